@@ -1,0 +1,51 @@
+!> Errors as values: library code fills an `error_type` and returns;
+!> only the app prints it and turns its kind into an exit code.
+module fekap_error
+   implicit none
+   private
+
+   public :: error_type, fatal_error, input_error, analysis_error
+
+   !> Kinds of error, which the app maps to exit codes 1, 2 and 3.
+   integer, parameter, public :: error_other = 1
+   integer, parameter, public :: error_input = 2
+   integer, parameter, public :: error_analysis = 3
+
+   !> An error travelling up to the app.
+   type :: error_type
+      !> One of error_other, error_input, error_analysis.
+      integer :: kind = error_other
+      !> What went wrong, possibly several lines (deck diagnostics).
+      character(:), allocatable :: message
+   end type error_type
+
+contains
+
+   !> Allocate an error of kind error_other.
+   pure subroutine fatal_error(error, message)
+      type(error_type), allocatable, intent(out) :: error
+      character(*), intent(in) :: message
+      allocate (error)
+      error%kind = error_other
+      error%message = message
+   end subroutine fatal_error
+
+   !> Allocate an input error (bad deck or bad command line): exit code 2.
+   pure subroutine input_error(error, message)
+      type(error_type), allocatable, intent(out) :: error
+      character(*), intent(in) :: message
+      allocate (error)
+      error%kind = error_input
+      error%message = message
+   end subroutine input_error
+
+   !> Allocate an analysis error (no convergence, singular configuration): exit code 3.
+   pure subroutine analysis_error(error, message)
+      type(error_type), allocatable, intent(out) :: error
+      character(*), intent(in) :: message
+      allocate (error)
+      error%kind = error_analysis
+      error%message = message
+   end subroutine analysis_error
+
+end module fekap_error

@@ -1,0 +1,246 @@
+!> Model data as the deck states it: named nodes, sections, links, joints,
+!> supports, drives, loads, slidelines, and the analysis and output settings.
+!> The finite element mesh (element ends, degrees of freedom) is derived from
+!> this by fekap_assembly_mesh; the classical methods read it directly.
+module fekap_model
+   use fekap_kinds, only: dp
+   use fekap_model_drive_law, only: law_type
+   implicit none
+   private
+
+   public :: model_type, node_type, section_type, link_type, weld_type
+   public :: support_type, drive_type, load_type, slideline_type
+   public :: analysis_type, output_type, source_loc_type
+   public :: find_node, find_link, model_size
+
+   !> Degree-of-freedom kinds at a node.
+   integer, parameter, public :: dof_x = 1, dof_y = 2, dof_rot = 3
+
+   !> Analysis methods.
+   integer, parameter, public :: method_fem = 1, method_cartesian = 2, method_angles = 3
+   !> Predictors: last converged configuration (the paper's), polynomial
+   !> extrapolation of the last converged configurations (default), Taylor
+   !> series from the last velocities and accelerations.
+   integer, parameter, public :: predictor_previous = 1, predictor_extrapolate = 2, predictor_taylor = 3
+   !> Convergence tests: the paper's ||P(i)||/||P(0)|| < tol, or FEKAP's
+   !> default (residual against the drive-increment scale and a correction length test).
+   integer, parameter, public :: convergence_paper = 1, convergence_default = 2
+   !> Slideline kinds: the paper's pin-in-slot (slave rotation free) or a
+   !> prismatic joint (slave link keeps its angle relative to the master).
+   integer, parameter, public :: joint_pin_in_slot = 1, joint_prismatic = 2
+
+   !> Where an entity was declared: for diagnostics that point into the deck.
+   type :: source_loc_type
+      character(:), allocatable :: file
+      integer :: line = 0
+      integer :: col = 0
+   end type source_loc_type
+
+   !> A named point of the mechanism (a hinge, a pivot, a tracked point).
+   type :: node_type
+      character(:), allocatable :: name
+      !> Initial coordinates.
+      real(dp) :: x(2) = 0
+      type(source_loc_type) :: loc
+   end type node_type
+
+   !> Section stiffnesses of the paper's constitutive law (30).
+   type :: section_type
+      character(:), allocatable :: name
+      !> Axial EA, shear kGA and bending EI stiffness, all positive.
+      real(dp) :: ea = 0, kga = 0, ei = 0
+      type(source_loc_type) :: loc
+   end type section_type
+
+   !> A straight link between two nodes, meshed with nelem beam elements.
+   type :: link_type
+      character(:), allocatable :: name
+      !> Indices into model%nodes of its first and second end.
+      integer :: node(2) = 0
+      !> Index into model%sections.
+      integer :: section = 0
+      integer :: nelem = 1
+      type(source_loc_type) :: loc
+   end type link_type
+
+   !> Links rigidly joined at a node: their end rotations there are one unknown.
+   !> Where links meet without a weld they are hinged (shared translations only).
+   type :: weld_type
+      integer :: node = 0
+      !> Indices into model%links; each has an end at `node`.
+      integer, allocatable :: links(:)
+      type(source_loc_type) :: loc
+   end type weld_type
+
+   !> Ground support of a node: fixed x and/or y, and optionally the rotation
+   !> of one link's end there (a clamp).
+   type :: support_type
+      integer :: node = 0
+      !> fix(dof_x), fix(dof_y), fix(dof_rot).
+      logical :: fix(3) = .false.
+      !> The link whose end rotation is fixed when fix(dof_rot).
+      integer :: link = 0
+      type(source_loc_type) :: loc
+   end type support_type
+
+   !> A prescribed motion. For dof_x/dof_y the law gives the node's absolute
+   !> coordinate; for dof_rot it gives the absolute angle (from +x,
+   !> counterclockwise, radians) of the link's direction, first node to second.
+   type :: drive_type
+      !> dof_x, dof_y or dof_rot.
+      integer :: dof = 0
+      !> The node (for dof_rot: the link end whose rotation is driven).
+      integer :: node = 0
+      !> For dof_rot: the driven link.
+      integer :: link = 0
+      type(law_type) :: law
+      type(source_loc_type) :: loc
+   end type drive_type
+
+   !> An external nodal load, scaled by the load factor t (see docs/deck-format.md).
+   type :: load_type
+      integer :: node = 0
+      real(dp) :: force(2) = 0
+      real(dp) :: moment = 0
+      !> The link end (at node) that carries the moment.
+      integer :: link = 0
+      type(source_loc_type) :: loc
+   end type load_type
+
+   !> A sliding joint: a slave node kept on a master line by a penalty spring.
+   type :: slideline_type
+      character(:), allocatable :: name
+      integer :: slave = 0
+      !> joint_pin_in_slot or joint_prismatic.
+      integer :: kind = joint_pin_in_slot
+      !> For joint_prismatic: the slave link whose angle is tied to the master.
+      integer :: slave_link = 0
+      !> Master line made of links, in order along the line (empty for a ground guide).
+      integer, allocatable :: master_links(:)
+      !> A fixed ground guide: from guide(:,1) to guide(:,2).
+      logical :: ground = .false.
+      real(dp) :: guide(2, 2) = 0
+      !> Penalty parameter; <= 0 selects the default scaled from element stiffness.
+      real(dp) :: penalty = 0
+      type(source_loc_type) :: loc
+   end type slideline_type
+
+   !> What to compute and how.
+   type :: analysis_type
+      integer :: method = method_fem
+      real(dp) :: t_start = 0
+      real(dp) :: t_end = 1
+      real(dp) :: dt = 0.025_dp
+      !> Newton tolerance on the residual ratio.
+      real(dp) :: tol = 1.0e-10_dp
+      !> Length tolerance of the last Newton correction, relative to the model size.
+      real(dp) :: length_tol = 1.0e-12_dp
+      integer :: max_iter = 25
+      integer :: predictor = predictor_extrapolate
+      integer :: convergence = convergence_default
+      logical :: velocities = .true.
+      logical :: accelerations = .true.
+      !> Gauss points per element: 1 (reduced, default) or 2 (full).
+      integer :: gauss_points = 1
+      !> Cartesian method: drop redundant constraint equations instead of stopping.
+      logical :: remove_redundant = .false.
+   end type analysis_type
+
+   !> What to write.
+   type :: output_type
+      !> Tracked nodes (indices into model%nodes); points.csv has one row per tracked node per step.
+      integer, allocatable :: points(:)
+      !> Reported links (indices into model%links); default all links.
+      integer, allocatable :: links(:)
+      !> Write every k-th step (the first and the last step always).
+      integer :: every = 1
+      logical :: csv = .true.
+      logical :: listing = .true.
+      logical :: vtk = .false.
+   end type output_type
+
+   !> The whole model of one deck.
+   type :: model_type
+      !> The deck's file name, for diagnostics.
+      character(:), allocatable :: file
+      character(:), allocatable :: title
+      type(node_type), allocatable :: nodes(:)
+      type(section_type), allocatable :: sections(:)
+      type(link_type), allocatable :: links(:)
+      type(weld_type), allocatable :: welds(:)
+      type(support_type), allocatable :: supports(:)
+      type(drive_type), allocatable :: drives(:)
+      type(load_type), allocatable :: loads(:)
+      type(slideline_type), allocatable :: slidelines(:)
+      type(analysis_type) :: analysis
+      type(output_type) :: output
+   end type model_type
+
+contains
+
+   !> Index of the node called `name` (case-insensitive), 0 if there is none.
+   pure integer function find_node(model, name) result(idx)
+      type(model_type), intent(in) :: model
+      character(*), intent(in) :: name
+      integer :: i
+      idx = 0
+      if (.not. allocated(model%nodes)) return
+      do i = 1, size(model%nodes)
+         if (same_name(model%nodes(i)%name, name)) then
+            idx = i
+            return
+         end if
+      end do
+   end function find_node
+
+   !> Index of the link called `name` (case-insensitive), 0 if there is none.
+   pure integer function find_link(model, name) result(idx)
+      type(model_type), intent(in) :: model
+      character(*), intent(in) :: name
+      integer :: i
+      idx = 0
+      if (.not. allocated(model%links)) return
+      do i = 1, size(model%links)
+         if (same_name(model%links(i)%name, name)) then
+            idx = i
+            return
+         end if
+      end do
+   end function find_link
+
+   !> Diagonal of the bounding box of the nodes (1 for a model without extent).
+   pure real(dp) function model_size(model) result(size_)
+      type(model_type), intent(in) :: model
+      integer :: i
+      real(dp) :: lo(2), hi(2)
+      size_ = 1
+      if (.not. allocated(model%nodes)) return
+      if (size(model%nodes) == 0) return
+      lo = model%nodes(1)%x
+      hi = lo
+      do i = 2, size(model%nodes)
+         lo = min(lo, model%nodes(i)%x)
+         hi = max(hi, model%nodes(i)%x)
+      end do
+      size_ = norm2(hi - lo)
+      if (size_ <= 0) size_ = 1
+   end function model_size
+
+   pure logical function same_name(a, b)
+      character(*), intent(in) :: a, b
+      integer :: i, ca, cb
+      same_name = len(a) == len(b)
+      if (.not. same_name) return
+      do i = 1, len(a)
+         ca = iachar(a(i:i))
+         cb = iachar(b(i:i))
+         if (ca >= iachar('A') .and. ca <= iachar('Z')) ca = ca + 32
+         if (cb >= iachar('A') .and. cb <= iachar('Z')) cb = cb + 32
+         if (ca /= cb) then
+            same_name = .false.
+            return
+         end if
+      end do
+   end function same_name
+
+end module fekap_model

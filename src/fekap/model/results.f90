@@ -1,0 +1,36 @@
+!> What every analysis method delivers at each step, whatever its unknowns:
+!> positions, velocities and accelerations of all named nodes and the angle,
+!> angular velocity and angular acceleration of every link.
+module fekap_model_results
+   use fekap_kinds, only: dp
+   implicit none
+   private
+
+   public :: step_result_type, new_step_result
+
+   type :: step_result_type
+      integer :: step = 0
+      real(dp) :: t = 0
+      !> Newton iterations (linear solves) of this step.
+      integer :: iterations = 0
+      !> Norm of the residual at the accepted configuration.
+      real(dp) :: residual = 0
+      logical :: has_velocity = .false.
+      logical :: has_acceleration = .false.
+      !> (2, number of nodes): x, y of every model node.
+      real(dp), allocatable :: pos(:, :), vel(:, :), acc(:, :)
+      !> (number of links): direction angle (radians, not wrapped) and its rates.
+      real(dp), allocatable :: angle(:), omega(:), alpha(:)
+   end type step_result_type
+
+contains
+
+   !> Allocate a zeroed result for a model with nnode nodes and nlink links.
+   pure subroutine new_step_result(self, nnode, nlink)
+      type(step_result_type), intent(out) :: self
+      integer, intent(in) :: nnode, nlink
+      allocate (self%pos(2, nnode), self%vel(2, nnode), self%acc(2, nnode), source=0.0_dp)
+      allocate (self%angle(nlink), self%omega(nlink), self%alpha(nlink), source=0.0_dp)
+   end subroutine new_step_result
+
+end module fekap_model_results

@@ -1,0 +1,39 @@
+!> Test driver: `tester [suite [test]]` runs every suite, one suite, or one test.
+program tester
+   use fekap_testing, only: unittest_type, run_testsuite
+   use test_drive_law, only: collect_drive_law
+   implicit none
+
+   abstract interface
+      subroutine collect_interface(tests)
+         import :: unittest_type
+         type(unittest_type), allocatable, intent(out) :: tests(:)
+      end subroutine collect_interface
+   end interface
+
+   character(len=128) :: only_suite, only_test
+   integer :: passed, failed
+
+   only_suite = ''
+   only_test = ''
+   if (command_argument_count() >= 1) call get_command_argument(1, only_suite)
+   if (command_argument_count() >= 2) call get_command_argument(2, only_test)
+   passed = 0
+   failed = 0
+
+   call run('drive_law', collect_drive_law)
+
+   if (failed > 0) error stop 1
+
+contains
+
+   subroutine run(name, collect)
+      character(*), intent(in) :: name
+      procedure(collect_interface) :: collect
+      type(unittest_type), allocatable :: tests(:)
+      if (len_trim(only_suite) > 0 .and. trim(only_suite) /= name) return
+      call collect(tests)
+      call run_testsuite(name, tests, passed, failed, trim(only_test))
+   end subroutine run
+
+end program tester
