@@ -1,0 +1,53 @@
+!> The interface every analysis method offers to the time loop: start at the
+!> initial configuration, then advance to each new time. The finite element
+!> method and both constraint-equation methods extend `stepper_type`.
+module fekap_solver_stepper
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type
+   use fekap_model_results, only: step_result_type
+   implicit none
+   private
+
+   public :: stepper_type, work_counts_type
+
+   !> Counts of the work done, for the listing's closing summary.
+   type :: work_counts_type
+      integer :: steps = 0
+      integer :: iterations = 0
+      integer :: residual_assemblies = 0
+      integer :: tangent_assemblies = 0
+      integer :: cholesky_factorisations = 0
+      integer :: lu_factorisations = 0
+      integer :: velocity_solves = 0
+      integer :: acceleration_solves = 0
+      integer :: slideline_evaluations = 0
+   end type work_counts_type
+
+   type, abstract :: stepper_type
+      type(work_counts_type) :: counts
+   contains
+      !> Fill `result` with the initial configuration at the start time
+      !> (and its velocities/accelerations when asked for).
+      procedure(start_interface), deferred :: start
+      !> Solve for the configuration at time t from the last accepted one.
+      procedure(advance_interface), deferred :: advance
+   end type stepper_type
+
+   abstract interface
+      subroutine start_interface(self, result, error)
+         import :: stepper_type, step_result_type, error_type
+         class(stepper_type), intent(inout) :: self
+         type(step_result_type), intent(inout) :: result
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine start_interface
+
+      subroutine advance_interface(self, t, result, error)
+         import :: stepper_type, step_result_type, error_type, dp
+         class(stepper_type), intent(inout) :: self
+         real(dp), intent(in) :: t
+         type(step_result_type), intent(inout) :: result
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine advance_interface
+   end interface
+
+end module fekap_solver_stepper
