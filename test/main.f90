@@ -3,6 +3,7 @@ program tester
    use fekap_testing, only: unittest_type, run_testsuite
    use test_drive_law, only: collect_drive_law
    use test_element_beam, only: collect_element_beam
+   use test_solver_fem, only: collect_solver_fem
    implicit none
 
    abstract interface
@@ -24,6 +25,7 @@ program tester
 
    call run('drive_law', collect_drive_law)
    call run('element_beam', collect_element_beam)
+   call run('solver_fem', collect_solver_fem)
 
    if (failed > 0) error stop 1
 

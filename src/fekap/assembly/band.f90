@@ -1,0 +1,155 @@
+!> Symmetric band matrices: assembly storage, LAPACK Cholesky factorisation
+!> (dpbtrf/dpbtrs) and, when the matrix is not positive definite (the
+!> geometric stiffness makes Newton tangents indefinite), a pivoting band LU
+!> (dgbtrf/dgbtrs) of the same matrix. LAPACK has no symmetric indefinite
+!> band solver.
+module fekap_assembly_band
+   use fekap_kinds, only: dp
+   use fekap_assembly_lapack, only: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dpbcon, dgbcon
+   implicit none
+   private
+
+   public :: band_matrix_type, new_band_matrix
+
+   !> An n x n symmetric matrix of half-bandwidth kd and its factor.
+   type :: band_matrix_type
+      integer :: n = 0
+      integer :: kd = 0
+      !> Upper band as LAPACK stores it: A(i, j), i <= j, at a(kd + 1 + i - j, j).
+      real(dp), allocatable :: a(:, :)
+      !> Factor: Cholesky in rows 1:kd+1, or band LU in rows 1:3*kd+1.
+      real(dp), allocatable :: f(:, :)
+      integer, allocatable :: ipiv(:)
+      !> Whether the factor in f is an LU (the fallback) rather than a Cholesky factor.
+      logical :: is_lu = .false.
+      !> 1-norm of the factored matrix, for the condition estimate.
+      real(dp) :: anorm = 0
+   contains
+      procedure :: zero => band_zero
+      procedure :: add => band_add
+      procedure :: factor => band_factor
+      procedure :: solve => band_solve
+      procedure :: rcond => band_rcond
+      procedure :: multiply => band_multiply
+   end type band_matrix_type
+
+contains
+
+   !> Allocate an n x n band matrix of half-bandwidth kd (all storage, once).
+   pure subroutine new_band_matrix(self, n, kd)
+      type(band_matrix_type), intent(out) :: self
+      integer, intent(in) :: n, kd
+      self%n = n
+      self%kd = kd
+      allocate (self%a(kd + 1, n), self%f(3*kd + 1, n), source=0.0_dp)
+      allocate (self%ipiv(n), source=0)
+   end subroutine new_band_matrix
+
+   pure subroutine band_zero(self)
+      class(band_matrix_type), intent(inout) :: self
+      self%a = 0
+   end subroutine band_zero
+
+   !> A(i, j) += value, for the upper triangle (i <= j); entries with i > j
+   !> are ignored, since the lower triangle is their mirror image.
+   pure subroutine band_add(self, i, j, value)
+      class(band_matrix_type), intent(inout) :: self
+      integer, intent(in) :: i, j
+      real(dp), intent(in) :: value
+      if (i <= j) self%a(self%kd + 1 + i - j, j) = self%a(self%kd + 1 + i - j, j) + value
+   end subroutine band_add
+
+   !> Factor the matrix: Cholesky first; if it is not positive definite, band
+   !> LU with partial pivoting. On return `info` is 0, or the equation at
+   !> which the matrix is singular (LU pivot zero).
+   pure subroutine band_factor(self, info)
+      class(band_matrix_type), intent(inout) :: self
+      integer, intent(out) :: info
+      integer :: i, j, kd, ld
+      kd = self%kd
+      ld = size(self%f, 1)
+      self%anorm = one_norm(self)
+      self%f(1:kd + 1, :) = self%a
+      self%is_lu = .false.
+      call dpbtrf('U', self%n, kd, self%f, ld, info)
+      if (info == 0) return
+      ! Not positive definite: expand to general band storage, rows kd+1:3kd+1.
+      self%is_lu = .true.
+      self%f = 0
+      do j = 1, self%n
+         do i = max(1, j - kd), min(self%n, j + kd)
+            if (i <= j) then
+               self%f(2*kd + 1 + i - j, j) = self%a(kd + 1 + i - j, j)
+            else
+               self%f(2*kd + 1 + i - j, j) = self%a(kd + 1 + j - i, i)
+            end if
+         end do
+      end do
+      call dgbtrf(self%n, self%n, kd, kd, self%f, ld, self%ipiv, info)
+   end subroutine band_factor
+
+   !> Solve A x = b in place with the factor (b may hold several columns).
+   pure subroutine band_solve(self, b)
+      class(band_matrix_type), intent(in) :: self
+      real(dp), intent(inout) :: b(:, :)
+      integer :: info
+      if (self%n == 0) return
+      if (self%is_lu) then
+         call dgbtrs('N', self%n, self%kd, self%kd, size(b, 2), self%f, size(self%f, 1), self%ipiv, &
+            & b, size(b, 1), info)
+      else
+         call dpbtrs('U', self%n, self%kd, size(b, 2), self%f, size(self%f, 1), b, size(b, 1), info)
+      end if
+   end subroutine band_solve
+
+   !> Reciprocal condition number (1-norm) estimated from the current factor.
+   real(dp) function band_rcond(self) result(rcond)
+      class(band_matrix_type), intent(in) :: self
+      real(dp), allocatable :: work(:)
+      integer, allocatable :: iwork(:)
+      integer :: info
+      rcond = 1
+      if (self%n == 0) return
+      allocate (work(3*self%n), iwork(self%n))
+      if (self%is_lu) then
+         call dgbcon('1', self%n, self%kd, self%kd, self%f, size(self%f, 1), self%ipiv, self%anorm, &
+            & rcond, work, iwork, info)
+      else
+         call dpbcon('U', self%n, self%kd, self%f, size(self%f, 1), self%anorm, rcond, work, iwork, info)
+      end if
+   end function band_rcond
+
+   !> y = A x with the assembled (unfactored) matrix.
+   pure subroutine band_multiply(self, x, y)
+      class(band_matrix_type), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: y(:)
+      integer :: i, j
+      y = 0
+      do j = 1, self%n
+         do i = max(1, j - self%kd), j - 1
+            y(i) = y(i) + self%a(self%kd + 1 + i - j, j)*x(j)
+            y(j) = y(j) + self%a(self%kd + 1 + i - j, j)*x(i)
+         end do
+         y(j) = y(j) + self%a(self%kd + 1, j)*x(j)
+      end do
+   end subroutine band_multiply
+
+   !> 1-norm (largest column sum) of the symmetric matrix.
+   pure real(dp) function one_norm(self) result(anorm)
+      type(band_matrix_type), intent(in) :: self
+      real(dp) :: colsum(self%n)
+      integer :: i, j
+      colsum = 0
+      do j = 1, self%n
+         do i = max(1, j - self%kd), j - 1
+            colsum(j) = colsum(j) + abs(self%a(self%kd + 1 + i - j, j))
+            colsum(i) = colsum(i) + abs(self%a(self%kd + 1 + i - j, j))
+         end do
+         colsum(j) = colsum(j) + abs(self%a(self%kd + 1, j))
+      end do
+      anorm = 0
+      if (self%n > 0) anorm = maxval(colsum)
+   end function one_norm
+
+end module fekap_assembly_band

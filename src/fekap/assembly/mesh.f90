@@ -1,0 +1,474 @@
+!> The finite element mesh derived from the model: points, degrees of
+!> freedom with double nodes at hinges, elements, supports and drives, and
+!> equation numbers in reverse Cuthill-McKee order for a small bandwidth.
+!>
+!> Points 1..size(model%nodes) are the model's nodes in order; a link meshed
+!> with several elements adds its interior points after them. Every point has
+!> two translational dofs, shared by all element ends there (a hinge). Every
+!> link end has its own rotation dof ("double noding", the paper after (54));
+!> a weld merges the rotation dofs of its links at its node; inside a link
+!> consecutive elements share the rotation of their common point.
+module fekap_assembly_mesh
+   use fekap_kinds, only: dp
+   use fekap_model, only: model_type, dof_x, dof_y, dof_rot
+   use fekap_element_beam, only: beam_type, new_beam
+   implicit none
+   private
+
+   public :: mesh_type, new_mesh, describe_dof
+
+   !> Status of a degree of freedom.
+   integer, parameter, public :: dof_free = 0, dof_fixed = 1, dof_driven = 2
+
+   type :: mesh_type
+      integer :: npoint = 0
+      integer :: ndof = 0
+      !> Number of free dofs (equations) and of driven dofs.
+      integer :: nfree = 0
+      integer :: ndriven = 0
+      !> Half-bandwidth of the free-free tangent in equation order.
+      integer :: kd = 0
+      !> (2, npoint): initial coordinates of each point.
+      real(dp), allocatable :: x0(:, :)
+      !> (2, npoint): x and y dof of each point.
+      integer, allocatable :: tdof(:, :)
+      !> (2, nlink): rotation dof at the first and second end of each link.
+      integer, allocatable :: link_rot(:, :)
+      !> Initial direction angle of each link.
+      real(dp), allocatable :: link_angle0(:)
+      type(beam_type), allocatable :: elements(:)
+      !> (6, nelem): global dofs of each element, (x1, y1, theta1, x2, y2, theta2).
+      integer, allocatable :: edof(:, :)
+      !> Link of each element.
+      integer, allocatable :: elink(:)
+      !> (ndof): dof_free, dof_fixed or dof_driven.
+      integer, allocatable :: status(:)
+      !> (ndof): equation number of a free dof, 0 otherwise.
+      integer, allocatable :: eq(:)
+      !> (nfree): dof of each equation.
+      integer, allocatable :: eq_dof(:)
+      !> (ndriven): dof of each drive, in model%drives order.
+      integer, allocatable :: driven_dof(:)
+      !> (ndof): the drive of a driven dof (its column in the free-driven block), 0 otherwise.
+      integer, allocatable :: drive_col(:)
+      !> (ndof): what each dof is: the point (or 0) and kind (dof_x, dof_y, dof_rot).
+      integer, allocatable :: dof_point(:), dof_kind(:)
+      !> (ndof): configuration at the start: coordinates for translations, 0 for rotations.
+      real(dp), allocatable :: q0(:)
+      !> (ndof): external nodal loads at unit load factor.
+      real(dp), allocatable :: f_ext(:)
+   end type mesh_type
+
+contains
+
+   !> Build the mesh of a validated model.
+   subroutine new_mesh(self, model)
+      type(mesh_type), intent(out) :: self
+      type(model_type), intent(in) :: model
+      integer :: nnode, nlink, l, k, m, ip, np, e, nelem, nrot, i, j, end_
+      integer, allocatable :: parent(:), link_rot_tmp(:, :), interior_rot(:), first_interior(:)
+      integer, allocatable :: rot_index(:), ends(:)
+      real(dp) :: xa(2), xb(2)
+
+      nnode = size(model%nodes)
+      nlink = size(model%links)
+
+      ! Points: model nodes, then interior points of multi-element links.
+      np = nnode + sum(model%links%nelem - 1)
+      self%npoint = np
+      allocate (self%x0(2, np), first_interior(nlink))
+      do ip = 1, nnode
+         self%x0(:, ip) = model%nodes(ip)%x
+      end do
+      ip = nnode
+      do l = 1, nlink
+         first_interior(l) = ip + 1
+         xa = model%nodes(model%links(l)%node(1))%x
+         xb = model%nodes(model%links(l)%node(2))%x
+         m = model%links(l)%nelem
+         do k = 1, m - 1
+            ip = ip + 1
+            self%x0(:, ip) = xa + (xb - xa)*real(k, dp)/m
+         end do
+      end do
+
+      ! Rotation unknowns before welding: two link ends per link, then interior
+      ! points; welds merge link ends (union-find on the link-end ids).
+      nrot = 2*nlink + (np - nnode)
+      allocate (parent(nrot))
+      parent = [(i, i=1, nrot)]
+      allocate (link_rot_tmp(2, nlink))
+      do l = 1, nlink
+         link_rot_tmp(:, l) = [2*l - 1, 2*l]
+      end do
+      if (allocated(model%welds)) then
+         do i = 1, size(model%welds)
+            allocate (ends(size(model%welds(i)%links)))
+            do j = 1, size(ends)
+               l = model%welds(i)%links(j)
+               end_ = merge(1, 2, model%links(l)%node(1) == model%welds(i)%node)
+               ends(j) = link_rot_tmp(end_, l)
+            end do
+            do j = 2, size(ends)
+               call union(parent, ends(1), ends(j))
+            end do
+            deallocate (ends)
+         end do
+      end if
+
+      ! Number the dofs: x, y of every point, then one rotation per distinct root.
+      self%ndof = 2*np
+      allocate (self%tdof(2, np))
+      do ip = 1, np
+         self%tdof(:, ip) = [2*ip - 1, 2*ip]
+      end do
+      allocate (rot_index(nrot), source=0)
+      do i = 1, nrot
+         j = find(parent, i)
+         if (rot_index(j) == 0) then
+            self%ndof = self%ndof + 1
+            rot_index(j) = self%ndof
+         end if
+         rot_index(i) = rot_index(j)
+      end do
+      allocate (self%link_rot(2, nlink), interior_rot(np))
+      interior_rot = 0
+      do l = 1, nlink
+         self%link_rot(:, l) = rot_index(link_rot_tmp(:, l))
+      end do
+      do ip = nnode + 1, np
+         interior_rot(ip) = rot_index(2*nlink + ip - nnode)
+      end do
+
+      allocate (self%dof_point(self%ndof), self%dof_kind(self%ndof), source=0)
+      do ip = 1, np
+         self%dof_point(self%tdof(:, ip)) = ip
+         self%dof_kind(self%tdof(:, ip)) = [dof_x, dof_y]
+      end do
+      do l = 1, nlink
+         do end_ = 1, 2
+            self%dof_point(self%link_rot(end_, l)) = model%links(l)%node(end_)
+            self%dof_kind(self%link_rot(end_, l)) = dof_rot
+         end do
+      end do
+      do ip = nnode + 1, np
+         self%dof_point(interior_rot(ip)) = ip
+         self%dof_kind(interior_rot(ip)) = dof_rot
+      end do
+
+      ! Elements.
+      nelem = sum(model%links%nelem)
+      allocate (self%elements(nelem), self%edof(6, nelem), self%elink(nelem), self%link_angle0(nlink))
+      e = 0
+      do l = 1, nlink
+         m = model%links(l)%nelem
+         xa = model%nodes(model%links(l)%node(1))%x
+         xb = model%nodes(model%links(l)%node(2))%x
+         self%link_angle0(l) = atan2(xb(2) - xa(2), xb(1) - xa(1))
+         do k = 1, m
+            e = e + 1
+            self%elink(e) = l
+            call new_beam(self%elements(e), xa + (xb - xa)*real(k - 1, dp)/m, xa + (xb - xa)*real(k, dp)/m, &
+               & section_stiffness(model, model%links(l)%section), model%analysis%gauss_points)
+            self%edof(1:3, e) = [self%tdof(:, link_point(k - 1)), link_rotation(k - 1)]
+            self%edof(4:6, e) = [self%tdof(:, link_point(k)), link_rotation(k)]
+         end do
+      end do
+
+      call set_status(self, model)
+      call number_equations(self)
+
+      allocate (self%q0(self%ndof), source=0.0_dp)
+      do ip = 1, np
+         self%q0(self%tdof(:, ip)) = self%x0(:, ip)
+      end do
+      allocate (self%f_ext(self%ndof), source=0.0_dp)
+      if (allocated(model%loads)) then
+         do i = 1, size(model%loads)
+            associate (load => model%loads(i))
+               self%f_ext(self%tdof(:, load%node)) = self%f_ext(self%tdof(:, load%node)) + load%force
+               if (load%link > 0 .and. load%moment /= 0) then
+                  j = end_dof(self, model, load%link, load%node)
+                  self%f_ext(j) = self%f_ext(j) + load%moment
+               end if
+            end associate
+         end do
+      end if
+
+   contains
+
+      !> Point k (0..m) along link l.
+      integer function link_point(k_) result(p)
+         integer, intent(in) :: k_
+         if (k_ == 0) then
+            p = model%links(l)%node(1)
+         else if (k_ == m) then
+            p = model%links(l)%node(2)
+         else
+            p = first_interior(l) + k_ - 1
+         end if
+      end function link_point
+
+      !> Rotation dof at point k (0..m) along link l.
+      integer function link_rotation(k_) result(r)
+         integer, intent(in) :: k_
+         if (k_ == 0) then
+            r = self%link_rot(1, l)
+         else if (k_ == m) then
+            r = self%link_rot(2, l)
+         else
+            r = interior_rot(first_interior(l) + k_ - 1)
+         end if
+      end function link_rotation
+
+   end subroutine new_mesh
+
+   !> Section stiffnesses (EA, kGA, EI) of section index isec.
+   pure function section_stiffness(model, isec) result(c)
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: isec
+      real(dp) :: c(3)
+      c = [model%sections(isec)%ea, model%sections(isec)%kga, model%sections(isec)%ei]
+   end function section_stiffness
+
+   !> The rotation dof of link l at its end on node.
+   pure integer function end_dof(self, model, l, node) result(dof)
+      type(mesh_type), intent(in) :: self
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: l, node
+      dof = self%link_rot(merge(1, 2, model%links(l)%node(1) == node), l)
+   end function end_dof
+
+   !> Mark supported and driven dofs.
+   subroutine set_status(self, model)
+      type(mesh_type), intent(inout) :: self
+      type(model_type), intent(in) :: model
+      integer :: i
+      allocate (self%status(self%ndof), source=dof_free)
+      if (allocated(model%supports)) then
+         do i = 1, size(model%supports)
+            associate (s => model%supports(i))
+               if (s%fix(dof_x)) self%status(self%tdof(1, s%node)) = dof_fixed
+               if (s%fix(dof_y)) self%status(self%tdof(2, s%node)) = dof_fixed
+               if (s%fix(dof_rot)) self%status(end_dof(self, model, s%link, s%node)) = dof_fixed
+            end associate
+         end do
+      end if
+      self%ndriven = 0
+      if (allocated(model%drives)) self%ndriven = size(model%drives)
+      allocate (self%driven_dof(self%ndriven))
+      do i = 1, self%ndriven
+         associate (d => model%drives(i))
+            if (d%dof == dof_rot) then
+               self%driven_dof(i) = end_dof(self, model, d%link, d%node)
+            else
+               self%driven_dof(i) = self%tdof(d%dof, d%node)
+            end if
+         end associate
+         self%status(self%driven_dof(i)) = dof_driven
+      end do
+      allocate (self%drive_col(self%ndof), source=0)
+      do i = 1, self%ndriven
+         self%drive_col(self%driven_dof(i)) = i
+      end do
+   end subroutine set_status
+
+   !> Equation numbers of the free dofs in reverse Cuthill-McKee order, and the
+   !> half-bandwidth that results.
+   subroutine number_equations(self)
+      type(mesh_type), intent(inout) :: self
+      integer, allocatable :: free_index(:), deg(:), adj_start(:), adj(:), fill(:), order(:), level(:)
+      integer :: nf, e, a, b, ia, ib, i, n_ordered, start, head, tail, v, w, k, nnz
+      logical, allocatable :: seen(:)
+
+      allocate (free_index(self%ndof), source=0)
+      nf = 0
+      do i = 1, self%ndof
+         if (self%status(i) == dof_free) then
+            nf = nf + 1
+            free_index(i) = nf
+         end if
+      end do
+      self%nfree = nf
+
+      ! Adjacency (CSR) of the free dofs: two dofs are adjacent when an element couples them.
+      allocate (deg(nf), source=0)
+      do e = 1, size(self%edof, 2)
+         do ia = 1, 6
+            a = free_index(self%edof(ia, e))
+            if (a == 0) cycle
+            do ib = 1, 6
+               b = free_index(self%edof(ib, e))
+               if (b /= 0 .and. b /= a) deg(a) = deg(a) + 1
+            end do
+         end do
+      end do
+      allocate (adj_start(nf + 1))
+      adj_start(1) = 1
+      do i = 1, nf
+         adj_start(i + 1) = adj_start(i) + deg(i)
+      end do
+      nnz = adj_start(nf + 1) - 1
+      allocate (adj(nnz), fill(nf))
+      fill = adj_start(1:nf)
+      do e = 1, size(self%edof, 2)
+         do ia = 1, 6
+            a = free_index(self%edof(ia, e))
+            if (a == 0) cycle
+            do ib = 1, 6
+               b = free_index(self%edof(ib, e))
+               if (b /= 0 .and. b /= a) then
+                  adj(fill(a)) = b
+                  fill(a) = fill(a) + 1
+               end if
+            end do
+         end do
+      end do
+
+      ! Cuthill-McKee, component by component, from a pseudo-peripheral dof.
+      allocate (order(nf), level(nf), seen(nf))
+      seen = .false.
+      n_ordered = 0
+      do while (n_ordered < nf)
+         start = minloc(deg, dim=1, mask=.not. seen)
+         start = peripheral(start)
+         head = n_ordered + 1
+         tail = n_ordered + 1
+         order(tail) = start
+         seen(start) = .true.
+         do while (head <= tail)
+            v = order(head)
+            head = head + 1
+            ! Neighbours in order of increasing degree.
+            do
+               w = 0
+               do k = adj_start(v), adj_start(v + 1) - 1
+                  if (.not. seen(adj(k))) then
+                     if (w == 0) then
+                        w = adj(k)
+                     else if (deg(adj(k)) < deg(w)) then
+                        w = adj(k)
+                     end if
+                  end if
+               end do
+               if (w == 0) exit
+               seen(w) = .true.
+               tail = tail + 1
+               order(tail) = w
+            end do
+         end do
+         n_ordered = tail
+      end do
+
+      allocate (self%eq(self%ndof), source=0)
+      allocate (self%eq_dof(nf))
+      do i = 1, self%ndof
+         if (free_index(i) == 0) cycle
+         ! Reverse: the dof ordered k-th gets equation nf + 1 - k.
+         self%eq(i) = nf + 1 - findloc(order, free_index(i), dim=1)
+         self%eq_dof(self%eq(i)) = i
+      end do
+
+      self%kd = 0
+      do e = 1, size(self%edof, 2)
+         associate (eqs => pack(self%eq(self%edof(:, e)), self%eq(self%edof(:, e)) > 0))
+            if (size(eqs) > 1) self%kd = max(self%kd, maxval(eqs) - minval(eqs))
+         end associate
+      end do
+
+   contains
+
+      !> A pseudo-peripheral dof of the component of v0 (George-Liu: repeat the
+      !> BFS from a lowest-degree dof of the last level while its depth grows).
+      integer function peripheral(v0) result(r)
+         integer, intent(in) :: v0
+         integer :: depth, new_depth, pass
+         logical :: mark(nf)
+         r = v0
+         depth = -1
+         do pass = 1, 5
+            call bfs_levels(r, mark, new_depth)
+            if (new_depth <= depth) exit
+            depth = new_depth
+            r = minloc(deg, dim=1, mask=mark .and. level == new_depth)
+         end do
+      end function peripheral
+
+      subroutine bfs_levels(v0, mark, depth)
+         integer, intent(in) :: v0
+         logical, intent(out) :: mark(nf)
+         integer, intent(out) :: depth
+         integer :: queue(nf), qh, qt, u, kk
+         mark = .false.
+         level = 0
+         qh = 1
+         qt = 1
+         queue(1) = v0
+         mark(v0) = .true.
+         do while (qh <= qt)
+            u = queue(qh)
+            qh = qh + 1
+            do kk = adj_start(u), adj_start(u + 1) - 1
+               if (.not. mark(adj(kk)) .and. .not. seen(adj(kk))) then
+                  mark(adj(kk)) = .true.
+                  level(adj(kk)) = level(u) + 1
+                  qt = qt + 1
+                  queue(qt) = adj(kk)
+               end if
+            end do
+         end do
+         depth = maxval(level, mask=mark)
+      end subroutine bfs_levels
+
+   end subroutine number_equations
+
+   pure recursive integer function find(parent, i) result(root)
+      integer, intent(in) :: parent(:), i
+      if (parent(i) == i) then
+         root = i
+      else
+         root = find(parent, parent(i))
+      end if
+   end function find
+
+   pure subroutine union(parent, i, j)
+      integer, intent(inout) :: parent(:)
+      integer, intent(in) :: i, j
+      integer :: ri, rj
+      ri = find(parent, i)
+      rj = find(parent, j)
+      if (ri /= rj) parent(max(ri, rj)) = min(ri, rj)
+   end subroutine union
+
+   !> A readable name of a dof, for messages: "x of node C", "rotation of link AB at node A".
+   function describe_dof(self, model, dof) result(text)
+      type(mesh_type), intent(in) :: self
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: dof
+      character(:), allocatable :: text
+      integer :: ip, l
+      character(len=16) :: num
+      ip = self%dof_point(dof)
+      if (ip <= size(model%nodes)) then
+         text = 'node '//model%nodes(ip)%name
+      else
+         write (num, '(i0)') ip
+         text = 'interior point '//trim(num)
+      end if
+      select case (self%dof_kind(dof))
+      case (dof_x)
+         text = 'x of '//text
+      case (dof_y)
+         text = 'y of '//text
+      case default
+         text = 'rotation at '//text
+         do l = 1, size(model%links)
+            if (any(self%link_rot(:, l) == dof)) then
+               text = text//' (link '//model%links(l)%name//')'
+               exit
+            end if
+         end do
+      end select
+   end function describe_dof
+
+end module fekap_assembly_mesh

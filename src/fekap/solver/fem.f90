@@ -1,0 +1,456 @@
+!> The paper's finite element method as a stepper: per step, advance the
+!> drives, predict, solve P(q) = 0 on the free dofs by Newton-Raphson with the
+!> symmetric band tangent, check that the converged configuration is a
+!> mechanism configuration (every element unstrained), then solve for
+!> velocities (47) and accelerations (49) with the tangent of the converged
+!> configuration. A step that fails is cut in halves (bounded) and retried.
+module fekap_solver_fem
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, analysis_error
+   use fekap_model, only: model_type, model_size, dof_rot, predictor_previous, predictor_taylor, &
+      & convergence_paper
+   use fekap_model_results, only: step_result_type
+   use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
+   use fekap_assembly_band, only: band_matrix_type, new_band_matrix
+   use fekap_assembly_assemble, only: assemble_residual, assemble_tangent, assemble_second_derivative, &
+      & max_strain
+   use fekap_solver_stepper, only: stepper_type
+   use fekap_solver_convergence, only: convergence_type, is_converged, extrapolate
+   implicit none
+   private
+
+   public :: fem_stepper_type, new_fem_stepper
+
+   !> Step cuts (halvings) allowed within one step before it is given up.
+   integer, parameter :: max_cuts = 8
+   !> Element strain above which a converged configuration is not a mechanism
+   !> configuration but a self-stressed equilibrium.
+   real(dp), parameter :: admissible_strain = 1.0e-8_dp
+   !> A Newton correction longer than this many model sizes is divergence.
+   real(dp), parameter :: divergence_length = 1.0e3_dp
+
+   type, extends(stepper_type) :: fem_stepper_type
+      type(model_type) :: model
+      type(mesh_type) :: mesh
+      type(convergence_type) :: conv
+      type(band_matrix_type) :: kff
+      !> Free-driven block of the tangent, (nfree, ndriven).
+      real(dp), allocatable :: kfd(:, :)
+      !> Accepted configuration, velocity and acceleration over all dofs, at time t.
+      real(dp), allocatable :: q(:), v(:), a(:)
+      real(dp) :: t = 0
+      !> Whether v (and a) belong to the accepted configuration.
+      logical :: has_velocity = .false., has_acceleration = .false.
+      !> Whether kff holds the factor of the tangent at (within tolerance of) q.
+      logical :: factor_current = .false.
+      !> Last accepted configurations (newest first) and their times, for the predictor.
+      real(dp), allocatable :: hist(:, :), thist(:)
+      integer :: nhist = 0
+      !> Drive laws' values at the start time: drives move from the initial configuration.
+      real(dp), allocatable :: law0(:)
+      !> Length weight of each dof for the correction test: 1 for translations,
+      !> the model size for rotations.
+      real(dp), allocatable :: dof_length(:)
+      real(dp) :: size = 1
+      !> Whether the model has external loads (a flexible, stressed analysis).
+      logical :: loaded = .false.
+      !> Work arrays, allocated once.
+      real(dp), allocatable :: r(:), rhs(:, :), qt(:), work(:)
+      !> Step cuts in the last advance, for the listing.
+      integer :: last_cuts = 0
+   contains
+      procedure :: start => fem_start
+      procedure :: advance => fem_advance
+   end type fem_stepper_type
+
+contains
+
+   !> Build the mesh, the equation numbering and all storage for a validated model.
+   subroutine new_fem_stepper(self, model)
+      type(fem_stepper_type), intent(out) :: self
+      type(model_type), intent(in) :: model
+      integer :: i, e
+      real(dp) :: f, df, ddf, force_scale
+      self%model = model
+      call new_mesh(self%mesh, model)
+      associate (n => self%mesh%ndof, nf => self%mesh%nfree, nd => self%mesh%ndriven)
+         call new_band_matrix(self%kff, nf, self%mesh%kd)
+         allocate (self%kfd(nf, nd), self%rhs(nf, 1), self%law0(nd))
+         allocate (self%q(n), self%v(n), self%a(n), self%r(n), self%qt(n), self%work(n), source=0.0_dp)
+         allocate (self%hist(n, 3), self%thist(3), source=0.0_dp)
+      end associate
+      do i = 1, self%mesh%ndriven
+         call model%drives(i)%law%eval(model%analysis%t_start, f, df, ddf)
+         self%law0(i) = f
+      end do
+      self%size = model_size(model)
+      self%dof_length = merge(self%size, 1.0_dp, self%mesh%dof_kind == dof_rot)
+      self%loaded = any(abs(self%mesh%f_ext) > 0)
+      self%conv%mode = model%analysis%convergence
+      self%conv%tol = model%analysis%tol
+      self%conv%length = model%analysis%length_tol*self%size
+      ! Residual floor: a strain of 1e-13 in the stiffest element.
+      force_scale = 0
+      do e = 1, size(self%mesh%elements)
+         associate (el => self%mesh%elements(e))
+            force_scale = max(force_scale, el%c(1), el%c(2), el%c(3)/el%length**2)
+         end associate
+      end do
+      self%conv%floor = 1.0e-13_dp*force_scale
+   end subroutine new_fem_stepper
+
+   !> The initial configuration (solved for the initial load, if loaded), and
+   !> its velocities and accelerations when asked for.
+   subroutine fem_start(self, result, error)
+      class(fem_stepper_type), intent(inout) :: self
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      self%t = self%model%analysis%t_start
+      self%q = self%mesh%q0
+      self%nhist = 0
+      self%factor_current = .false.
+      result%iterations = 0
+      call assemble_residual(self%mesh, self%q, self%t, self%r)
+      self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+      result%residual = free_norm(self, self%r)
+      if (self%loaded .and. result%residual > self%conv%floor) then
+         ! Loads at t_start /= 0: find the loaded configuration first.
+         call solve_step(self, self%t, result%iterations, result%residual, error)
+         if (allocated(error)) return
+      else
+         call accept(self, self%t, self%q)
+      end if
+      call solve_rates(self, error)
+      if (allocated(error)) return
+      call fill_result(self, result)
+   end subroutine fem_start
+
+   !> Advance to time t, cutting the step in halves when Newton fails or
+   !> converges to an inadmissible configuration.
+   subroutine fem_advance(self, t, result, error)
+      class(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: step_error
+      real(dp) :: h, h_full, t_try, residual
+      integer :: iterations
+      character(len=200) :: note
+      h_full = t - self%t
+      h = h_full
+      self%last_cuts = 0
+      result%iterations = 0
+      do while (self%t < t)
+         t_try = min(self%t + h, t)
+         if (t - t_try < 1.0e-12_dp*abs(h_full)) t_try = t
+         call solve_step(self, t_try, iterations, residual, step_error)
+         result%iterations = result%iterations + iterations
+         if (allocated(step_error)) then
+            self%last_cuts = self%last_cuts + 1
+            if (self%last_cuts > max_cuts) then
+               write (note, '(a,i0,a)') ' (after ', max_cuts, &
+                  & ' step cuts; try a smaller time step or another predictor)'
+               call analysis_error(error, step_error%message//trim(note))
+               return
+            end if
+            deallocate (step_error)
+            h = h/2
+            cycle
+         end if
+         result%residual = residual
+         if (self%t < t) then
+            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
+            if (self%model%analysis%predictor == predictor_taylor) call solve_rates(self, error)
+            if (allocated(error)) return
+            h = min(2*h, h_full)
+         end if
+      end do
+      call solve_rates(self, error)
+      if (allocated(error)) return
+      call fill_result(self, result)
+   end subroutine fem_advance
+
+   !> Predict and solve P(q) = 0 at time t; accept the configuration if it is
+   !> admissible. Leaves the accepted state untouched on failure.
+   subroutine solve_step(self, t, iterations, residual, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: residual
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: r0, scale, correction, strain
+      integer :: i, info, element
+      character(len=300) :: msg
+      associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof)
+         call predict(self, t, qt, error)
+         if (allocated(error)) return
+         ! Scale of the residual: what the drive increment alone produces from
+         ! the last configuration (independent of the predictor).
+         scale = 0
+         if (self%conv%mode /= convergence_paper .and. self%model%analysis%predictor /= predictor_previous) then
+            self%work = self%q
+            call set_driven(self, t, self%work)
+            call assemble_residual(mesh, self%work, t, self%r)
+            self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+            scale = free_norm(self, self%r)
+         end if
+         self%factor_current = .false.
+         iterations = 0
+         r0 = 0
+         do i = 0, self%model%analysis%max_iter
+            call assemble_tangent(mesh, qt, t, self%r, self%kff, self%kfd)
+            self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+            residual = free_norm(self, self%r)
+            if (i == 0) then
+               r0 = residual
+               if (self%model%analysis%predictor == predictor_previous) scale = r0
+            end if
+            if (self%conv%mode == convergence_paper) then
+               if (is_converged(self%conv, residual, r0, scale, 0.0_dp)) exit
+            end if
+            if (i == self%model%analysis%max_iter) then
+               write (msg, '(a,es12.5,a,i0,a,es9.2)') 't = ', t, ': Newton did not converge in ', i, &
+                  & ' iterations (residual ', residual
+               call analysis_error(error, trim(msg)//')')
+               return
+            end if
+            call factor(self, info)
+            if (info > 0) then
+               write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
+               call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
+               return
+            end if
+            self%rhs(:, 1) = -self%r(eqd)
+            call self%kff%solve(self%rhs)
+            correction = 0
+            if (mesh%nfree > 0) correction = maxval(abs(self%rhs(:, 1))*self%dof_length(eqd))
+            if (correction > divergence_length*self%size) then
+               write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
+               call analysis_error(error, trim(msg))
+               return
+            end if
+            qt(eqd) = qt(eqd) + self%rhs(:, 1)
+            iterations = i + 1
+            self%counts%iterations = self%counts%iterations + 1
+            if (self%conv%mode /= convergence_paper) then
+               if (is_converged(self%conv, residual, r0, scale, correction)) then
+                  self%factor_current = .true.
+                  exit
+               end if
+            end if
+         end do
+         if (.not. self%loaded) then
+            call max_strain(mesh, qt, strain, element)
+            if (strain > admissible_strain) then
+               write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, &
+                  & ': Newton converged to a self-stressed configuration (strain ', strain, ' in link '
+               call analysis_error(error, trim(msg)//' '//self%model%links(mesh%elink(element))%name// &
+                  & '), not a mechanism configuration')
+               self%factor_current = .false.
+               return
+            end if
+         end if
+         call accept(self, t, qt)
+      end associate
+   end subroutine solve_step
+
+   !> Initial guess at time t: the paper's last configuration, polynomial
+   !> extrapolation of the last ones, or a Taylor series from the last rates.
+   !> Without history (the first step) extrapolation and Taylor start from the
+   !> tangent predictor, the linear response of the last configuration to the
+   !> drive increment: rotating a driven link end alone would strain its
+   !> element so much that Newton may leave the assembly branch.
+   subroutine predict(self, t, qt, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: qt(:)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: h
+      h = t - self%t
+      select case (self%model%analysis%predictor)
+      case (predictor_previous)
+         qt = self%q
+      case (predictor_taylor)
+         if (self%has_acceleration) then
+            qt = self%q + h*self%v + h**2/2*self%a
+         else if (self%nhist > 1) then
+            call extrapolate(self%hist(:, 1:self%nhist), self%thist(1:self%nhist), t, qt)
+         else
+            call tangent_predictor(self, t, qt, error)
+         end if
+      case default
+         if (self%nhist > 1) then
+            call extrapolate(self%hist(:, 1:self%nhist), self%thist(1:self%nhist), t, qt)
+            call guard_extrapolation(self, t, qt)
+         else
+            call tangent_predictor(self, t, qt, error)
+         end if
+      end select
+      where (self%mesh%status == dof_fixed) qt = self%mesh%q0
+      call set_driven(self, t, qt)
+   end subroutine predict
+
+   !> Extrapolating positions over a large rotation (a quarter turn per step)
+   !> distorts the links badly, and Newton from there may find another
+   !> assembly branch. Keep the extrapolation only if it strains the elements
+   !> less than the last configuration with the new drive values does.
+   subroutine guard_extrapolation(self, t, qt)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(inout) :: qt(:)
+      real(dp) :: strain_extrapolated, strain_previous
+      integer :: element
+      call set_driven(self, t, qt)
+      call max_strain(self%mesh, qt, strain_extrapolated, element)
+      if (strain_extrapolated < 1.0e-2_dp) return
+      self%work = self%q
+      call set_driven(self, t, self%work)
+      call max_strain(self%mesh, self%work, strain_previous, element)
+      if (strain_previous < strain_extrapolated) qt = self%work
+   end subroutine guard_extrapolation
+
+   !> qt = q + dq with K_ff dq_f = -K_fd dq_d + (t - t_q) f_ext: the tangent at
+   !> the accepted configuration applied to the drive and load increments.
+   subroutine tangent_predictor(self, t, qt, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: qt(:)
+      type(error_type), allocatable, intent(out) :: error
+      call refactor_at_accepted(self, error)
+      if (allocated(error)) return
+      qt = self%q
+      call set_driven(self, t, qt)
+      associate (eqd => self%mesh%eq_dof, dd => self%mesh%driven_dof)
+         self%rhs(:, 1) = -matmul(self%kfd, qt(dd) - self%q(dd))
+         if (self%loaded) self%rhs(:, 1) = self%rhs(:, 1) + (t - self%t)*self%mesh%f_ext(eqd)
+         call self%kff%solve(self%rhs)
+         qt(eqd) = qt(eqd) + self%rhs(:, 1)
+      end associate
+   end subroutine tangent_predictor
+
+   !> Make kff the factor of the tangent at the accepted configuration, unless it is already.
+   subroutine refactor_at_accepted(self, error)
+      type(fem_stepper_type), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      integer :: info
+      character(len=200) :: msg
+      if (self%factor_current) return
+      call assemble_tangent(self%mesh, self%q, self%t, self%r, self%kff, self%kfd)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      call factor(self, info)
+      if (info > 0) then
+         write (msg, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent stiffness is singular at'
+         call analysis_error(error, trim(msg)//' '//describe_dof(self%mesh, self%model, self%mesh%eq_dof(info))//')')
+         return
+      end if
+      self%factor_current = .true.
+   end subroutine refactor_at_accepted
+
+   !> Driven dofs at time t: the initial value plus the law's change since t_start.
+   subroutine set_driven(self, t, q)
+      type(fem_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(inout) :: q(:)
+      real(dp) :: f, df, ddf
+      integer :: i, dof
+      do i = 1, self%mesh%ndriven
+         call self%model%drives(i)%law%eval(t, f, df, ddf)
+         dof = self%mesh%driven_dof(i)
+         q(dof) = self%mesh%q0(dof) + (f - self%law0(i))
+      end do
+   end subroutine set_driven
+
+   !> Make q at time t the accepted configuration and push it on the history.
+   subroutine accept(self, t, q)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, q(:)
+      self%hist(:, 2:3) = self%hist(:, 1:2)
+      self%thist(2:3) = self%thist(1:2)
+      self%hist(:, 1) = q
+      self%thist(1) = t
+      self%nhist = min(self%nhist + 1, 3)
+      self%q = q
+      self%t = t
+      self%has_velocity = .false.
+      self%has_acceleration = .false.
+      self%counts%steps = self%counts%steps + 1
+   end subroutine accept
+
+   !> Factor the assembled tangent, counting Cholesky and LU fallbacks.
+   subroutine factor(self, info)
+      type(fem_stepper_type), intent(inout) :: self
+      integer, intent(out) :: info
+      call self%kff%factor(info)
+      if (self%kff%is_lu) then
+         self%counts%lu_factorisations = self%counts%lu_factorisations + 1
+      else
+         self%counts%cholesky_factorisations = self%counts%cholesky_factorisations + 1
+      end if
+   end subroutine factor
+
+   !> Velocities K v_f = -K_fd v_d + lambda' f (47) and accelerations
+   !> K a_f = -K_fd a_d - d2P[v, v] + lambda'' f (48)-(53), as asked for, with
+   !> the tangent at the accepted configuration (the material tangent there,
+   !> since the geometric part vanishes with the stresses; the load factor is
+   !> lambda = t, so lambda' = 1, lambda'' = 0).
+   subroutine solve_rates(self, error)
+      type(fem_stepper_type), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven)
+      integer :: i
+      if (.not. self%model%analysis%velocities) return
+      call refactor_at_accepted(self, error)
+      if (allocated(error)) return
+      associate (mesh => self%mesh, eqd => self%mesh%eq_dof)
+         do i = 1, mesh%ndriven
+            call self%model%drives(i)%law%eval(self%t, f, vd(i), ad(i))
+         end do
+         self%v = 0
+         self%v(mesh%driven_dof) = vd
+         self%rhs(:, 1) = -matmul(self%kfd, vd)
+         if (self%loaded) self%rhs(:, 1) = self%rhs(:, 1) + mesh%f_ext(eqd)
+         call self%kff%solve(self%rhs)
+         self%v(eqd) = self%rhs(:, 1)
+         self%counts%velocity_solves = self%counts%velocity_solves + 1
+         self%has_velocity = .true.
+         if (.not. self%model%analysis%accelerations) return
+         call assemble_second_derivative(mesh, self%q, self%v, self%work)
+         self%a = 0
+         self%a(mesh%driven_dof) = ad
+         self%rhs(:, 1) = -matmul(self%kfd, ad) - self%work(eqd)
+         call self%kff%solve(self%rhs)
+         self%a(eqd) = self%rhs(:, 1)
+         self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+         self%has_acceleration = .true.
+      end associate
+   end subroutine solve_rates
+
+   !> Node positions, velocities, accelerations and link angles of the accepted state.
+   subroutine fill_result(self, result)
+      type(fem_stepper_type), intent(in) :: self
+      type(step_result_type), intent(inout) :: result
+      integer :: i, dof
+      result%t = self%t
+      result%has_velocity = self%has_velocity
+      result%has_acceleration = self%has_acceleration
+      do i = 1, size(self%model%nodes)
+         result%pos(:, i) = self%q(self%mesh%tdof(:, i))
+         result%vel(:, i) = self%v(self%mesh%tdof(:, i))
+         result%acc(:, i) = self%a(self%mesh%tdof(:, i))
+      end do
+      do i = 1, size(self%model%links)
+         dof = self%mesh%link_rot(1, i)
+         result%angle(i) = self%mesh%link_angle0(i) + self%q(dof)
+         result%omega(i) = self%v(dof)
+         result%alpha(i) = self%a(dof)
+      end do
+   end subroutine fill_result
+
+   !> Euclidean norm of a residual over the free dofs.
+   pure real(dp) function free_norm(self, r) result(norm)
+      type(fem_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: r(:)
+      norm = norm2(r(self%mesh%eq_dof))
+   end function free_norm
+
+end module fekap_solver_fem

@@ -1,0 +1,114 @@
+!> Models of the paper's mechanisms built directly in Fortran, and their
+!> independent closed-form solutions, for tests that must not depend on the
+!> deck reader.
+module test_mechanisms
+   use fekap_kinds, only: dp
+   use fekap_model, only: model_type, node_type, section_type, link_type, support_type, drive_type, &
+      & dof_rot
+   use fekap_model_drive_law, only: new_rate_law
+   implicit none
+   private
+
+   public :: fourbar_model, fourbar_exact, add_node, add_link
+
+   real(dp), parameter :: pi = acos(-1.0_dp)
+
+contains
+
+   subroutine add_node(model, name, x, y)
+      type(model_type), intent(inout) :: model
+      character(*), intent(in) :: name
+      real(dp), intent(in) :: x, y
+      type(node_type) :: node
+      node%name = name
+      node%x = [x, y]
+      if (.not. allocated(model%nodes)) allocate (model%nodes(0))
+      model%nodes = [model%nodes, node]
+   end subroutine add_node
+
+   subroutine add_link(model, name, n1, n2, nelem)
+      type(model_type), intent(inout) :: model
+      character(*), intent(in) :: name
+      integer, intent(in) :: n1, n2, nelem
+      type(link_type) :: link
+      link%name = name
+      link%node = [n1, n2]
+      link%section = 1
+      link%nelem = nelem
+      if (.not. allocated(model%links)) allocate (model%links(0))
+      model%links = [model%links, link]
+   end subroutine add_link
+
+   !> Example 1: A = (0, 0), D = (4, 0), crank AB = 2, coupler BC = 4, rocker
+   !> DC = 4; crank angle 2*pi*t. Section data scaled by `factor` (1: the paper's).
+   subroutine fourbar_model(model, dt, factor, nelem)
+      type(model_type), intent(out) :: model
+      real(dp), intent(in) :: dt
+      real(dp), intent(in), optional :: factor
+      integer, intent(in), optional :: nelem
+      real(dp) :: s
+      integer :: ne
+      s = 1
+      if (present(factor)) s = factor
+      ne = 1
+      if (present(nelem)) ne = nelem
+      model%file = 'fourbar'
+      call add_node(model, 'A', 0.0_dp, 0.0_dp)
+      call add_node(model, 'B', 2.0_dp, 0.0_dp)
+      call add_node(model, 'C', 3.0_dp, sqrt(15.0_dp))
+      call add_node(model, 'D', 4.0_dp, 0.0_dp)
+      allocate (model%sections(1))
+      model%sections(1)%name = 'bar'
+      ! E = G = 1, A = 100, I = 1, k = 5/6, all scaled.
+      model%sections(1)%ea = 100*s
+      model%sections(1)%kga = 5.0_dp/6*100*s
+      model%sections(1)%ei = s
+      call add_link(model, 'AB', 1, 2, ne)
+      call add_link(model, 'BC', 2, 3, ne)
+      call add_link(model, 'DC', 4, 3, ne)
+      allocate (model%supports(2))
+      model%supports(1)%node = 1
+      model%supports(1)%fix = [.true., .true., .false.]
+      model%supports(2)%node = 4
+      model%supports(2)%fix = [.true., .true., .false.]
+      allocate (model%drives(1))
+      model%drives(1)%dof = dof_rot
+      model%drives(1)%link = 1
+      model%drives(1)%node = 1
+      call new_rate_law(model%drives(1)%law, 2*pi)
+      model%analysis%dt = dt
+      allocate (model%welds(0), model%loads(0), model%slidelines(0))
+      model%output%points = [2, 3]
+      model%output%links = [1, 2, 3]
+   end subroutine fourbar_model
+
+   !> Closed-form Example 1 at time t: B and C (upper branch: C to the left of
+   !> B->D) and their first and second time derivatives, from circle
+   !> intersection and the differentiated loop constraints.
+   pure subroutine fourbar_exact(t, b, c, vb, vc, ab, ac)
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: b(2), c(2), vb(2), vc(2), ab(2), ac(2)
+      real(dp), parameter :: l1 = 2, l2 = 4, l3 = 4, dx(2) = [4.0_dp, 0.0_dp]
+      real(dp) :: th, w, e(2), dist, along, h, m(2, 2), rhs(2), det
+      th = 2*pi*t
+      w = 2*pi
+      b = l1*[cos(th), sin(th)]
+      vb = l1*w*[-sin(th), cos(th)]
+      ab = -w**2*b
+      dist = norm2(dx - b)
+      e = (dx - b)/dist
+      along = (l2**2 - l3**2 + dist**2)/(2*dist)
+      h = sqrt(l2**2 - along**2)
+      c = b + along*e + h*[-e(2), e(1)]
+      ! (C - B).(vc - vb) = 0, (C - D).vc = 0
+      m(1, :) = c - b
+      m(2, :) = c - dx
+      rhs = [dot_product(c - b, vb), 0.0_dp]
+      det = m(1, 1)*m(2, 2) - m(1, 2)*m(2, 1)
+      vc = [rhs(1)*m(2, 2) - m(1, 2)*rhs(2), m(1, 1)*rhs(2) - rhs(1)*m(2, 1)]/det
+      ! (C - B).(ac - ab) + |vc - vb|^2 = 0, (C - D).ac + |vc|^2 = 0
+      rhs = [dot_product(c - b, ab) - sum((vc - vb)**2), -sum(vc**2)]
+      ac = [rhs(1)*m(2, 2) - m(1, 2)*rhs(2), m(1, 1)*rhs(2) - rhs(1)*m(2, 1)]/det
+   end subroutine fourbar_exact
+
+end module test_mechanisms
