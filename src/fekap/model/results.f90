@@ -15,6 +15,8 @@ module fekap_model_results
       integer :: iterations = 0
       !> Norm of the residual at the accepted configuration.
       real(dp) :: residual = 0
+      !> Times the step was cut in halves to converge.
+      integer :: cuts = 0
       logical :: has_velocity = .false.
       logical :: has_acceleration = .false.
       !> (2, number of nodes): x, y of every model node.

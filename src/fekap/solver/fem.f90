@@ -165,6 +165,7 @@ contains
             h = min(2*h, h_full)
          end if
       end do
+      result%cuts = self%last_cuts
       call solve_rates(self, error)
       if (allocated(error)) return
       call fill_result(self, result)

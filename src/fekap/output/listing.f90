@@ -1,0 +1,221 @@
+!> The human-readable listing (<stem>.lis): the model echoed, the plan of
+!> the run, one line per step, and a closing summary of the work done.
+module fekap_output_listing
+   use fekap_kinds, only: dp
+   use fekap_model, only: model_type, dof_x, dof_y, dof_rot, method_fem, method_cartesian, &
+      & predictor_previous, predictor_extrapolate, convergence_paper, joint_prismatic
+   use fekap_model_results, only: step_result_type
+   use fekap_solver_stepper, only: work_counts_type
+   implicit none
+   private
+
+   public :: write_listing_model, write_listing_plan, write_listing_step_header, write_listing_step
+   public :: write_listing_summary, write_listing_stop, plan_text
+
+   real(dp), parameter :: rad2deg = 180/acos(-1.0_dp)
+
+contains
+
+   !> Title and the model: nodes, sections, links, joints, supports, drives, loads, slidelines.
+   subroutine write_listing_model(unit, model, version)
+      integer, intent(in) :: unit
+      type(model_type), intent(in) :: model
+      character(*), intent(in) :: version
+      integer :: i, j
+      real(dp) :: d(2)
+      write (unit, '(a)') 'FEKAP '//version//' - Finite Element Kinematic Analysis Program'
+      write (unit, '(a)') 'deck:  '//model%file
+      if (allocated(model%title)) write (unit, '(a)') 'title: '//model%title
+      write (unit, '(/,a)') 'NODES'
+      write (unit, '(2x,a12,2a24)') 'name', 'x', 'y'
+      do i = 1, size(model%nodes)
+         write (unit, '(2x,a12,2es24.15)') model%nodes(i)%name, model%nodes(i)%x
+      end do
+      write (unit, '(/,a)') 'SECTIONS'
+      write (unit, '(2x,a12,3a16)') 'name', 'EA', 'kGA', 'EI'
+      do i = 1, size(model%sections)
+         write (unit, '(2x,a12,3es16.7)') model%sections(i)%name, model%sections(i)%ea, model%sections(i)%kga, &
+            & model%sections(i)%ei
+      end do
+      write (unit, '(/,a)') 'LINKS'
+      write (unit, '(2x,a12,2a8,a12,a9,2a20)') 'name', 'first', 'second', 'section', 'elements', 'length', &
+         & 'angle (deg)'
+      do i = 1, size(model%links)
+         associate (l => model%links(i))
+            d = model%nodes(l%node(2))%x - model%nodes(l%node(1))%x
+            write (unit, '(2x,a12,2a8,a12,i9,2es20.11)') l%name, model%nodes(l%node(1))%name, &
+               & model%nodes(l%node(2))%name, model%sections(l%section)%name, l%nelem, norm2(d), &
+               & atan2(d(2), d(1))*rad2deg
+         end associate
+      end do
+      if (allocated(model%welds)) then
+         if (size(model%welds) > 0) write (unit, '(/,a)') 'WELDS (links rigidly joined; elsewhere links are hinged)'
+         do i = 1, size(model%welds)
+            write (unit, '(2x,a)', advance='no') 'at '//model%nodes(model%welds(i)%node)%name//':'
+            do j = 1, size(model%welds(i)%links)
+               write (unit, '(1x,a)', advance='no') model%links(model%welds(i)%links(j))%name
+            end do
+            write (unit, '(a)') ''
+         end do
+      end if
+      if (allocated(model%supports)) then
+         write (unit, '(/,a)') 'SUPPORTS'
+         do i = 1, size(model%supports)
+            associate (s => model%supports(i))
+               write (unit, '(2x,a12,a)') model%nodes(s%node)%name, trim(merge(' x  ', '    ', s%fix(dof_x)))// &
+                  & trim(merge(' y  ', '    ', s%fix(dof_y)))//merge(' rotation', '         ', s%fix(dof_rot))
+            end associate
+         end do
+      end if
+      if (allocated(model%drives)) then
+         write (unit, '(/,a)') 'DRIVES'
+         do i = 1, size(model%drives)
+            associate (dr => model%drives(i))
+               select case (dr%dof)
+               case (dof_x)
+                  write (unit, '(2x,a)') 'x of node '//model%nodes(dr%node)%name
+               case (dof_y)
+                  write (unit, '(2x,a)') 'y of node '//model%nodes(dr%node)%name
+               case default
+                  write (unit, '(2x,a)') 'angle of link '//model%links(dr%link)%name//' at node '// &
+                     & model%nodes(dr%node)%name
+               end select
+            end associate
+         end do
+      end if
+      if (allocated(model%loads)) then
+         if (size(model%loads) > 0) write (unit, '(/,a)') 'LOADS (times the load factor t)'
+         do i = 1, size(model%loads)
+            write (unit, '(2x,a12,3es16.7)') model%nodes(model%loads(i)%node)%name, model%loads(i)%force, &
+               & model%loads(i)%moment
+         end do
+      end if
+      if (allocated(model%slidelines)) then
+         if (size(model%slidelines) > 0) write (unit, '(/,a)') 'SLIDELINES'
+         do i = 1, size(model%slidelines)
+            associate (s => model%slidelines(i))
+               write (unit, '(2x,a12,a)') s%name, 'slave '//model%nodes(s%slave)%name// &
+                  & merge(' prismatic ', ' pin-in-slot', s%kind == joint_prismatic)
+            end associate
+         end do
+      end if
+   end subroutine write_listing_model
+
+   !> One line saying what the run computes, e.g. "computing positions and
+   !> velocities; 40 steps; output every 10th step".
+   function plan_text(model, nsteps) result(text)
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: nsteps
+      character(:), allocatable :: text
+      character(len=32) :: num
+      text = 'method '//trim(merge('fem      ', 'cartesian', model%analysis%method == method_fem))
+      if (model%analysis%method /= method_fem .and. model%analysis%method /= method_cartesian) text = 'method angles'
+      if (model%analysis%velocities .and. model%analysis%accelerations) then
+         text = text//'; computing positions, velocities and accelerations'
+      else if (model%analysis%velocities) then
+         text = text//'; computing positions and velocities'
+      else
+         text = text//'; computing positions'
+      end if
+      if (allocated(model%slidelines)) then
+         write (num, '(i0)') size(model%slidelines)
+         if (size(model%slidelines) > 0) text = text//'; '//trim(num)//' slideline'// &
+            & trim(merge('s', ' ', size(model%slidelines) > 1))
+      end if
+      write (num, '(i0)') nsteps
+      text = text//'; '//trim(num)//' steps'
+      if (model%output%every > 1) then
+         write (num, '(i0)') model%output%every
+         text = text//'; output every '//trim(num)//trim(ordinal(model%output%every))//' step'
+      end if
+   end function plan_text
+
+   pure function ordinal(n) result(suffix)
+      integer, intent(in) :: n
+      character(len=2) :: suffix
+      suffix = 'th'
+      if (mod(n/10, 10) == 1) return
+      select case (mod(n, 10))
+      case (1)
+         suffix = 'st'
+      case (2)
+         suffix = 'nd'
+      case (3)
+         suffix = 'rd'
+      end select
+   end function ordinal
+
+   !> The plan and the settings of the analysis.
+   subroutine write_listing_plan(unit, model, nsteps, mesh_text)
+      integer, intent(in) :: unit
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: nsteps
+      character(*), intent(in) :: mesh_text
+      character(len=16) :: pred
+      write (unit, '(/,a)') 'PLAN'
+      write (unit, '(2x,a)') plan_text(model, nsteps)
+      if (len(mesh_text) > 0) write (unit, '(2x,a)') mesh_text
+      select case (model%analysis%predictor)
+      case (predictor_previous)
+         pred = 'previous'
+      case (predictor_extrapolate)
+         pred = 'extrapolate'
+      case default
+         pred = 'taylor'
+      end select
+      write (unit, '(2x,a,es12.5,a,es12.5,a,es12.5)') 'time from ', model%analysis%t_start, ' to ', &
+         & model%analysis%t_end, ' step ', model%analysis%dt
+      write (unit, '(2x,a,es9.2,a,es9.2,a,i0,a)') 'Newton: tolerance ', model%analysis%tol, ', length ', &
+         & model%analysis%length_tol, ' x model size, at most ', model%analysis%max_iter, ' iterations'
+      write (unit, '(2x,a)') 'predictor '//trim(pred)//', convergence test '// &
+         & trim(merge('paper  ', 'default', model%analysis%convergence == convergence_paper))
+   end subroutine write_listing_plan
+
+   subroutine write_listing_step_header(unit)
+      integer, intent(in) :: unit
+      write (unit, '(/,a)') 'STEPS'
+      write (unit, '(a8,a20,a12,a16,a6)') 'step', 't', 'iterations', 'residual', 'cuts'
+   end subroutine write_listing_step_header
+
+   subroutine write_listing_step(unit, result)
+      integer, intent(in) :: unit
+      type(step_result_type), intent(in) :: result
+      write (unit, '(i8,es20.11,i12,es16.6,i6)') result%step, result%t, result%iterations, result%residual, &
+         & result%cuts
+   end subroutine write_listing_step
+
+   !> Closing summary: counts of the work done and time per phase.
+   subroutine write_listing_summary(unit, counts, rows, seconds)
+      integer, intent(in) :: unit
+      type(work_counts_type), intent(in) :: counts
+      integer, intent(in) :: rows
+      !> Time in analysis, output and total.
+      real(dp), intent(in) :: seconds(3)
+      write (unit, '(/,a)') 'SUMMARY'
+      write (unit, '(2x,a30,i12)') 'steps', counts%steps
+      write (unit, '(2x,a30,i12)') 'Newton iterations', counts%iterations
+      if (counts%steps > 0) write (unit, '(2x,a30,f12.3)') 'iterations per step', &
+         & real(counts%iterations, dp)/counts%steps
+      write (unit, '(2x,a30,i12)') 'residual assemblies', counts%residual_assemblies
+      write (unit, '(2x,a30,i12)') 'tangent assemblies', counts%tangent_assemblies
+      write (unit, '(2x,a30,i12)') 'Cholesky factorisations', counts%cholesky_factorisations
+      write (unit, '(2x,a30,i12)') 'LU factorisations (fallback)', counts%lu_factorisations
+      write (unit, '(2x,a30,i12)') 'velocity solves', counts%velocity_solves
+      write (unit, '(2x,a30,i12)') 'acceleration solves', counts%acceleration_solves
+      write (unit, '(2x,a30,i12)') 'slideline evaluations', counts%slideline_evaluations
+      write (unit, '(2x,a30,i12)') 'rows written', rows
+      write (unit, '(2x,a30,f12.4)') 'time in analysis (s)', seconds(1)
+      write (unit, '(2x,a30,f12.4)') 'time in output (s)', seconds(2)
+      write (unit, '(2x,a30,f12.4)') 'total time (s)', seconds(3)
+   end subroutine write_listing_summary
+
+   !> Why the run stopped early.
+   subroutine write_listing_stop(unit, message)
+      integer, intent(in) :: unit
+      character(*), intent(in) :: message
+      write (unit, '(/,a)') 'RUN STOPPED'
+      write (unit, '(2x,a)') message
+      write (unit, '(2x,a)') 'The rows written so far are valid results of the completed steps.'
+   end subroutine write_listing_stop
+
+end module fekap_output_listing

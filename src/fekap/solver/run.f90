@@ -1,0 +1,125 @@
+!> The time loop: start the method, advance step by step, and write each
+!> step's rows as soon as it is accepted (flushed), so that a run that stops
+!> early keeps every completed step.
+module fekap_solver_run
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, analysis_error
+   use fekap_model, only: model_type
+   use fekap_model_results, only: step_result_type, new_step_result
+   use fekap_solver_stepper, only: stepper_type
+   use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
+      & write_steps_header, write_steps_row
+   use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
+      & write_listing_stop
+   implicit none
+   private
+
+   public :: run_units_type, run_analysis, step_count, step_time
+
+   !> Open units of the output files; a negative unit is not written.
+   type :: run_units_type
+      integer :: points = -1
+      integer :: links = -1
+      integer :: steps = -1
+      integer :: listing = -1
+   end type run_units_type
+
+contains
+
+   !> Number of steps from t_start to t_end: dt divides the interval, or the
+   !> last step is shortened to end exactly at t_end.
+   pure integer function step_count(model) result(n)
+      type(model_type), intent(in) :: model
+      real(dp) :: span
+      span = model%analysis%t_end - model%analysis%t_start
+      n = nint(span/model%analysis%dt)
+      if (abs(n*model%analysis%dt - span) > 1.0e-9_dp*model%analysis%dt) n = ceiling(span/model%analysis%dt)
+      n = max(n, 1)
+   end function step_count
+
+   !> Time of step n (not accumulated, so no drift over long runs).
+   pure real(dp) function step_time(model, n, nsteps) result(t)
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: n, nsteps
+      if (n >= nsteps) then
+         t = model%analysis%t_end
+      else
+         t = model%analysis%t_start + n*model%analysis%dt
+      end if
+   end function step_time
+
+   !> Run the analysis with `stepper`, writing to `units`. On an analysis
+   !> failure the listing says where and why, and the error names the step.
+   subroutine run_analysis(stepper, model, units, error)
+      class(stepper_type), intent(inout) :: stepper
+      type(model_type), intent(in) :: model
+      type(run_units_type), intent(in) :: units
+      type(error_type), allocatable, intent(out) :: error
+      type(step_result_type) :: result
+      type(error_type), allocatable :: step_error
+      integer :: n, nsteps, rows
+      integer(8) :: clock_rate, c0, c1, c_start
+      real(dp) :: seconds(3)
+      character(len=100) :: where_
+      logical :: vel, acc
+
+      vel = model%analysis%velocities
+      acc = vel .and. model%analysis%accelerations
+      nsteps = step_count(model)
+      call new_step_result(result, size(model%nodes), size(model%links))
+      seconds = 0
+      rows = 0
+      call system_clock(c_start, clock_rate)
+      if (units%points >= 0) call write_points_header(units%points, vel, acc)
+      if (units%links >= 0) call write_links_header(units%links, vel, acc)
+      if (units%steps >= 0) call write_steps_header(units%steps)
+      if (units%listing >= 0) call write_listing_step_header(units%listing)
+
+      do n = 0, nsteps
+         call system_clock(c0)
+         result%step = n
+         result%cuts = 0
+         if (n == 0) then
+            call stepper%start(result, step_error)
+         else
+            call stepper%advance(step_time(model, n, nsteps), result, step_error)
+         end if
+         call system_clock(c1)
+         seconds(1) = seconds(1) + real(c1 - c0, dp)/clock_rate
+         if (allocated(step_error)) then
+            write (where_, '(a,i0,a,es12.5,a)') 'step ', n, ' (t = ', step_time(model, n, nsteps), '): '
+            call analysis_error(error, trim(where_)//' '//step_error%message)
+            if (units%listing >= 0) then
+               call write_listing_stop(units%listing, error%message)
+               flush (units%listing)
+            end if
+            exit
+         end if
+         if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
+            if (units%points >= 0) call write_points_rows(units%points, model, result, vel, acc)
+            if (units%links >= 0) call write_links_rows(units%links, model, result, vel, acc)
+            if (units%steps >= 0) call write_steps_row(units%steps, result)
+            if (units%listing >= 0) call write_listing_step(units%listing, result)
+            rows = rows + size(model%output%points) + size(model%output%links) + 1
+            call flush_all(units)
+         end if
+         call system_clock(c0)
+         seconds(2) = seconds(2) + real(c0 - c1, dp)/clock_rate
+      end do
+      call system_clock(c1)
+      seconds(3) = real(c1 - c_start, dp)/clock_rate
+      if (units%listing >= 0) then
+         call write_listing_summary(units%listing, stepper%counts, rows, seconds)
+         flush (units%listing)
+      end if
+   end subroutine run_analysis
+
+   subroutine flush_all(units)
+      type(run_units_type), intent(in) :: units
+      if (units%points >= 0) flush (units%points)
+      if (units%links >= 0) flush (units%links)
+      if (units%steps >= 0) flush (units%steps)
+      if (units%listing >= 0) flush (units%listing)
+   end subroutine flush_all
+
+end module fekap_solver_run
