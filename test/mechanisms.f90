@@ -9,7 +9,7 @@ module test_mechanisms
    implicit none
    private
 
-   public :: fourbar_model, fourbar_exact, add_node, add_link
+   public :: fourbar_model, fourbar_exact, add_node, add_link, cantilever_model
 
    real(dp), parameter :: pi = acos(-1.0_dp)
 
@@ -110,5 +110,34 @@ contains
       rhs = [dot_product(c - b, ab) - sum((vc - vb)**2), -sum(vc**2)]
       ac = [rhs(1)*m(2, 2) - m(1, 2)*rhs(2), m(1, 1)*rhs(2) - rhs(1)*m(2, 1)]/det
    end subroutine fourbar_exact
+
+   !> A cantilever R-T of length 1 along +x, clamped at R, meshed with nelem
+   !> elements, under an end moment M = t * 2*pi*EI/L at T (EI = 1).
+   subroutine cantilever_model(model, nelem, dt)
+      type(model_type), intent(out) :: model
+      integer, intent(in) :: nelem
+      real(dp), intent(in) :: dt
+      model%file = 'cantilever'
+      call add_node(model, 'R', 0.0_dp, 0.0_dp)
+      call add_node(model, 'T', 1.0_dp, 0.0_dp)
+      allocate (model%sections(1))
+      model%sections(1)%name = 'strip'
+      model%sections(1)%ea = 1.0e3_dp
+      model%sections(1)%kga = 5.0_dp/6*1.0e3_dp
+      model%sections(1)%ei = 1
+      call add_link(model, 'RT', 1, 2, nelem)
+      allocate (model%supports(1))
+      model%supports(1)%node = 1
+      model%supports(1)%fix = .true.
+      model%supports(1)%link = 1
+      allocate (model%loads(1))
+      model%loads(1)%node = 2
+      model%loads(1)%link = 1
+      model%loads(1)%moment = 2*pi
+      allocate (model%drives(0), model%welds(0), model%slidelines(0))
+      model%analysis%dt = dt
+      model%output%points = [2]
+      model%output%links = [1]
+   end subroutine cantilever_model
 
 end module test_mechanisms

@@ -6,7 +6,7 @@ module test_solver_fem
       & convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
-   use test_mechanisms, only: fourbar_model, fourbar_exact
+   use test_mechanisms, only: fourbar_model, fourbar_exact, cantilever_model
    implicit none
    private
    public :: collect_solver_fem
@@ -21,7 +21,9 @@ contains
          & new_unittest('fem_advance_rates_vs_differences', test_rates_fd), &
          & new_unittest('fem_advance_material_independence', test_material), &
          & new_unittest('fem_advance_several_elements', test_several_elements), &
-         & new_unittest('fem_start', test_start) &
+         & new_unittest('fem_start', test_start), &
+         & new_unittest('fem_advance_cantilever_rollup', test_rollup), &
+         & new_unittest('fem_advance_rollup_convergence_rate', test_rollup_rate) &
          & ]
    end subroutine collect_solver_fem
 
@@ -172,5 +174,68 @@ contains
       call check(error, res%has_acceleration, 'accelerations at the start')
       call check(error, fem%mesh%nfree, 9, 'free dofs: x, y of B and C, five link-end rotations (the paper''s 9 x 9)')
    end subroutine test_start
+
+   !> Tip of the cantilever under the end moment at time t (M = t*2*pi*EI/L),
+   !> computed by FEKAP with nelem elements.
+   subroutine rollup_tip(nelem, t_end, tip, error)
+      integer, intent(in) :: nelem
+      real(dp), intent(in) :: t_end
+      real(dp), intent(out) :: tip(3)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      type(fem_stepper_type) :: fem
+      type(step_result_type) :: res
+      integer :: n
+      call cantilever_model(model, nelem, 0.05_dp)
+      model%analysis%t_end = t_end
+      call new_fem_stepper(fem, model)
+      call new_step_result(res, 2, 1)
+      call fem%start(res, error)
+      do n = 1, nint(t_end/0.05_dp)
+         if (allocated(error)) return
+         call fem%advance(n*0.05_dp, res, error)
+      end do
+      if (allocated(error)) return
+      tip = [res%pos(:, 2), fem%q(fem%mesh%link_rot(2, 1))]
+   end subroutine rollup_tip
+
+   !> M = 2*pi*EI/L rolls the cantilever into a full circle: the tip returns to
+   !> the root with a tip rotation of 2*pi (exact for the discrete beam too, whose
+   !> nodes form a closed regular polygon); at M = pi*EI/L the tip reaches the
+   !> exact half circle (0, 2/pi) within the discretisation error.
+   subroutine test_rollup(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: tip(3), pi
+      pi = acos(-1.0_dp)
+      call rollup_tip(16, 1.0_dp, tip, error)
+      if (allocated(error)) return
+      call check(error, norm2(tip(1:2)), 0.0_dp, 'tip back at the root', abs=1.0e-9_dp)
+      call check(error, tip(3), 2*pi, 'tip rotation', rel=1.0e-10_dp)
+      call rollup_tip(16, 0.5_dp, tip, error)
+      if (allocated(error)) return
+      call check(error, tip(1), 0.0_dp, 'half circle: x', abs=1.0e-2_dp)
+      call check(error, tip(2), 2/pi, 'half circle: y', rel=1.0e-2_dp)
+   end subroutine test_rollup
+
+   !> The tip error at M = pi*EI/L (a half circle, tip at (0, 2/pi)) falls as
+   !> h^2 when elements are added: observed rate 2 within 0.05.
+   subroutine test_rollup_rate(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: tip(3), err(4), pi, rate
+      integer :: k
+      character(len=80) :: label
+      pi = acos(-1.0_dp)
+      do k = 1, 4
+         call rollup_tip(4*2**k, 0.5_dp, tip, error)
+         if (allocated(error)) return
+         err(k) = norm2(tip(1:2) - [0.0_dp, 2/pi])
+      end do
+      do k = 2, 4
+         rate = log(err(k - 1)/err(k))/log(2.0_dp)
+         write (label, '(a,i0,a,es10.3,a,f6.3)') 'elements ', 4*2**k, ' tip error ', err(k), ' rate ', rate
+         write (*, '(4x,a)') trim(label)
+         call check(error, rate, 2.0_dp, trim(label), abs=0.05_dp)
+      end do
+   end subroutine test_rollup_rate
 
 end module test_solver_fem

@@ -1,0 +1,220 @@
+!> The command line of fekap: options, overrides of the deck's settings.
+module fekap_app_cli
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, input_error
+   use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
+      & predictor_extrapolate, predictor_taylor
+   implicit none
+   private
+
+   public :: cli_type, parse_command_line, apply_overrides, usage_text
+
+   character(*), parameter, public :: fekap_version = '0.1.0'
+
+   type :: cli_type
+      character(:), allocatable :: deck
+      character(:), allocatable :: outdir
+      logical :: quiet = .false.
+      logical :: help = .false.
+      logical :: version = .false.
+      !> Print the output directory and exit (used by scripts/fekap).
+      logical :: print_outdir = .false.
+      character(:), allocatable :: method, dt, tol, predictor, compute
+   end type cli_type
+
+contains
+
+   function usage_text() result(text)
+      character(:), allocatable :: text
+      character(*), parameter :: nl = new_line('a')
+      text = 'usage: fekap [options] DECK'//nl//nl// &
+         & 'Kinematic analysis of a planar mechanism described by a card deck'//nl// &
+         & '(see docs/deck-format.md). Results go to out/<deck stem>/ unless -o is given.'//nl//nl// &
+         & 'options:'//nl// &
+         & '  -o DIR              output directory'//nl// &
+         & '  -q                  quiet: print nothing but errors'//nl// &
+         & '  --method NAME       fem | cartesian | angles (overrides the deck)'//nl// &
+         & '  --dt VALUE          time step (overrides the deck)'//nl// &
+         & '  --tol VALUE         Newton tolerance (overrides the deck)'//nl// &
+         & '  --predictor NAME    previous | extrapolate | taylor (overrides the deck)'//nl// &
+         & '  --compute LIST      positions[,velocities[,accelerations]] (overrides the deck)'//nl// &
+         & '  --print-outdir      print the output directory and exit'//nl// &
+         & '  --version           print the version and exit'//nl// &
+         & '  --help              print this help and exit'//nl//nl// &
+         & 'exit codes: 0 success, 2 input error, 3 analysis did not converge or hit a'//nl// &
+         & 'singular configuration, 1 anything else.'
+   end function usage_text
+
+   !> Read the command line into `cli`.
+   subroutine parse_command_line(cli, error)
+      type(cli_type), intent(out) :: cli
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i, n
+      character(:), allocatable :: arg
+      n = command_argument_count()
+      i = 0
+      do while (i < n)
+         i = i + 1
+         call argument(i, arg)
+         select case (arg)
+         case ('-h', '--help')
+            cli%help = .true.
+         case ('--version')
+            cli%version = .true.
+         case ('-q', '--quiet')
+            cli%quiet = .true.
+         case ('--print-outdir')
+            cli%print_outdir = .true.
+         case ('-o', '--method', '--dt', '--tol', '--predictor', '--compute')
+            if (i == n) then
+               call input_error(error, 'fekap: option '//arg//' needs a value (see fekap --help)')
+               return
+            end if
+            i = i + 1
+            select case (arg)
+            case ('-o')
+               call argument(i, cli%outdir)
+            case ('--method')
+               call argument(i, cli%method)
+            case ('--dt')
+               call argument(i, cli%dt)
+            case ('--tol')
+               call argument(i, cli%tol)
+            case ('--predictor')
+               call argument(i, cli%predictor)
+            case ('--compute')
+               call argument(i, cli%compute)
+            end select
+         case default
+            if (len(arg) > 1 .and. arg(1:1) == '-') then
+               call input_error(error, 'fekap: unknown option '//arg//' (see fekap --help)')
+               return
+            end if
+            if (allocated(cli%deck)) then
+               call input_error(error, 'fekap: one deck at a time: got '//cli%deck//' and '//arg)
+               return
+            end if
+            cli%deck = arg
+         end select
+      end do
+      if (.not. (cli%help .or. cli%version) .and. .not. allocated(cli%deck)) then
+         call input_error(error, 'fekap: no deck given (usage: fekap [options] DECK; see fekap --help)')
+         return
+      end if
+      if (allocated(cli%deck) .and. .not. allocated(cli%outdir)) cli%outdir = 'out/'//stem(cli%deck)
+   end subroutine parse_command_line
+
+   subroutine argument(i, arg)
+      integer, intent(in) :: i
+      character(:), allocatable, intent(out) :: arg
+      integer :: length
+      call get_command_argument(i, length=length)
+      allocate (character(len=length) :: arg)
+      call get_command_argument(i, arg)
+   end subroutine argument
+
+   !> File name without directory and extension.
+   pure function stem(path) result(name)
+      character(*), intent(in) :: path
+      character(:), allocatable :: name
+      integer :: slash, dot
+      slash = index(path, '/', back=.true.)
+      name = path(slash + 1:)
+      dot = index(name, '.', back=.true.)
+      if (dot > 1) name = name(:dot - 1)
+   end function stem
+
+   !> Apply the command-line overrides to the model's analysis settings.
+   subroutine apply_overrides(cli, model, error)
+      type(cli_type), intent(in) :: cli
+      type(model_type), intent(inout) :: model
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: value
+      integer :: stat, start, comma
+      character(:), allocatable :: item
+      if (allocated(cli%method)) then
+         select case (lower(cli%method))
+         case ('fem')
+            model%analysis%method = method_fem
+         case ('cartesian')
+            model%analysis%method = method_cartesian
+         case ('angles')
+            model%analysis%method = method_angles
+         case default
+            call input_error(error, 'fekap: --method '//cli%method//': expected fem, cartesian or angles')
+            return
+         end select
+      end if
+      if (allocated(cli%predictor)) then
+         select case (lower(cli%predictor))
+         case ('previous')
+            model%analysis%predictor = predictor_previous
+         case ('extrapolate')
+            model%analysis%predictor = predictor_extrapolate
+         case ('taylor')
+            model%analysis%predictor = predictor_taylor
+         case default
+            call input_error(error, 'fekap: --predictor '//cli%predictor//': expected previous, extrapolate or taylor')
+            return
+         end select
+      end if
+      if (allocated(cli%dt)) then
+         read (cli%dt, *, iostat=stat) value
+         if (stat /= 0 .or. .not. (value > 0 .and. value <= huge(value))) then
+            call input_error(error, 'fekap: --dt '//cli%dt//': expected a positive number')
+            return
+         end if
+         if ((model%analysis%t_end - model%analysis%t_start)/value > 1.0e7_dp) then
+            call input_error(error, 'fekap: --dt '//cli%dt//': more than 10,000,000 steps')
+            return
+         end if
+         model%analysis%dt = value
+      end if
+      if (allocated(cli%tol)) then
+         read (cli%tol, *, iostat=stat) value
+         if (stat /= 0 .or. .not. (value > 0 .and. value < 1)) then
+            call input_error(error, 'fekap: --tol '//cli%tol//': expected a number between 0 and 1')
+            return
+         end if
+         model%analysis%tol = value
+      end if
+      if (allocated(cli%compute)) then
+         model%analysis%velocities = .false.
+         model%analysis%accelerations = .false.
+         start = 1
+         do while (start <= len(cli%compute))
+            comma = index(cli%compute(start:), ',')
+            if (comma == 0) then
+               item = lower(cli%compute(start:))
+               start = len(cli%compute) + 1
+            else
+               item = lower(cli%compute(start:start + comma - 2))
+               start = start + comma
+            end if
+            select case (item)
+            case ('positions')
+            case ('velocities')
+               model%analysis%velocities = .true.
+            case ('accelerations')
+               model%analysis%velocities = .true.
+               model%analysis%accelerations = .true.
+            case default
+               call input_error(error, 'fekap: --compute '//cli%compute//': expected a list of positions, '// &
+                  & 'velocities, accelerations')
+               return
+            end select
+         end do
+      end if
+   end subroutine apply_overrides
+
+   pure function lower(text) result(low)
+      character(*), intent(in) :: text
+      character(len(text)) :: low
+      integer :: i
+      low = text
+      do i = 1, len(text)
+         if (text(i:i) >= 'A' .and. text(i:i) <= 'Z') low(i:i) = achar(iachar(text(i:i)) + 32)
+      end do
+   end function lower
+
+end module fekap_app_cli
