@@ -4,6 +4,7 @@ program tester
    use test_drive_law, only: collect_drive_law
    use test_element_beam, only: collect_element_beam
    use test_solver_fem, only: collect_solver_fem
+   use test_contact_slideline, only: collect_contact_slideline
    implicit none
 
    abstract interface
@@ -26,6 +27,7 @@ program tester
    call run('drive_law', collect_drive_law)
    call run('element_beam', collect_element_beam)
    call run('solver_fem', collect_solver_fem)
+   call run('contact_slideline', collect_contact_slideline)
 
    if (failed > 0) error stop 1
 
