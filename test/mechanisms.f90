@@ -4,12 +4,13 @@
 module test_mechanisms
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, node_type, section_type, link_type, support_type, drive_type, &
-      & dof_rot
+      & dof_rot, joint_pin_in_slot
    use fekap_model_drive_law, only: new_rate_law
    implicit none
    private
 
-   public :: fourbar_model, fourbar_exact, add_node, add_link, cantilever_model
+   public :: fourbar_model, fourbar_exact, add_node, add_link, cantilever_model, slider_crank_model, &
+      & slider_crank_exact
 
    real(dp), parameter :: pi = acos(-1.0_dp)
 
@@ -139,5 +140,76 @@ contains
       model%output%points = [2]
       model%output%links = [1]
    end subroutine cantilever_model
+
+   !> Slider-crank: crank O-A of length 1 at the origin (A = (1, 0) at t = 0),
+   !> connecting rod A-B of length 3, slider B on a ground guide along the x
+   !> axis from x = -5 to x = 5, crank angle 2*pi*t. With `master_link`, the
+   !> guide is instead a grounded link G1-G2 meshed with nelem_guide elements.
+   subroutine slider_crank_model(model, dt, nelem_guide)
+      type(model_type), intent(out) :: model
+      real(dp), intent(in) :: dt
+      integer, intent(in), optional :: nelem_guide
+      model%file = 'slider-crank'
+      call add_node(model, 'O', 0.0_dp, 0.0_dp)
+      call add_node(model, 'A', 1.0_dp, 0.0_dp)
+      call add_node(model, 'B', 4.0_dp, 0.0_dp)
+      allocate (model%sections(1))
+      model%sections(1)%name = 'bar'
+      model%sections(1)%ea = 100
+      model%sections(1)%kga = 5.0_dp/6*100
+      model%sections(1)%ei = 1
+      call add_link(model, 'OA', 1, 2, 1)
+      call add_link(model, 'AB', 2, 3, 1)
+      allocate (model%slidelines(1))
+      model%slidelines(1)%name = 'rail'
+      model%slidelines(1)%slave = 3
+      model%slidelines(1)%kind = joint_pin_in_slot
+      if (present(nelem_guide)) then
+         call add_node(model, 'G1', -5.0_dp, 0.0_dp)
+         call add_node(model, 'G2', 5.0_dp, 0.0_dp)
+         call add_link(model, 'G', 4, 5, nelem_guide)
+         model%slidelines(1)%master_links = [3]
+         allocate (model%supports(3))
+         model%supports(3)%node = 5
+         model%supports(3)%fix = [.true., .true., .false.]
+      else
+         model%slidelines(1)%ground = .true.
+         model%slidelines(1)%guide = reshape([-5.0_dp, 0.0_dp, 5.0_dp, 0.0_dp], [2, 2])
+         allocate (model%supports(1))
+      end if
+      model%supports(1)%node = 1
+      model%supports(1)%fix = [.true., .true., .false.]
+      if (present(nelem_guide)) then
+         model%supports(2)%node = 4
+         model%supports(2)%fix = [.true., .true., .false.]
+      end if
+      allocate (model%drives(1))
+      model%drives(1)%dof = dof_rot
+      model%drives(1)%link = 1
+      model%drives(1)%node = 1
+      call new_rate_law(model%drives(1)%law, 2*pi)
+      allocate (model%welds(0), model%loads(0))
+      model%analysis%dt = dt
+      model%output%points = [3]
+      model%output%links = [1, 2]
+   end subroutine slider_crank_model
+
+   !> Closed-form slider position x = cos(th) + sqrt(9 - sin(th)^2), th = 2*pi*t,
+   !> and its first and second time derivatives.
+   pure subroutine slider_crank_exact(t, x, v, a)
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: x, v, a
+      real(dp) :: th, w, s, c, root, d1, d2
+      th = 2*pi*t
+      w = 2*pi
+      s = sin(th)
+      c = cos(th)
+      root = sqrt(9 - s**2)
+      x = c + root
+      d1 = -s - s*c/root
+      d2 = -c - (c**2 - s**2)/root - s**2*c**2/root**3
+      v = w*d1
+      a = w**2*d2
+   end subroutine slider_crank_exact
 
 end module test_mechanisms

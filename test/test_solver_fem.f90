@@ -6,7 +6,8 @@ module test_solver_fem
       & convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
-   use test_mechanisms, only: fourbar_model, fourbar_exact, cantilever_model
+   use test_mechanisms, only: fourbar_model, fourbar_exact, cantilever_model, slider_crank_model, &
+      & slider_crank_exact
    implicit none
    private
    public :: collect_solver_fem
@@ -23,7 +24,9 @@ contains
          & new_unittest('fem_advance_several_elements', test_several_elements), &
          & new_unittest('fem_start', test_start), &
          & new_unittest('fem_advance_cantilever_rollup', test_rollup), &
-         & new_unittest('fem_advance_rollup_convergence_rate', test_rollup_rate) &
+         & new_unittest('fem_advance_rollup_convergence_rate', test_rollup_rate), &
+         & new_unittest('fem_advance_slider_crank', test_slider_crank), &
+         & new_unittest('fem_advance_slider_across_elements', test_slider_across) &
          & ]
    end subroutine collect_solver_fem
 
@@ -237,5 +240,61 @@ contains
          call check(error, rate, 2.0_dp, trim(label), abs=0.05_dp)
       end do
    end subroutine test_rollup_rate
+
+   !> Run the slider-crank over one revolution: largest errors of the slider's
+   !> x, vx, ax (relative to their largest exact magnitudes), largest |y|, and
+   !> the largest jump of the velocity between steps (for smoothness).
+   subroutine run_slider(model, err, error)
+      type(model_type), intent(in) :: model
+      real(dp), intent(out) :: err(4)
+      type(error_type), allocatable, intent(out) :: error
+      type(fem_stepper_type) :: fem
+      type(step_result_type) :: res
+      real(dp) :: x, v, a
+      integer :: n
+      call new_fem_stepper(fem, model)
+      call new_step_result(res, size(model%nodes), size(model%links))
+      call fem%start(res, error)
+      err = 0
+      do n = 1, nint(1/model%analysis%dt)
+         if (allocated(error)) return
+         call fem%advance(n*model%analysis%dt, res, error)
+         if (allocated(error)) return
+         call slider_crank_exact(res%t, x, v, a)
+         err(1) = max(err(1), abs(res%pos(1, 3) - x)/4)
+         err(2) = max(err(2), abs(res%vel(1, 3) - v)/(2*acos(-1.0_dp)*1.4_dp))
+         err(3) = max(err(3), abs(res%acc(1, 3) - a)/(4*acos(-1.0_dp)**2*1.4_dp))
+         err(4) = max(err(4), abs(res%pos(2, 3)))
+      end do
+   end subroutine run_slider
+
+   !> The slider on a ground guide: x, vx, ax equal the closed form to 1e-9.
+   subroutine test_slider_crank(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      real(dp) :: err(4)
+      call slider_crank_model(model, 0.01_dp)
+      call run_slider(model, err, error)
+      if (allocated(error)) return
+      call check(error, err(1), 0.0_dp, 'slider x', abs=1.0e-9_dp)
+      call check(error, err(2), 0.0_dp, 'slider vx', abs=1.0e-9_dp)
+      call check(error, err(3), 0.0_dp, 'slider ax', abs=1.0e-9_dp)
+      call check(error, err(4), 0.0_dp, 'slider stays on the guide', abs=1.0e-9_dp)
+   end subroutine test_slider_crank
+
+   !> The guide is a grounded link of 5 elements: the slider crosses from one
+   !> master element to the next, with the same exact results as on one guide.
+   subroutine test_slider_across(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      real(dp) :: err(4)
+      call slider_crank_model(model, 0.01_dp, nelem_guide=5)
+      call run_slider(model, err, error)
+      if (allocated(error)) return
+      call check(error, err(1), 0.0_dp, 'slider x', abs=1.0e-9_dp)
+      call check(error, err(2), 0.0_dp, 'slider vx', abs=1.0e-9_dp)
+      call check(error, err(3), 0.0_dp, 'slider ax', abs=1.0e-9_dp)
+      call check(error, err(4), 0.0_dp, 'slider stays on the guide', abs=1.0e-9_dp)
+   end subroutine test_slider_across
 
 end module test_solver_fem

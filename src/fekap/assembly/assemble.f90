@@ -1,22 +1,29 @@
-!> Global assembly of the beam elements: internal force P(q) over all dofs,
-!> the free-free tangent in band storage, the free-driven coupling block, and
-!> the second directional derivative used by the acceleration analysis.
+!> Global assembly of the residual R(q) = P(q) - F^c(q) - lambda f_ext: beam
+!> internal forces P, slideline contact forces F^c (76), external loads; its
+!> tangent K - K^c (77) with the free-free part in band storage and the
+!> free-driven block dense; and its second directional derivative, the
+!> velocity term of the acceleration equations (48)-(53), (81)-(95).
 module fekap_assembly_assemble
    use fekap_kinds, only: dp
-   use fekap_assembly_mesh, only: mesh_type
+   use fekap_model, only: joint_prismatic
+   use fekap_assembly_mesh, only: mesh_type, slide_type
    use fekap_assembly_band, only: band_matrix_type
    use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain
+   use fekap_contact_slideline, only: slide_force, slide_second_derivative, slide_tie_force, &
+      & slide_tie_second_derivative
    implicit none
    private
 
-   public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain
+   public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain, slide_position
 
 contains
 
-   !> r = P(q) - lambda f_ext over all dofs (reactions at fixed and driven dofs included).
-   pure subroutine assemble_residual(mesh, q, lambda, r)
+   !> r = R(q) over all dofs (reactions at fixed and driven dofs included).
+   !> seg(i) is the master segment slideline i is on.
+   pure subroutine assemble_residual(mesh, q, lambda, seg, r)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:), lambda
+      integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
       real(dp) :: pe(6)
       integer :: e
@@ -25,54 +32,166 @@ contains
          call beam_residual(mesh%elements(e), q(mesh%edof(:, e)), pe)
          r(mesh%edof(:, e)) = r(mesh%edof(:, e)) + pe
       end do
+      call add_contact(mesh, q, seg, r)
    end subroutine assemble_residual
 
-   !> Residual as assemble_residual, and the tangent: free-free part into the
-   !> band matrix (equation order), free-driven part into kfd(eq, drive).
-   pure subroutine assemble_tangent(mesh, q, lambda, r, kff, kfd)
+   !> Residual as assemble_residual, and the tangent dR/dq: free-free part into
+   !> the band matrix (equation order), free-driven part into kfd(eq, drive).
+   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:), lambda
+      integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
       type(band_matrix_type), intent(inout) :: kff
       real(dp), intent(out) :: kfd(:, :)
       real(dp) :: pe(6), ke(6, 6)
-      integer :: e, i, j, ei, ej, dj
+      integer :: e
       r = -lambda*mesh%f_ext
       call kff%zero()
       kfd = 0
       do e = 1, size(mesh%elements)
          call beam_residual(mesh%elements(e), q(mesh%edof(:, e)), pe, ke)
          r(mesh%edof(:, e)) = r(mesh%edof(:, e)) + pe
-         do j = 1, 6
-            dj = mesh%edof(j, e)
-            ej = mesh%eq(dj)
-            do i = 1, 6
-               ei = mesh%eq(mesh%edof(i, e))
-               if (ei == 0) cycle
-               if (ej > 0) then
-                  call kff%add(ei, ej, ke(i, j))
-               else if (mesh%drive_col(dj) > 0) then
-                  kfd(ei, mesh%drive_col(dj)) = kfd(ei, mesh%drive_col(dj)) + ke(i, j)
-               end if
-            end do
-         end do
+         call scatter(mesh, mesh%edof(:, e), ke, kff, kfd)
       end do
+      call add_contact(mesh, q, seg, r, kff, kfd)
    end subroutine assemble_tangent
 
-   !> d2 = d^2 P / dq^2 [v, v] over all dofs (the velocity-dependent term of
-   !> the acceleration equations (48)-(53)).
-   pure subroutine assemble_second_derivative(mesh, q, v, d2)
+   !> Add ke on the dofs `dofs` (0: no dof, a fixed ground point) to the
+   !> free-free band and the free-driven block.
+   pure subroutine scatter(mesh, dofs, ke, kff, kfd)
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: dofs(:)
+      real(dp), intent(in) :: ke(:, :)
+      type(band_matrix_type), intent(inout) :: kff
+      real(dp), intent(inout) :: kfd(:, :)
+      integer :: i, j, ei, ej, dj
+      do j = 1, size(dofs)
+         dj = dofs(j)
+         if (dj == 0) cycle
+         ej = mesh%eq(dj)
+         do i = 1, size(dofs)
+            if (dofs(i) == 0) cycle
+            ei = mesh%eq(dofs(i))
+            if (ei == 0) cycle
+            if (ej > 0) then
+               call kff%add(ei, ej, ke(i, j))
+            else if (mesh%drive_col(dj) > 0) then
+               kfd(ei, mesh%drive_col(dj)) = kfd(ei, mesh%drive_col(dj)) + ke(i, j)
+            end if
+         end do
+      end do
+   end subroutine scatter
+
+   !> Positions of slideline `sl` on segment iseg: slave, master ends, and the
+   !> dofs (slave x, y, master x1, y1, x2, y2; 0 for a fixed guide).
+   pure subroutine slide_position(mesh, sl, iseg, q, xs, x1, x2, dofs)
+      type(mesh_type), intent(in) :: mesh
+      type(slide_type), intent(in) :: sl
+      integer, intent(in) :: iseg
+      real(dp), intent(in) :: q(:)
+      real(dp), intent(out) :: xs(2), x1(2), x2(2)
+      integer, intent(out) :: dofs(6)
+      dofs(1:2) = mesh%tdof(:, sl%slave)
+      xs = q(dofs(1:2))
+      if (sl%ground) then
+         dofs(3:6) = 0
+         x1 = sl%guide(:, 1)
+         x2 = sl%guide(:, 2)
+      else
+         dofs(3:4) = mesh%tdof(:, sl%seg(1, iseg))
+         dofs(5:6) = mesh%tdof(:, sl%seg(2, iseg))
+         x1 = q(dofs(3:4))
+         x2 = q(dofs(5:6))
+      end if
+   end subroutine slide_position
+
+   !> r -= F^c and, when given, K -= K^c: the gap springs (65), (72) and the
+   !> rotational ties of prismatic joints.
+   pure subroutine add_contact(mesh, q, seg, r, kff, kfd)
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      real(dp), intent(inout) :: r(:)
+      type(band_matrix_type), intent(inout), optional :: kff
+      real(dp), intent(inout), optional :: kfd(:, :)
+      real(dp) :: xs(2), x1(2), x2(2), f(6), k(6, 6), ft(5), kt(5, 5)
+      integer :: i, dofs(6), tdofs(5)
+      do i = 1, size(mesh%slides)
+         associate (sl => mesh%slides(i))
+            call slide_position(mesh, sl, seg(i), q, xs, x1, x2, dofs)
+            if (present(kff)) then
+               call slide_force(xs, x1, x2, sl%kp, f, k)
+               call scatter(mesh, dofs, -k, kff, kfd)
+            else
+               call slide_force(xs, x1, x2, sl%kp, f)
+            end if
+            call subtract(r, dofs, f)
+            if (sl%kind == joint_prismatic) then
+               tdofs = [sl%slave_rot, dofs(3:6)]
+               if (present(kff)) then
+                  call slide_tie_force(q(sl%slave_rot), x1, x2, sl%c0(seg(i)), sl%kr, ft, kt)
+                  call scatter(mesh, tdofs, -kt, kff, kfd)
+               else
+                  call slide_tie_force(q(sl%slave_rot), x1, x2, sl%c0(seg(i)), sl%kr, ft)
+               end if
+               call subtract(r, tdofs, ft)
+            end if
+         end associate
+      end do
+   end subroutine add_contact
+
+   !> r(dofs) -= f, skipping absent dofs.
+   pure subroutine subtract(r, dofs, f)
+      real(dp), intent(inout) :: r(:)
+      integer, intent(in) :: dofs(:)
+      real(dp), intent(in) :: f(:)
+      integer :: i
+      do i = 1, size(dofs)
+         if (dofs(i) > 0) r(dofs(i)) = r(dofs(i)) - f(i)
+      end do
+   end subroutine subtract
+
+   !> d2 = d^2 R / dq^2 [v, v] over all dofs.
+   pure subroutine assemble_second_derivative(mesh, q, v, seg, d2)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:), v(:)
+      integer, intent(in) :: seg(:)
       real(dp), intent(out) :: d2(:)
-      real(dp) :: de(6)
-      integer :: e
+      real(dp) :: de(6), xs(2), x1(2), x2(2), ve(6), vt(5), dt(5)
+      integer :: e, i, dofs(6), tdofs(5)
       d2 = 0
       do e = 1, size(mesh%elements)
          call beam_second_derivative(mesh%elements(e), q(mesh%edof(:, e)), v(mesh%edof(:, e)), de)
          d2(mesh%edof(:, e)) = d2(mesh%edof(:, e)) + de
       end do
+      do i = 1, size(mesh%slides)
+         associate (sl => mesh%slides(i))
+            call slide_position(mesh, sl, seg(i), q, xs, x1, x2, dofs)
+            ve = gather(v, dofs)
+            call slide_second_derivative(xs, x1, x2, sl%kp, ve, de)
+            call subtract(d2, dofs, de)
+            if (sl%kind == joint_prismatic) then
+               tdofs = [sl%slave_rot, dofs(3:6)]
+               vt = gather(v, tdofs)
+               call slide_tie_second_derivative(q(sl%slave_rot), x1, x2, sl%c0(seg(i)), sl%kr, vt, dt)
+               call subtract(d2, tdofs, dt)
+            end if
+         end associate
+      end do
    end subroutine assemble_second_derivative
+
+   !> v(dofs), with 0 for absent dofs (a fixed guide does not move).
+   pure function gather(v, dofs) result(ve)
+      real(dp), intent(in) :: v(:)
+      integer, intent(in) :: dofs(:)
+      real(dp) :: ve(size(dofs))
+      integer :: i
+      ve = 0
+      do i = 1, size(dofs)
+         if (dofs(i) > 0) ve(i) = v(dofs(i))
+      end do
+   end function gather
 
    !> Largest element strain and the element where it occurs.
    pure subroutine max_strain(mesh, q, strain, element)

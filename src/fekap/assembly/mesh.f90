@@ -10,15 +10,34 @@
 !> consecutive elements share the rotation of their common point.
 module fekap_assembly_mesh
    use fekap_kinds, only: dp
-   use fekap_model, only: model_type, dof_x, dof_y, dof_rot
+   use fekap_model, only: model_type, dof_x, dof_y, dof_rot, joint_prismatic
    use fekap_element_beam, only: beam_type, new_beam
+   use fekap_contact_slideline, only: default_penalty, default_tie_penalty
    implicit none
    private
 
-   public :: mesh_type, new_mesh, describe_dof
+   public :: mesh_type, slide_type, new_mesh, describe_dof
 
    !> Status of a degree of freedom.
    integer, parameter, public :: dof_free = 0, dof_fixed = 1, dof_driven = 2
+
+   !> A slideline in mesh terms: the slave point and the chain of master
+   !> segments (pairs of points, in order along the line), or a fixed guide.
+   type :: slide_type
+      integer :: slave = 0
+      !> joint_pin_in_slot or joint_prismatic.
+      integer :: kind = 0
+      !> Prismatic joints: the slave link's rotation dof at the slave point.
+      integer :: slave_rot = 0
+      logical :: ground = .false.
+      real(dp) :: guide(2, 2) = 0
+      !> (2, nseg): the master points of each segment along the chain.
+      integer, allocatable :: seg(:, :)
+      !> Penalty constants of the gap spring and of the rotational tie.
+      real(dp) :: kp = 0, kr = 0
+      !> Prismatic joints: initial chord angle of each segment (the tie's offset).
+      real(dp), allocatable :: c0(:)
+   end type slide_type
 
    type :: mesh_type
       integer :: npoint = 0
@@ -57,6 +76,7 @@ module fekap_assembly_mesh
       real(dp), allocatable :: q0(:)
       !> (ndof): external nodal loads at unit load factor.
       real(dp), allocatable :: f_ext(:)
+      type(slide_type), allocatable :: slides(:)
    end type mesh_type
 
 contains
@@ -176,6 +196,7 @@ contains
       end do
 
       call set_status(self, model)
+      call new_slides(self, model, first_interior)
       call number_equations(self)
 
       allocate (self%q0(self%ndof), source=0.0_dp)
@@ -278,6 +299,7 @@ contains
    subroutine number_equations(self)
       type(mesh_type), intent(inout) :: self
       integer, allocatable :: free_index(:), deg(:), adj_start(:), adj(:), fill(:), order(:), level(:)
+      integer, allocatable :: group_start(:), group_dof(:)
       integer :: nf, e, a, b, ia, ib, i, n_ordered, start, head, tail, v, w, k, nnz
       logical, allocatable :: seen(:)
 
@@ -291,14 +313,17 @@ contains
       end do
       self%nfree = nf
 
-      ! Adjacency (CSR) of the free dofs: two dofs are adjacent when an element couples them.
+      ! Coupling groups: each element's dofs, and each slideline's slave with
+      ! all its master points (the slave may reach any master segment).
+      call coupling_groups(self, group_start, group_dof)
+      ! Adjacency (CSR) of the free dofs: two dofs are adjacent when a group couples them.
       allocate (deg(nf), source=0)
-      do e = 1, size(self%edof, 2)
-         do ia = 1, 6
-            a = free_index(self%edof(ia, e))
+      do e = 1, size(group_start) - 1
+         do ia = group_start(e), group_start(e + 1) - 1
+            a = free_index(group_dof(ia))
             if (a == 0) cycle
-            do ib = 1, 6
-               b = free_index(self%edof(ib, e))
+            do ib = group_start(e), group_start(e + 1) - 1
+               b = free_index(group_dof(ib))
                if (b /= 0 .and. b /= a) deg(a) = deg(a) + 1
             end do
          end do
@@ -311,12 +336,12 @@ contains
       nnz = adj_start(nf + 1) - 1
       allocate (adj(nnz), fill(nf))
       fill = adj_start(1:nf)
-      do e = 1, size(self%edof, 2)
-         do ia = 1, 6
-            a = free_index(self%edof(ia, e))
+      do e = 1, size(group_start) - 1
+         do ia = group_start(e), group_start(e + 1) - 1
+            a = free_index(group_dof(ia))
             if (a == 0) cycle
-            do ib = 1, 6
-               b = free_index(self%edof(ib, e))
+            do ib = group_start(e), group_start(e + 1) - 1
+               b = free_index(group_dof(ib))
                if (b /= 0 .and. b /= a) then
                   adj(fill(a)) = b
                   fill(a) = fill(a) + 1
@@ -370,9 +395,11 @@ contains
       end do
 
       self%kd = 0
-      do e = 1, size(self%edof, 2)
-         associate (eqs => pack(self%eq(self%edof(:, e)), self%eq(self%edof(:, e)) > 0))
-            if (size(eqs) > 1) self%kd = max(self%kd, maxval(eqs) - minval(eqs))
+      do e = 1, size(group_start) - 1
+         associate (g => group_dof(group_start(e):group_start(e + 1) - 1))
+            associate (eqs => pack(self%eq(g), self%eq(g) > 0))
+               if (size(eqs) > 1) self%kd = max(self%kd, maxval(eqs) - minval(eqs))
+            end associate
          end associate
       end do
 
@@ -421,6 +448,110 @@ contains
       end subroutine bfs_levels
 
    end subroutine number_equations
+
+   !> Dof groups that the tangent couples: every element, and every slideline
+   !> (slave translations and tie rotation with every master point's translations).
+   pure subroutine coupling_groups(self, group_start, group_dof)
+      type(mesh_type), intent(in) :: self
+      integer, allocatable, intent(out) :: group_start(:), group_dof(:)
+      integer :: e, i, ng
+      integer, allocatable :: pts(:)
+      ng = size(self%edof, 2) + size(self%slides)
+      allocate (group_start(ng + 1), group_dof(0))
+      group_start(1) = 1
+      do e = 1, size(self%edof, 2)
+         group_dof = [group_dof, self%edof(:, e)]
+         group_start(e + 1) = size(group_dof) + 1
+      end do
+      do i = 1, size(self%slides)
+         associate (sl => self%slides(i))
+            group_dof = [group_dof, self%tdof(:, sl%slave)]
+            if (sl%slave_rot > 0) group_dof = [group_dof, sl%slave_rot]
+            if (.not. sl%ground) then
+               pts = [sl%seg(1, :), sl%seg(2, size(sl%seg, 2))]
+               do e = 1, size(pts)
+                  group_dof = [group_dof, self%tdof(:, pts(e))]
+               end do
+            end if
+         end associate
+         group_start(size(self%edof, 2) + i + 1) = size(group_dof) + 1
+      end do
+   end subroutine coupling_groups
+
+   !> Slidelines in mesh terms: master chains of segments oriented along the
+   !> chain, default penalties scaled from the stiffness of the elements coupled.
+   subroutine new_slides(self, model, first_interior)
+      type(mesh_type), intent(inout) :: self
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: first_interior(:)
+      integer :: i, j, k, l, m, nseg, last, e
+      integer, allocatable :: pts(:)
+      real(dp) :: ea_m, l_m, ei_m, ea_s, l_s, ei_s, d(2)
+      if (.not. allocated(model%slidelines)) then
+         allocate (self%slides(0))
+         return
+      end if
+      allocate (self%slides(size(model%slidelines)))
+      do i = 1, size(model%slidelines)
+         associate (ms => model%slidelines(i), sl => self%slides(i))
+            sl%slave = ms%slave
+            sl%kind = ms%kind
+            sl%ground = ms%ground
+            sl%guide = ms%guide
+            ea_m = 0
+            ei_m = 0
+            l_m = 0
+            if (ms%ground) then
+               allocate (sl%seg(2, 1), source=0)
+               nseg = 1
+               d = ms%guide(:, 2) - ms%guide(:, 1)
+               sl%c0 = [atan2(d(2), d(1))]
+            else
+               nseg = sum(model%links(ms%master_links)%nelem)
+               allocate (sl%seg(2, nseg), sl%c0(nseg))
+               k = 0
+               last = 0
+               do j = 1, size(ms%master_links)
+                  l = ms%master_links(j)
+                  m = model%links(l)%nelem
+                  pts = [model%links(l)%node(1), (first_interior(l) + e - 1, e=1, m - 1), model%links(l)%node(2)]
+                  ! Continue the chain from where the last link ended.
+                  if (last /= 0 .and. pts(m + 1) == last) pts = pts(m + 1:1:-1)
+                  do e = 1, m
+                     k = k + 1
+                     sl%seg(:, k) = pts(e:e + 1)
+                     d = self%x0(:, pts(e + 1)) - self%x0(:, pts(e))
+                     sl%c0(k) = atan2(d(2), d(1))
+                  end do
+                  last = pts(m + 1)
+                  associate (sec => model%sections(model%links(l)%section))
+                     l_m = norm2(d)
+                     ea_m = max(ea_m, sec%ea)
+                     ei_m = max(ei_m, sec%ei)
+                  end associate
+               end do
+            end if
+            ! The slave's own elements: the stiffest one touching the slave point.
+            ea_s = 0
+            ei_s = 0
+            l_s = 0
+            do e = 1, size(self%elements)
+               if (any(self%edof(1:2, e) == self%tdof(1, sl%slave)) .or. &
+                  & any(self%edof(4:5, e) == self%tdof(1, sl%slave))) then
+                  if (self%elements(e)%c(1)/self%elements(e)%length > ea_s/max(l_s, tiny(1.0_dp))) then
+                     ea_s = self%elements(e)%c(1)
+                     ei_s = self%elements(e)%c(3)
+                     l_s = self%elements(e)%length
+                  end if
+               end if
+            end do
+            sl%kp = default_penalty(ea_m, ea_s, l_m, l_s)
+            sl%kr = default_tie_penalty(ei_m, ei_s, l_m, l_s)
+            if (ms%penalty > 0) sl%kp = ms%penalty
+            if (ms%kind == joint_prismatic) sl%slave_rot = end_dof(self, model, ms%slave_link, ms%slave)
+         end associate
+      end do
+   end subroutine new_slides
 
    pure recursive integer function find(parent, i) result(root)
       integer, intent(in) :: parent(:), i

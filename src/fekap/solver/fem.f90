@@ -13,7 +13,8 @@ module fekap_solver_fem
    use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
    use fekap_assembly_assemble, only: assemble_residual, assemble_tangent, assemble_second_derivative, &
-      & max_strain
+      & max_strain, slide_position
+   use fekap_contact_slideline, only: slide_geometry, slide_locate, slide_on_element, slide_off_end
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type, is_converged, extrapolate
    implicit none
@@ -58,6 +59,8 @@ module fekap_solver_fem
       real(dp), allocatable :: r(:), rhs(:, :), qt(:), work(:)
       !> Step cuts in the last advance, for the listing.
       integer :: last_cuts = 0
+      !> Master segment of each slideline: during the step, and at the accepted configuration.
+      integer, allocatable :: seg(:), seg_accepted(:)
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
@@ -83,6 +86,7 @@ contains
          call model%drives(i)%law%eval(model%analysis%t_start, f, df, ddf)
          self%law0(i) = f
       end do
+      allocate (self%seg(size(self%mesh%slides)), self%seg_accepted(size(self%mesh%slides)), source=1)
       self%size = model_size(model)
       self%dof_length = merge(self%size, 1.0_dp, self%mesh%dof_kind == dof_rot)
       self%loaded = any(abs(self%mesh%f_ext) > 0)
@@ -107,11 +111,14 @@ contains
       type(error_type), allocatable, intent(out) :: error
       self%t = self%model%analysis%t_start
       self%q = self%mesh%q0
+      call initial_segments(self, error)
+      if (allocated(error)) return
       self%nhist = 0
       self%factor_current = .false.
       result%iterations = 0
-      call assemble_residual(self%mesh, self%q, self%t, self%r)
+      call assemble_residual(self%mesh, self%q, self%t, self%seg, self%r)
       self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+      self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
       result%residual = free_norm(self, self%r)
       if (self%loaded .and. result%residual > self%conv%floor) then
          ! Loads at t_start /= 0: find the loaded configuration first.
@@ -180,9 +187,11 @@ contains
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: r0, scale, correction, strain
-      integer :: i, info, element
+      integer :: i, info, element, pass
+      logical :: moved
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof)
+         self%seg = self%seg_accepted
          call predict(self, t, qt, error)
          if (allocated(error)) return
          ! Scale of the residual: what the drive increment alone produces from
@@ -191,55 +200,65 @@ contains
          if (self%conv%mode /= convergence_paper .and. self%model%analysis%predictor /= predictor_previous) then
             self%work = self%q
             call set_driven(self, t, self%work)
-            call assemble_residual(mesh, self%work, t, self%r)
+            call assemble_residual(mesh, self%work, t, self%seg, self%r)
             self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+            self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
             scale = free_norm(self, self%r)
          end if
          self%factor_current = .false.
          iterations = 0
          r0 = 0
-         do i = 0, self%model%analysis%max_iter
-            call assemble_tangent(mesh, qt, t, self%r, self%kff, self%kfd)
-            self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-            residual = free_norm(self, self%r)
-            if (i == 0) then
-               r0 = residual
-               if (self%model%analysis%predictor == predictor_previous) scale = r0
-            end if
-            if (self%conv%mode == convergence_paper) then
-               if (is_converged(self%conv, residual, r0, scale, 0.0_dp)) exit
-            end if
-            if (i == self%model%analysis%max_iter) then
-               write (msg, '(a,es12.5,a,i0,a,es9.2)') 't = ', t, ': Newton did not converge in ', i, &
-                  & ' iterations (residual ', residual
-               call analysis_error(error, trim(msg)//')')
-               return
-            end if
-            call factor(self, info)
-            if (info > 0) then
-               write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
-               call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
-               return
-            end if
-            self%rhs(:, 1) = -self%r(eqd)
-            call self%kff%solve(self%rhs)
-            correction = 0
-            if (mesh%nfree > 0) correction = maxval(abs(self%rhs(:, 1))*self%dof_length(eqd))
-            if (correction > divergence_length*self%size) then
-               write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
-               call analysis_error(error, trim(msg))
-               return
-            end if
-            qt(eqd) = qt(eqd) + self%rhs(:, 1)
-            iterations = i + 1
-            self%counts%iterations = self%counts%iterations + 1
-            if (self%conv%mode /= convergence_paper) then
-               if (is_converged(self%conv, residual, r0, scale, correction)) then
-                  self%factor_current = .true.
-                  exit
+         ! Newton; then, if a slave has slid past its master segment, move it on
+         ! to the neighbouring segment and iterate again from there.
+         relocations: do pass = 0, size(mesh%slides)*8
+            do i = 0, self%model%analysis%max_iter
+               call assemble_tangent(mesh, qt, t, self%seg, self%r, self%kff, self%kfd)
+               self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+               self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
+               residual = free_norm(self, self%r)
+               if (i == 0) then
+                  r0 = residual
+                  if (self%model%analysis%predictor == predictor_previous) scale = r0
                end if
-            end if
-         end do
+               if (self%conv%mode == convergence_paper) then
+                  if (is_converged(self%conv, residual, r0, scale, 0.0_dp)) exit
+               end if
+               if (i == self%model%analysis%max_iter) then
+                  write (msg, '(a,es12.5,a,i0,a,es9.2)') 't = ', t, ': Newton did not converge in ', i, &
+                     & ' iterations (residual ', residual
+                  call analysis_error(error, trim(msg)//')')
+                  return
+               end if
+               call factor(self, info)
+               if (info > 0) then
+                  write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
+                  call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
+                  return
+               end if
+               self%rhs(:, 1) = -self%r(eqd)
+               call self%kff%solve(self%rhs)
+               correction = 0
+               if (mesh%nfree > 0) correction = maxval(abs(self%rhs(:, 1))*self%dof_length(eqd))
+               if (correction > divergence_length*self%size) then
+                  write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
+                  call analysis_error(error, trim(msg))
+                  return
+               end if
+               qt(eqd) = qt(eqd) + self%rhs(:, 1)
+               iterations = iterations + 1
+               self%counts%iterations = self%counts%iterations + 1
+               if (self%conv%mode /= convergence_paper) then
+                  if (is_converged(self%conv, residual, r0, scale, correction)) then
+                     self%factor_current = .true.
+                     exit
+                  end if
+               end if
+            end do
+            call relocate(self, t, qt, moved, error)
+            if (allocated(error)) return
+            if (.not. moved) exit relocations
+            self%factor_current = .false.
+         end do relocations
          if (.not. self%loaded) then
             call max_strain(mesh, qt, strain, element)
             if (strain > admissible_strain) then
@@ -250,6 +269,8 @@ contains
                self%factor_current = .false.
                return
             end if
+            call check_gaps(self, t, qt, error)
+            if (allocated(error)) return
          end if
          call accept(self, t, qt)
       end associate
@@ -336,8 +357,9 @@ contains
       integer :: info
       character(len=200) :: msg
       if (self%factor_current) return
-      call assemble_tangent(self%mesh, self%q, self%t, self%r, self%kff, self%kfd)
+      call assemble_tangent(self%mesh, self%q, self%t, self%seg, self%r, self%kff, self%kfd)
       self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
       call factor(self, info)
       if (info > 0) then
          write (msg, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent stiffness is singular at'
@@ -361,6 +383,83 @@ contains
       end do
    end subroutine set_driven
 
+   !> The master segment each slave starts on: the one it projects into with
+   !> the smallest gap.
+   subroutine initial_segments(self, error)
+      type(fem_stepper_type), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: xs(2), x1(2), x2(2), g, alpha, s1, best
+      integer :: i, k, dofs(6)
+      do i = 1, size(self%mesh%slides)
+         best = huge(1.0_dp)
+         self%seg(i) = 0
+         do k = 1, size(self%mesh%slides(i)%seg, 2)
+            call slide_position(self%mesh, self%mesh%slides(i), k, self%q, xs, x1, x2, dofs)
+            call slide_geometry(xs, x1, x2, g, alpha, s1)
+            if (alpha >= -1.0e-9_dp .and. alpha <= 1 + 1.0e-9_dp .and. abs(g) < best) then
+               best = abs(g)
+               self%seg(i) = k
+            end if
+         end do
+         if (self%seg(i) == 0 .or. best > 1.0e-9_dp*self%size) then
+            call analysis_error(error, 'slideline '//self%model%slidelines(i)%name//': the slave node '// &
+               & self%model%nodes(self%mesh%slides(i)%slave)%name//' is not on its master line')
+            return
+         end if
+      end do
+      self%seg_accepted = self%seg
+   end subroutine initial_segments
+
+   !> After convergence: move each slave whose coordinate alpha left [0, 1]
+   !> on to the neighbouring master segment (`moved`); past the end of a
+   !> slideline the step fails with a message naming slave and slideline.
+   subroutine relocate(self, t, q, moved, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, q(:)
+      logical, intent(out) :: moved
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: xs(2), x1(2), x2(2), g, alpha, s1
+      integer :: i, next, status, dofs(6)
+      character(len=120) :: msg
+      moved = .false.
+      do i = 1, size(self%mesh%slides)
+         call slide_position(self%mesh, self%mesh%slides(i), self%seg(i), q, xs, x1, x2, dofs)
+         call slide_geometry(xs, x1, x2, g, alpha, s1)
+         call slide_locate(alpha, self%seg(i), size(self%mesh%slides(i)%seg, 2), next, status)
+         if (status == slide_off_end) then
+            write (msg, '(a,es12.5,a,f8.4,a)') 't = ', t, ': the slave left the slideline past its end (alpha = ', &
+               & alpha, ') '
+            call analysis_error(error, trim(msg)//': slave node '//self%model%nodes(self%mesh%slides(i)%slave)%name// &
+               & ', slideline '//self%model%slidelines(i)%name//'; lengthen the master line or shorten the run')
+            return
+         end if
+         if (status /= slide_on_element) then
+            self%seg(i) = next
+            moved = .true.
+         end if
+      end do
+   end subroutine relocate
+
+   !> A converged mechanism configuration has every slave on its master line.
+   subroutine check_gaps(self, t, q, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, q(:)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: xs(2), x1(2), x2(2), g, alpha, s1
+      integer :: i, dofs(6)
+      character(len=120) :: msg
+      do i = 1, size(self%mesh%slides)
+         call slide_position(self%mesh, self%mesh%slides(i), self%seg(i), q, xs, x1, x2, dofs)
+         call slide_geometry(xs, x1, x2, g, alpha, s1)
+         if (abs(g) > admissible_strain*self%size) then
+            write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, ': Newton converged with a gap of ', g, ' at slideline '
+            call analysis_error(error, trim(msg)//' '//self%model%slidelines(i)%name//', not a mechanism configuration')
+            self%factor_current = .false.
+            return
+         end if
+      end do
+   end subroutine check_gaps
+
    !> Make q at time t the accepted configuration and push it on the history.
    subroutine accept(self, t, q)
       type(fem_stepper_type), intent(inout) :: self
@@ -372,6 +471,7 @@ contains
       self%nhist = min(self%nhist + 1, 3)
       self%q = q
       self%t = t
+      self%seg_accepted = self%seg
       self%has_velocity = .false.
       self%has_acceleration = .false.
       self%counts%steps = self%counts%steps + 1
@@ -415,7 +515,8 @@ contains
          self%counts%velocity_solves = self%counts%velocity_solves + 1
          self%has_velocity = .true.
          if (.not. self%model%analysis%accelerations) return
-         call assemble_second_derivative(mesh, self%q, self%v, self%work)
+         call assemble_second_derivative(mesh, self%q, self%v, self%seg, self%work)
+         self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(mesh%slides)
          self%a = 0
          self%a(mesh%driven_dof) = ad
          self%rhs(:, 1) = -matmul(self%kfd, ad) - self%work(eqd)
