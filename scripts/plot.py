@@ -98,14 +98,33 @@ def draw_mechanism(ax, run: fc.Run, step: int, color, label: str | None) -> None
             label = None  # one legend entry per instant
 
 
+def label_point(run: fc.Run, steps: list[int]) -> str | None:
+    """The mesh end point whose positions at ``steps`` are farthest apart (to label instants)."""
+    best, spread = None, 0.0
+    for name in dict.fromkeys(n for _, n1, n2 in run.drawable_links() for n in (n1, n2)):
+        where = np.array([run.positions_at(step).get(name, (np.nan, np.nan)) for step in steps])
+        gaps = np.linalg.norm(where[:, None, :] - where[None, :, :], axis=2)
+        gap = np.nanmin(gaps + np.diag(np.full(len(steps), np.inf))) if len(steps) > 1 else 1.0
+        if gap > spread:
+            best, spread = name, gap
+    return best
+
+
 def plot_paths(run: fc.Run, instants: int) -> plt.Figure:
     """The path of every point, with a marker per step, over the mechanism at a few instants."""
     fig, ax = plt.subplots(figsize=(7.5, 6.5))
     if run.drawable_links():
         steps = instant_steps(run.step_numbers(), instants)
-        shades = np.linspace(0.75, 0.35, max(len(steps), 1))
+        shades = np.linspace(0.8, 0.3, max(len(steps), 1))
+        labelled = label_point(run, steps)
         for step, shade in zip(steps, shades):
-            draw_mechanism(ax, run, step, str(shade), f"mechanism at t = {run.time_of(step):.4g}")
+            time_text = f"t = {run.time_of(step):.4g}"
+            draw_mechanism(ax, run, step, str(shade), f"mechanism at {time_text}")
+            if labelled is not None:
+                ax.annotate(time_text, run.positions_at(step)[labelled], xytext=(6, 6),
+                            textcoords="offset points", fontsize="small", color="0.25",
+                            bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none",
+                                      alpha=0.75), zorder=4)
     for index, series in enumerate(run.points.values()):
         color = f"C{index % 10}"
         x, y = series.values["x"], series.values["y"]
@@ -260,8 +279,8 @@ def main(argv: list[str] | None = None) -> int:
 
     if explicit("angles") and not run.links:
         raise fc.UsageError(f"{run.path}: no links.csv (or it is empty): no angles to plot")
-    if explicit("iterations") and run.steps is None:
-        raise fc.UsageError(f"{run.path}: no steps.csv: no iterations to plot")
+    if explicit("iterations") and (run.steps is None or not run.steps["step"].size):
+        raise fc.UsageError(f"{run.path}: no steps.csv (or it is empty): no iterations to plot")
     groups = history_groups(run, kinds) if kinds is None or kinds & {
         "history", "velocity", "acceleration"} else []
 
