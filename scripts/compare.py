@@ -16,14 +16,14 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
-import numpy as np  # noqa: E402
+import fekap_csv as fc
 
-import fekap_csv as fc  # noqa: E402
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 PROG = "compare.py"
 STYLES = [dict(marker="o", mfc="none", ms=6, lw=1.2), dict(marker="+", ms=8, lw=1.0),
@@ -153,8 +153,9 @@ def format_table(rows, reference: str, steps: int) -> str:
     return "\n".join(lines)
 
 
-def plot_comparison(sources: list[Source], point: str, quantity: str) -> plt.Figure:
+def plot_comparison(sources: list[Source], point: str, quantity: str) -> Figure:
     """Path of ``point`` for every run, the quantity against t, and its differences."""
+    plt = fc.pyplot()
     fig = plt.figure(figsize=(13, 6))
     grid = fig.add_gridspec(2, 2, width_ratios=[1.0, 1.3])
     ax_path = fig.add_subplot(grid[:, 0])
@@ -188,6 +189,7 @@ def plot_comparison(sources: list[Source], point: str, quantity: str) -> plt.Fig
 
 def main(argv: list[str] | None = None) -> int:
     """Compare the runs: print the difference table and write the figure."""
+    plt = fc.pyplot()
     args = parse_args(argv)
     paths = [Path(run) for run in args.runs]
     for path in paths:

@@ -58,6 +58,19 @@ def run_main(prog: str, main, argv: list[str] | None = None) -> int:
         return 1
 
 
+def pyplot():
+    """matplotlib.pyplot on the headless Agg backend.
+
+    Imported only when a figure is drawn, so that bad arguments are refused at once.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
 def parse_number(text: str) -> float:
     """Convert one CSV field to float, accepting Fortran spellings (1.0D+00, 1.0-100)."""
     text = text.strip()

@@ -22,15 +22,14 @@ from __future__ import annotations
 import re
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
-import numpy as np  # noqa: E402
-from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
+import fekap_csv as fc
 
-import fekap_csv as fc  # noqa: E402
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 PROG = "plot.py"
 KINDS = ("paths", "history", "velocity", "acceleration", "angles", "iterations")
@@ -100,18 +99,24 @@ def draw_mechanism(ax, run: fc.Run, step: int, color, label: str | None) -> None
 
 def label_point(run: fc.Run, steps: list[int]) -> str | None:
     """The mesh end point whose positions at ``steps`` are farthest apart (to label instants)."""
+    if not steps:
+        return None
     best, spread = None, 0.0
     for name in dict.fromkeys(n for _, n1, n2 in run.drawable_links() for n in (n1, n2)):
-        where = np.array([run.positions_at(step).get(name, (np.nan, np.nan)) for step in steps])
+        spots = [run.positions_at(step).get(name) for step in steps]
+        if None in spots:
+            continue
+        where = np.array(spots)
         gaps = np.linalg.norm(where[:, None, :] - where[None, :, :], axis=2)
-        gap = np.nanmin(gaps + np.diag(np.full(len(steps), np.inf))) if len(steps) > 1 else 1.0
+        gap = np.min(gaps + np.diag(np.full(len(steps), np.inf))) if len(steps) > 1 else 1.0
         if gap > spread:
             best, spread = name, gap
     return best
 
 
-def plot_paths(run: fc.Run, instants: int) -> plt.Figure:
+def plot_paths(run: fc.Run, instants: int) -> Figure:
     """The path of every point, with a marker per step, over the mechanism at a few instants."""
+    plt = fc.pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 6.5))
     if run.drawable_links():
         steps = instant_steps(run.step_numbers(), instants)
@@ -156,8 +161,9 @@ def history_groups(run: fc.Run, kinds: set[str] | None) -> list[str]:
     return wanted
 
 
-def plot_history(series: fc.Series, groups: list[str]) -> plt.Figure:
+def plot_history(series: fc.Series, groups: list[str]) -> Figure:
     """Stacked time histories of one point: a row per group, x and y components side by side."""
+    plt = fc.pyplot()
     fig, axes = plt.subplots(len(groups), 2, figsize=(10, 1.2 + 2.3 * len(groups)),
                              sharex=True, squeeze=False)
     for row, group in enumerate(groups):
@@ -173,8 +179,9 @@ def plot_history(series: fc.Series, groups: list[str]) -> plt.Figure:
     return fig
 
 
-def plot_angles(run: fc.Run) -> plt.Figure:
+def plot_angles(run: fc.Run) -> Figure:
     """Time histories of the link angles (and omega, alpha when computed)."""
+    plt = fc.pyplot()
     first = next(iter(run.links.values()))
     quantities = [q for q in fc.LINK_QUANTITIES if first.has(q)]
     labels = {"angle": "angle (rad)", "omega": "omega", "alpha": "alpha"}
@@ -195,8 +202,9 @@ def plot_angles(run: fc.Run) -> plt.Figure:
     return fig
 
 
-def plot_iterations(steps: dict[str, np.ndarray], name: str) -> plt.Figure:
+def plot_iterations(steps: dict[str, np.ndarray], name: str) -> Figure:
     """Newton iterations per step (bars) and, when written, the final residual per step."""
+    plt = fc.pyplot()
     residual = steps.get("residual")
     rows = 2 if residual is not None else 1
     fig, axes = plt.subplots(rows, 1, figsize=(9, 1.4 + 2.4 * rows), sharex=True,
@@ -221,6 +229,9 @@ def plot_iterations(steps: dict[str, np.ndarray], name: str) -> plt.Figure:
 
 def animate(run: fc.Run, target: Path) -> None:
     """Write a GIF of the mechanism moving, with the paths traced so far."""
+    plt = fc.pyplot()
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
     steps = run.step_numbers()
     frames = steps[np.unique(np.linspace(0, steps.size - 1, min(steps.size, MAX_FRAMES))
                              .astype(int))]
@@ -258,8 +269,9 @@ def animate(run: fc.Run, target: Path) -> None:
     plt.close(fig)
 
 
-def save(fig: plt.Figure, target: Path, written: list[Path]) -> None:
+def save(fig: Figure, target: Path, written: list[Path]) -> None:
     """Save a figure as PNG, close it and remember the file."""
+    plt = fc.pyplot()
     fig.savefig(target, dpi=DPI, bbox_inches="tight")
     plt.close(fig)
     written.append(target)
