@@ -195,6 +195,9 @@ def main(argv: list[str] | None = None) -> int:
     for path in paths:
         if not path.exists():
             raise fc.UsageError(f"{path}: no such directory or file")
+    output = Path(args.output)
+    if not output.parent.is_dir():
+        raise fc.UsageError(f"-o {output}: no such directory {output.parent}")
     labels = run_labels(paths, args.labels)
     sources = [load_source(path, label) for path, label in zip(paths, labels)]
     points = chosen_points(sources, args.point)
@@ -204,9 +207,9 @@ def main(argv: list[str] | None = None) -> int:
     print(format_table(max_differences(sources, points), sources[0].label,
                        sources[0].points[points[0]].t.size))
     fig = plot_comparison(sources, points[0], args.quantity)
-    fig.savefig(args.output, dpi=110, bbox_inches="tight")
+    fig.savefig(output, dpi=110, bbox_inches="tight")
     plt.close(fig)
-    print(f"wrote {args.output}")
+    print(f"wrote {output}")
     return 0
 
 

@@ -361,6 +361,20 @@ def test_compare_positions_only_and_default_output(tmp: Path) -> None:
     check(all(set(row) == {"x", "y"} for row in table.values()), f"columns {table}")
 
 
+def test_compare_with_positions_only_exact(tmp: Path) -> None:
+    """An exact solution with positions only: differences in x, y, '-' for the rest."""
+    run = write_run(tmp / "cmp_full", steps=8)
+    exact = tmp / "exact_positions.csv"
+    lines = (run / "points.csv").read_text().splitlines()
+    exact.write_text("\n".join(",".join(line.split(",")[:5]) for line in lines) + "\n")
+    proc = run_script(COMPARE, run, exact, "--quantity", "y", "-o", tmp / "exact.png")
+    check_ok(proc)
+    table = difference_table(proc.stdout)
+    check(set(table) == {("exact_positions", p) for p in "ABCD"}, f"rows {sorted(table)}")
+    check(all(row == {"x": 0.0, "y": 0.0} for row in table.values()), f"table {table}")
+    check(proc.stdout.count(" - ") >= 4, f"no '-' for missing quantities: {proc.stdout}")
+
+
 def test_compare_bad_arguments(tmp: Path) -> None:
     """compare.py refuses bad arguments with exit 2 and one clear line."""
     one = write_run(tmp / "cbad_1", steps=10)
@@ -375,10 +389,12 @@ def test_compare_bad_arguments(tmp: Path) -> None:
         ((one, one, "--point", "Z"), ("Z",)),
         ((one, positions, "--quantity", "vx"), ("velocities",)),
         ((one, one, "--quantity", "speed"), ("invalid choice",)),
+        ((one, one, "-o", tmp / "nowhere" / "x.png"), ("no such directory",)),
     ]
     for args, fragments in cases:
         try:
-            check_usage_error(run_script(COMPARE, *args, "-o", out), *fragments)
+            output = () if "-o" in args else ("-o", out)
+            check_usage_error(run_script(COMPARE, *args, *output), *fragments)
         except Failure as exc:
             raise Failure(f"compare.py {' '.join(map(str, args))}: {exc}") from None
 
@@ -388,7 +404,8 @@ def test_compare_bad_arguments(tmp: Path) -> None:
 TESTS = [test_full_run, test_positions_only, test_only_and_instants, test_animate,
          test_animate_without_mesh, test_mesh_with_untracked_point, test_fortran_number_spellings,
          test_bad_arguments, test_compare_identical, test_compare_perturbed,
-         test_compare_positions_only_and_default_output, test_compare_bad_arguments]
+         test_compare_positions_only_and_default_output, test_compare_with_positions_only_exact,
+         test_compare_bad_arguments]
 
 
 def main() -> int:
