@@ -408,6 +408,11 @@ TESTS = [test_full_run, test_positions_only, test_only_and_instants, test_animat
          test_compare_bad_arguments]
 
 
+def indent(text: str) -> str:
+    """Indent the continuation lines of a failure reason (e.g. a script's stderr)."""
+    return text.replace("\n", "\n      ")
+
+
 def main() -> int:
     """Run every test in its own temporary directory and print the summary line."""
     passed = failed = 0
@@ -421,10 +426,10 @@ def main() -> int:
                 test(tmp)
             except Failure as exc:
                 failed += 1
-                print(f"  FAIL {name}: {exc}")
+                print(f"  FAIL {name}: {indent(str(exc))}")
             except Exception as exc:  # a bug in the test itself: report, do not crash
                 failed += 1
-                print(f"  FAIL {name}: {type(exc).__name__}: {exc}")
+                print(f"  FAIL {name}: {type(exc).__name__}: {indent(str(exc))}")
             else:
                 passed += 1
                 print(f"  PASS {name}")
