@@ -35,9 +35,10 @@ PROG = "plot.py"
 KINDS = ("paths", "history", "velocity", "acceleration", "angles", "iterations")
 #: How to ask the deck for the missing quantities (the hint in the error message).
 MISSING_HINT = {
-    "velocity": "this run computed no velocities; run with compute ... velocities in the deck",
-    "acceleration": "this run computed no accelerations; run with compute ... accelerations "
-                    "in the deck",
+    "velocity": "this run computed no velocities; ask for them in the deck's ANALysis block "
+                "(compute positions velocities) or with fekap --compute positions,velocities",
+    "acceleration": "this run computed no accelerations; ask for them in the deck's ANALysis block "
+                    "(compute positions velocities accelerations) or with fekap --compute accelerations",
 }
 GROUPS = {"position": fc.POSITION, "velocity": fc.VELOCITY, "acceleration": fc.ACCELERATION}
 MAX_FRAMES = 150

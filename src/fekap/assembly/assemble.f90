@@ -25,12 +25,17 @@ contains
       real(dp), intent(in) :: q(:), lambda
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
-      real(dp) :: pe(6)
-      integer :: e
+      real(dp) :: pe(6), xe(6)
+      integer :: e, i
       r = -lambda*mesh%f_ext
       do e = 1, size(mesh%elements)
-         call beam_residual(mesh%elements(e), q(mesh%edof(:, e)), pe)
-         r(mesh%edof(:, e)) = r(mesh%edof(:, e)) + pe
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+         end do
+         call beam_residual(mesh%elements(e), xe, pe)
+         do i = 1, 6
+            r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
+         end do
       end do
       call add_contact(mesh, q, seg, r)
    end subroutine assemble_residual
@@ -44,14 +49,19 @@ contains
       real(dp), intent(out) :: r(:)
       type(band_matrix_type), intent(inout) :: kff
       real(dp), intent(out) :: kfd(:, :)
-      real(dp) :: pe(6), ke(6, 6)
-      integer :: e
+      real(dp) :: pe(6), ke(6, 6), xe(6)
+      integer :: e, i
       r = -lambda*mesh%f_ext
       call kff%zero()
       kfd = 0
       do e = 1, size(mesh%elements)
-         call beam_residual(mesh%elements(e), q(mesh%edof(:, e)), pe, ke)
-         r(mesh%edof(:, e)) = r(mesh%edof(:, e)) + pe
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+         end do
+         call beam_residual(mesh%elements(e), xe, pe, ke)
+         do i = 1, 6
+            r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
+         end do
          call scatter(mesh, mesh%edof(:, e), ke, kff, kfd)
       end do
       call add_contact(mesh, q, seg, r, kff, kfd)
@@ -158,12 +168,18 @@ contains
       real(dp), intent(in) :: q(:), v(:)
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: d2(:)
-      real(dp) :: de(6), xs(2), x1(2), x2(2), ve(6), vt(5), dt(5)
+      real(dp) :: de(6), xs(2), x1(2), x2(2), ve(6), vt(5), dt(5), xe(6)
       integer :: e, i, dofs(6), tdofs(5)
       d2 = 0
       do e = 1, size(mesh%elements)
-         call beam_second_derivative(mesh%elements(e), q(mesh%edof(:, e)), v(mesh%edof(:, e)), de)
-         d2(mesh%edof(:, e)) = d2(mesh%edof(:, e)) + de
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+            ve(i) = v(mesh%edof(i, e))
+         end do
+         call beam_second_derivative(mesh%elements(e), xe, ve, de)
+         do i = 1, 6
+            d2(mesh%edof(i, e)) = d2(mesh%edof(i, e)) + de(i)
+         end do
       end do
       do i = 1, size(mesh%slides)
          associate (sl => mesh%slides(i))
@@ -199,12 +215,15 @@ contains
       real(dp), intent(in) :: q(:)
       real(dp), intent(out) :: strain
       integer, intent(out) :: element
-      real(dp) :: s
-      integer :: e
+      real(dp) :: s, xe(6)
+      integer :: e, i
       strain = 0
       element = 0
       do e = 1, size(mesh%elements)
-         s = beam_max_strain(mesh%elements(e), q(mesh%edof(:, e)))
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+         end do
+         s = beam_max_strain(mesh%elements(e), xe)
          if (s > strain .or. element == 0) then
             strain = s
             element = e

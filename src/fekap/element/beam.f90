@@ -79,8 +79,17 @@ contains
       gam(3) = (xe(6) - xe(3))/self%length
       grad(:, 1) = [c, s, gam(2)]
       grad(:, 2) = [-s, c, -(1 + gam(1))]
-      hess(:, :, 1) = reshape([0.0_dp, 0.0_dp, -s, 0.0_dp, 0.0_dp, c, -s, c, -(1 + gam(1))], [3, 3])
-      hess(:, :, 2) = reshape([0.0_dp, 0.0_dp, -c, 0.0_dp, 0.0_dp, -s, -c, -s, -gam(2)], [3, 3])
+      hess = 0
+      hess(1, 3, 1) = -s
+      hess(2, 3, 1) = c
+      hess(3, 1, 1) = -s
+      hess(3, 2, 1) = c
+      hess(3, 3, 1) = -(1 + gam(1))
+      hess(1, 3, 2) = -c
+      hess(2, 3, 2) = -s
+      hess(3, 1, 2) = -c
+      hess(3, 2, 2) = -s
+      hess(3, 3, 2) = -gam(2)
    end subroutine point_state
 
    !> Internal force p (38) and, if asked, the tangent k = km + kg (43)-(44);
@@ -91,8 +100,8 @@ contains
       real(dp), intent(out) :: p(6)
       real(dp), intent(out), optional :: k(6, 6)
       logical, intent(in), optional :: geometric
-      real(dp) :: bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), b(6, 3), sig(3), xi, w, wl
-      integer :: ig, m
+      real(dp) :: bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), b(6, 3), sig(3), xi, w, wl, g(3, 3), gb(3, 6)
+      integer :: ig, i, j
       logical :: with_kg
       with_kg = .true.
       if (present(geometric)) with_kg = geometric
@@ -108,11 +117,21 @@ contains
          b(:, 3) = [0.0_dp, 0.0_dp, -1/self%length, 0.0_dp, 0.0_dp, 1/self%length]
          p = p + wl*matmul(b, sig)                          ! (38)
          if (present(k)) then
-            do m = 1, 3                                     ! km, (43) first integral
-               k = k + wl*self%c(m)*spread(b(:, m), 2, 6)*spread(b(:, m), 1, 6)
+            do j = 1, 6                                     ! km, (43) first integral
+               do i = 1, 6
+                  k(i, j) = k(i, j) + wl*(self%c(1)*b(i, 1)*b(j, 1) + self%c(2)*b(i, 2)*b(j, 2) &
+                     & + self%c(3)*b(i, 3)*b(j, 3))
+               end do
             end do
-            if (with_kg) k = k + wl*matmul(transpose(bw), &  ! kg, (43)-(44)
-               & matmul(sig(1)*hess(:, :, 1) + sig(2)*hess(:, :, 2), bw))
+            if (with_kg) then                               ! kg = Bw^T G Bw, (43)-(44)
+               g = sig(1)*hess(:, :, 1) + sig(2)*hess(:, :, 2)
+               gb = matmul(g, bw)
+               do j = 1, 6
+                  do i = 1, 6
+                     k(i, j) = k(i, j) + wl*(bw(1, i)*gb(1, j) + bw(2, i)*gb(2, j) + bw(3, i)*gb(3, j))
+                  end do
+               end do
+            end if
          end if
       end do
    end subroutine beam_residual

@@ -187,23 +187,20 @@ contains
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: r0, scale, correction, strain
-      integer :: i, info, element, pass
+      integer :: i, k, info, element, pass
       logical :: moved
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof)
          self%seg = self%seg_accepted
          call predict(self, t, qt, error)
          if (allocated(error)) return
-         ! Scale of the residual: what the drive increment alone produces from
-         ! the last configuration (independent of the predictor).
+         ! Scale of the residual: what the drive (and load) increment alone
+         ! produces from the last configuration, to first order -K_fd dq_d +
+         ! dlambda f, with the free-driven block of the last tangent (at the
+         ! accepted configuration within tolerance). It does not depend on the predictor.
          scale = 0
          if (self%conv%mode /= convergence_paper .and. self%model%analysis%predictor /= predictor_previous) then
-            self%work = self%q
-            call set_driven(self, t, self%work)
-            call assemble_residual(mesh, self%work, t, self%seg, self%r)
-            self%counts%residual_assemblies = self%counts%residual_assemblies + 1
-            self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
-            scale = free_norm(self, self%r)
+            call drive_increment_residual(self, t, scale)
          end if
          self%factor_current = .false.
          iterations = 0
@@ -235,16 +232,22 @@ contains
                   call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
                   return
                end if
-               self%rhs(:, 1) = -self%r(eqd)
+               do k = 1, mesh%nfree
+                  self%rhs(k, 1) = -self%r(eqd(k))
+               end do
                call self%kff%solve(self%rhs)
                correction = 0
-               if (mesh%nfree > 0) correction = maxval(abs(self%rhs(:, 1))*self%dof_length(eqd))
+               do k = 1, mesh%nfree
+                  correction = max(correction, abs(self%rhs(k, 1))*self%dof_length(eqd(k)))
+               end do
                if (correction > divergence_length*self%size) then
                   write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
                   call analysis_error(error, trim(msg))
                   return
                end if
-               qt(eqd) = qt(eqd) + self%rhs(:, 1)
+               do k = 1, mesh%nfree
+                  qt(eqd(k)) = qt(eqd(k)) + self%rhs(k, 1)
+               end do
                iterations = iterations + 1
                self%counts%iterations = self%counts%iterations + 1
                if (self%conv%mode /= convergence_paper) then
@@ -276,6 +279,26 @@ contains
       end associate
    end subroutine solve_step
 
+   !> Norm of -K_fd (q_d(t) - q_d) + (t - t_q) f_ext over the free dofs.
+   subroutine drive_increment_residual(self, t, scale)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: scale
+      real(dp) :: f, df, ddf, dqd(self%mesh%ndriven)
+      integer :: i, j
+      do j = 1, self%mesh%ndriven
+         call self%model%drives(j)%law%eval(t, f, df, ddf)
+         dqd(j) = self%mesh%q0(self%mesh%driven_dof(j)) + (f - self%law0(j)) - self%q(self%mesh%driven_dof(j))
+      end do
+      scale = 0
+      do i = 1, self%mesh%nfree
+         f = -dot_product(self%kfd(i, :), dqd)
+         if (self%loaded) f = f + (t - self%t)*self%mesh%f_ext(self%mesh%eq_dof(i))
+         scale = scale + f**2
+      end do
+      scale = sqrt(scale)
+   end subroutine drive_increment_residual
+
    !> Initial guess at time t: the paper's last configuration, polynomial
    !> extrapolation of the last ones, or a Taylor series from the last rates.
    !> Without history (the first step) extrapolation and Taylor start from the
@@ -288,6 +311,7 @@ contains
       real(dp), intent(out) :: qt(:)
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: h
+      integer :: i
       h = t - self%t
       select case (self%model%analysis%predictor)
       case (predictor_previous)
@@ -308,7 +332,9 @@ contains
             call tangent_predictor(self, t, qt, error)
          end if
       end select
-      where (self%mesh%status == dof_fixed) qt = self%mesh%q0
+      do i = 1, self%mesh%ndof
+         if (self%mesh%status(i) == dof_fixed) qt(i) = self%mesh%q0(i)
+      end do
       call set_driven(self, t, qt)
    end subroutine predict
 
@@ -464,8 +490,10 @@ contains
    subroutine accept(self, t, q)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t, q(:)
-      self%hist(:, 2:3) = self%hist(:, 1:2)
-      self%thist(2:3) = self%thist(1:2)
+      self%hist(:, 3) = self%hist(:, 2)
+      self%hist(:, 2) = self%hist(:, 1)
+      self%thist(3) = self%thist(2)
+      self%thist(2) = self%thist(1)
       self%hist(:, 1) = q
       self%thist(1) = t
       self%nhist = min(self%nhist + 1, 3)
@@ -498,7 +526,7 @@ contains
       type(fem_stepper_type), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven)
-      integer :: i
+      integer :: i, k
       if (.not. self%model%analysis%velocities) return
       call refactor_at_accepted(self, error)
       if (allocated(error)) return
@@ -507,21 +535,33 @@ contains
             call self%model%drives(i)%law%eval(self%t, f, vd(i), ad(i))
          end do
          self%v = 0
-         self%v(mesh%driven_dof) = vd
-         self%rhs(:, 1) = -matmul(self%kfd, vd)
-         if (self%loaded) self%rhs(:, 1) = self%rhs(:, 1) + mesh%f_ext(eqd)
+         do i = 1, mesh%ndriven
+            self%v(mesh%driven_dof(i)) = vd(i)
+         end do
+         do k = 1, mesh%nfree
+            self%rhs(k, 1) = -dot_product(self%kfd(k, :), vd)
+            if (self%loaded) self%rhs(k, 1) = self%rhs(k, 1) + mesh%f_ext(eqd(k))
+         end do
          call self%kff%solve(self%rhs)
-         self%v(eqd) = self%rhs(:, 1)
+         do k = 1, mesh%nfree
+            self%v(eqd(k)) = self%rhs(k, 1)
+         end do
          self%counts%velocity_solves = self%counts%velocity_solves + 1
          self%has_velocity = .true.
          if (.not. self%model%analysis%accelerations) return
          call assemble_second_derivative(mesh, self%q, self%v, self%seg, self%work)
          self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(mesh%slides)
          self%a = 0
-         self%a(mesh%driven_dof) = ad
-         self%rhs(:, 1) = -matmul(self%kfd, ad) - self%work(eqd)
+         do i = 1, mesh%ndriven
+            self%a(mesh%driven_dof(i)) = ad(i)
+         end do
+         do k = 1, mesh%nfree
+            self%rhs(k, 1) = -dot_product(self%kfd(k, :), ad) - self%work(eqd(k))
+         end do
          call self%kff%solve(self%rhs)
-         self%a(eqd) = self%rhs(:, 1)
+         do k = 1, mesh%nfree
+            self%a(eqd(k)) = self%rhs(k, 1)
+         end do
          self%counts%acceleration_solves = self%counts%acceleration_solves + 1
          self%has_acceleration = .true.
       end associate
@@ -552,7 +592,12 @@ contains
    pure real(dp) function free_norm(self, r) result(norm)
       type(fem_stepper_type), intent(in) :: self
       real(dp), intent(in) :: r(:)
-      norm = norm2(r(self%mesh%eq_dof))
+      integer :: k
+      norm = 0
+      do k = 1, self%mesh%nfree
+         norm = norm + r(self%mesh%eq_dof(k))**2
+      end do
+      norm = sqrt(norm)
    end function free_norm
 
 end module fekap_solver_fem
