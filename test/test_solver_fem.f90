@@ -26,7 +26,9 @@ contains
          & new_unittest('fem_advance_cantilever_rollup', test_rollup), &
          & new_unittest('fem_advance_rollup_convergence_rate', test_rollup_rate), &
          & new_unittest('fem_advance_slider_crank', test_slider_crank), &
-         & new_unittest('fem_advance_slider_across_elements', test_slider_across) &
+         & new_unittest('fem_advance_slider_across_elements', test_slider_across), &
+         & new_unittest('fem_advance_positions_only_work', test_positions_only), &
+         & new_unittest('fem_advance_positions_independent_of_rates', test_bit_for_bit) &
          & ]
    end subroutine collect_solver_fem
 
@@ -296,5 +298,65 @@ contains
       call check(error, err(3), 0.0_dp, 'slider ax', abs=1.0e-9_dp)
       call check(error, err(4), 0.0_dp, 'slider stays on the guide', abs=1.0e-9_dp)
    end subroutine test_slider_across
+
+   !> Run Example 1 for 40 steps with the given quantities; return the stepper.
+   subroutine run_counted(velocities, accelerations, fem, final, error)
+      logical, intent(in) :: velocities, accelerations
+      type(fem_stepper_type), intent(out) :: fem
+      type(step_result_type), intent(out) :: final
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      integer :: n
+      call fourbar_model(model, 0.025_dp)
+      model%analysis%velocities = velocities
+      model%analysis%accelerations = accelerations
+      call new_fem_stepper(fem, model)
+      call new_step_result(final, 4, 3)
+      call fem%start(final, error)
+      do n = 1, 40
+         if (allocated(error)) return
+         call fem%advance(n*0.025_dp, final, error)
+      end do
+   end subroutine run_counted
+
+   !> A positions-only run does no velocity or acceleration solve; a
+   !> velocities-only run no acceleration work; no slideline is evaluated
+   !> where there is none.
+   subroutine test_positions_only(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(fem_stepper_type) :: fem
+      type(step_result_type) :: res
+      call run_counted(.false., .false., fem, res, error)
+      if (allocated(error)) return
+      call check(error, fem%counts%velocity_solves, 0, 'positions only: velocity solves')
+      call check(error, fem%counts%acceleration_solves, 0, 'positions only: acceleration solves')
+      call check(error, .not. res%has_velocity, 'positions only: no velocities reported')
+      call check(error, fem%counts%slideline_evaluations, 0, 'no slidelines: slideline evaluations')
+      call run_counted(.true., .false., fem, res, error)
+      if (allocated(error)) return
+      call check(error, fem%counts%velocity_solves, 41, 'velocities: one solve per configuration')
+      call check(error, fem%counts%acceleration_solves, 0, 'velocities only: acceleration solves')
+      call run_counted(.true., .true., fem, res, error)
+      if (allocated(error)) return
+      call check(error, fem%counts%acceleration_solves, 41, 'accelerations: one solve per configuration')
+   end subroutine test_positions_only
+
+   !> With the default predictor, positions are bit for bit the same whether
+   !> or not rates are computed, and velocities whether or not accelerations are.
+   subroutine test_bit_for_bit(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(fem_stepper_type) :: fem
+      type(step_result_type) :: res(3)
+      call run_counted(.false., .false., fem, res(1), error)
+      if (allocated(error)) return
+      call run_counted(.true., .false., fem, res(2), error)
+      if (allocated(error)) return
+      call run_counted(.true., .true., fem, res(3), error)
+      if (allocated(error)) return
+      call check(error, all(res(1)%pos == res(2)%pos) .and. all(res(1)%pos == res(3)%pos), &
+         & 'positions identical with and without rates')
+      call check(error, all(res(1)%angle == res(3)%angle), 'link angles identical with and without rates')
+      call check(error, all(res(2)%vel == res(3)%vel), 'velocities identical with and without accelerations')
+   end subroutine test_bit_for_bit
 
 end module test_solver_fem
