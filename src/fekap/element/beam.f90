@@ -94,45 +94,60 @@ contains
 
    !> Internal force p (38) and, if asked, the tangent k = km + kg (43)-(44);
    !> `geometric = .false.` leaves out kg (the material tangent of (46)).
+   !> With w = (x1', x2', phi) = Bw xe at a Gauss point, the columns of Bw are
+   !> ax (d x1'), ay (d x2') and ph (d phi), so that
+   !>   km = EA b1 b1^T + kGA b2 b2^T + EI bk bk^T,  b_m = Bw^T grad Gamma_m,
+   !>   kg = Bw^T (P H1 + V H2) Bw = g13 (ax ph^T + ph ax^T) + g23 (ay ph^T + ph ay^T) + g33 ph ph^T
+   !> with g13 = -s P - c V, g23 = c P - s V, g33 = -(1 + Gamma1) P - Gamma2 V (the paper's G).
    pure subroutine beam_residual(self, xe, p, k, geometric)
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6)
       real(dp), intent(out) :: p(6)
       real(dp), intent(out), optional :: k(6, 6)
       logical, intent(in), optional :: geometric
-      real(dp) :: bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), b(6, 3), sig(3), xi, w, wl, g(3, 3), gb(3, 6)
+      real(dp) :: b1(6), b2(6), bk(6), ax(6), ay(6), ph(6), sig(3), a(2)
+      real(dp) :: xi, w, wl, n1, n2, phi, c, s, g1, g2, g13, g23, g33, rl
       integer :: ig, i, j
       logical :: with_kg
       with_kg = .true.
       if (present(geometric)) with_kg = geometric
+      rl = 1/self%length
+      a = (xe(4:5) - xe(1:2))*rl
+      ax = [-rl, 0.0_dp, 0.0_dp, rl, 0.0_dp, 0.0_dp]
+      ay = [0.0_dp, -rl, 0.0_dp, 0.0_dp, rl, 0.0_dp]
+      bk = [0.0_dp, 0.0_dp, -rl, 0.0_dp, 0.0_dp, rl]
       p = 0
       if (present(k)) k = 0
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
          wl = w*self%length/2
-         call point_state(self, xe, xi, bw, gam, grad, hess)
-         sig = self%c*gam                                   ! (30)
-         b(:, 1) = matmul(grad(:, 1), bw)                   ! dGamma1/dd
-         b(:, 2) = matmul(grad(:, 2), bw)                   ! dGamma2/dd
-         b(:, 3) = [0.0_dp, 0.0_dp, -1/self%length, 0.0_dp, 0.0_dp, 1/self%length]
-         p = p + wl*matmul(b, sig)                          ! (38)
-         if (present(k)) then
-            do j = 1, 6                                     ! km, (43) first integral
-               do i = 1, 6
-                  k(i, j) = k(i, j) + wl*(self%c(1)*b(i, 1)*b(j, 1) + self%c(2)*b(i, 2)*b(j, 2) &
-                     & + self%c(3)*b(i, 3)*b(j, 3))
-               end do
-            end do
-            if (with_kg) then                               ! kg = Bw^T G Bw, (43)-(44)
-               g = sig(1)*hess(:, :, 1) + sig(2)*hess(:, :, 2)
-               gb = matmul(g, bw)
-               do j = 1, 6
-                  do i = 1, 6
-                     k(i, j) = k(i, j) + wl*(bw(1, i)*gb(1, j) + bw(2, i)*gb(2, j) + bw(3, i)*gb(3, j))
-                  end do
-               end do
-            end if
+         n1 = (1 - xi)/2
+         n2 = (1 + xi)/2
+         phi = self%angle + n1*xe(3) + n2*xe(6)
+         c = cos(phi)
+         s = sin(phi)
+         g1 = c*a(1) + s*a(2) - 1                          ! (27)
+         g2 = -s*a(1) + c*a(2)
+         sig = self%c*[g1, g2, (xe(6) - xe(3))*rl]         ! (30)
+         ph = [0.0_dp, 0.0_dp, n1, 0.0_dp, 0.0_dp, n2]
+         b1 = c*ax + s*ay + g2*ph                           ! dGamma1/dxe
+         b2 = -s*ax + c*ay - (1 + g1)*ph                    ! dGamma2/dxe
+         p = p + wl*(sig(1)*b1 + sig(2)*b2 + sig(3)*bk)     ! (38)
+         if (.not. present(k)) cycle
+         g13 = 0
+         g23 = 0
+         g33 = 0
+         if (with_kg) then
+            g13 = -s*sig(1) - c*sig(2)
+            g23 = c*sig(1) - s*sig(2)
+            g33 = -(1 + g1)*sig(1) - g2*sig(2)
          end if
+         do j = 1, 6                                        ! (43)-(44)
+            do i = 1, 6
+               k(i, j) = k(i, j) + wl*(self%c(1)*b1(i)*b1(j) + self%c(2)*b2(i)*b2(j) + self%c(3)*bk(i)*bk(j) &
+                  & + g13*(ax(i)*ph(j) + ph(i)*ax(j)) + g23*(ay(i)*ph(j) + ph(i)*ay(j)) + g33*ph(i)*ph(j))
+            end do
+         end do
       end do
    end subroutine beam_residual
 

@@ -29,6 +29,8 @@ module fekap_solver_fem
    real(dp), parameter :: admissible_strain = 1.0e-8_dp
    !> A Newton correction longer than this many model sizes is divergence.
    real(dp), parameter :: divergence_length = 1.0e3_dp
+   !> Configurations kept for the extrapolating predictor (quadratic extrapolation).
+   integer, parameter :: history = 3
 
    type, extends(stepper_type) :: fem_stepper_type
       type(model_type) :: model
@@ -80,7 +82,7 @@ contains
          call new_band_matrix(self%kff, nf, self%mesh%kd)
          allocate (self%kfd(nf, nd), self%rhs(nf, 1), self%law0(nd))
          allocate (self%q(n), self%v(n), self%a(n), self%r(n), self%qt(n), self%work(n), source=0.0_dp)
-         allocate (self%hist(n, 3), self%thist(3), source=0.0_dp)
+         allocate (self%hist(n, history), self%thist(history), source=0.0_dp)
       end associate
       do i = 1, self%mesh%ndriven
          call model%drives(i)%law%eval(model%analysis%t_start, f, df, ddf)
@@ -490,13 +492,14 @@ contains
    subroutine accept(self, t, q)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t, q(:)
-      self%hist(:, 3) = self%hist(:, 2)
-      self%hist(:, 2) = self%hist(:, 1)
-      self%thist(3) = self%thist(2)
-      self%thist(2) = self%thist(1)
+      integer :: k
+      do k = history, 2, -1
+         self%hist(:, k) = self%hist(:, k - 1)
+         self%thist(k) = self%thist(k - 1)
+      end do
       self%hist(:, 1) = q
       self%thist(1) = t
-      self%nhist = min(self%nhist + 1, 3)
+      self%nhist = min(self%nhist + 1, history)
       self%q = q
       self%t = t
       self%seg_accepted = self%seg
