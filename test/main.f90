@@ -2,6 +2,7 @@
 program tester
    use fekap_testing, only: unittest_type, run_testsuite
    use test_drive_law, only: collect_drive_law
+   use test_classical_angles, only: collect_classical_angles
    implicit none
 
    abstract interface
@@ -22,6 +23,7 @@ program tester
    failed = 0
 
    call run('drive_law', collect_drive_law)
+   call run('classical_angles', collect_classical_angles)
 
    if (failed > 0) error stop 1
 
