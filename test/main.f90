@@ -3,6 +3,8 @@ program tester
    use fekap_testing, only: unittest_type, run_testsuite
    use test_drive_law, only: collect_drive_law
    use test_classical_angles, only: collect_classical_angles
+   use test_classical_constraints, only: collect_classical_constraints
+   use test_classical_cartesian, only: collect_classical_cartesian
    implicit none
 
    abstract interface
@@ -24,6 +26,8 @@ program tester
 
    call run('drive_law', collect_drive_law)
    call run('classical_angles', collect_classical_angles)
+   call run('classical_constraints', collect_classical_constraints)
+   call run('classical_cartesian', collect_classical_cartesian)
 
    if (failed > 0) error stop 1
 
