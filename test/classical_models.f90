@@ -7,7 +7,7 @@ module classical_models
    use fekap_error, only: error_type
    use fekap_model, only: model_type, node_type, link_type, weld_type, support_type, drive_type, &
       & slideline_type, section_type, load_type, find_node, find_link, dof_x, dof_y, dof_rot, &
-      & joint_pin_in_slot
+      & joint_pin_in_slot, joint_prismatic
    use fekap_model_drive_law, only: law_type, new_rate_law, new_harmonic_law
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: stepper_type
@@ -15,7 +15,7 @@ module classical_models
    private
 
    public :: four_bar_model, appendage_model, double_crank_model, peaucellier_model, slider_crank_model
-   public :: quick_return_model, four_bar_exact, slider_crank_exact, run_steps, pi
+   public :: prismatic_slider_model, slider_drive_model, quick_return_model, four_bar_exact, slider_crank_exact, run_steps, pi
 
    real(dp), parameter :: pi = 3.14159265358979323846_dp
 
@@ -129,6 +129,54 @@ contains
       allocate (s%master_links(0))
       model%slidelines = [model%slidelines, s]
    end subroutine slider_crank_model
+
+   !> The slider-crank with a slider block B-K (0.5 along x) on the ground
+   !> guide as a prismatic joint: the block keeps its angle.
+   subroutine prismatic_slider_model(model)
+      type(model_type), intent(out) :: model
+      type(law_type) :: law
+      type(slideline_type) :: s
+      call start_model(model, ['O', 'A', 'B', 'K'], reshape([0.0_dp, 0.0_dp, 1.0_dp, 0.0_dp, 4.0_dp, 0.0_dp, &
+         & 4.5_dp, 0.0_dp], [2, 4]))
+      call add_link(model, 'OA', 'O', 'A')
+      call add_link(model, 'AB', 'A', 'B')
+      call add_link(model, 'BK', 'B', 'K')
+      call add_pin(model, 'O')
+      call new_rate_law(law, 2*pi, 0.0_dp)
+      call add_rotation_drive(model, 'OA', 'O', law)
+      s%name = 'block'
+      s%slave = find_node(model, 'B')
+      s%kind = joint_prismatic
+      s%slave_link = find_link(model, 'BK')
+      s%ground = .true.
+      s%guide = reshape([-5.0_dp, 0.0_dp, 5.0_dp, 0.0_dp], [2, 2])
+      allocate (s%master_links(0))
+      model%slidelines = [model%slidelines, s]
+   end subroutine prismatic_slider_model
+
+   !> Crank O-A (1, at 90 deg) and rod A-B (3) with B on the x axis, driven by
+   !> the slider: B.x = sqrt(8) + 0.5 sin(2 pi t) (an x drive).
+   subroutine slider_drive_model(model)
+      type(model_type), intent(out) :: model
+      type(law_type) :: law
+      type(slideline_type) :: s
+      type(drive_type) :: drive
+      call start_model(model, ['O', 'A', 'B'], reshape([0.0_dp, 0.0_dp, 0.0_dp, 1.0_dp, sqrt(8.0_dp), 0.0_dp], [2, 3]))
+      call add_link(model, 'OA', 'O', 'A')
+      call add_link(model, 'AB', 'A', 'B')
+      call add_pin(model, 'O')
+      call new_harmonic_law(law, 0.0_dp, 0.5_dp, 2*pi, -pi/2)
+      drive%dof = dof_x
+      drive%node = find_node(model, 'B')
+      drive%law = law
+      model%drives = [model%drives, drive]
+      s%name = 'slot'
+      s%slave = find_node(model, 'B')
+      s%ground = .true.
+      s%guide = reshape([-5.0_dp, 0.0_dp, 5.0_dp, 0.0_dp], [2, 2])
+      allocate (s%master_links(0))
+      model%slidelines = [model%slidelines, s]
+   end subroutine slider_drive_model
 
    !> Example 5: quick-return mechanism; crank O2-C whose pin C slides on the
    !> lever O4-B, link B-P, P sliding on the ground guide y = 500; dt = 0.01.

@@ -218,7 +218,8 @@ contains
       type(angles_stepper_type) :: stepper
       type(step_result_type), allocatable :: res(:)
       type(error_type), allocatable :: got
-      integer :: k
+      real(dp) :: b(2), vb(2), ab(2), c(2), vc(2), ac(2), dev
+      integer :: k, last
       call four_bar_model(model)
       model%analysis%dt = dt
       model%analysis%predictor = predictor
@@ -226,8 +227,16 @@ contains
       call new_angles_stepper(stepper, model, error)
       if (allocated(error)) return
       call run_steps(stepper, model, res, got)
+      last = ubound(res, 1)
+      if (allocated(got)) last = stepper%counts%steps - 1
+      dev = 0
+      do k = 1, last
+         call four_bar_exact(res(k)%t, b, vb, ab, c, vc, ac)
+         dev = max(dev, norm2(res(k)%pos(:, 3) - c))
+      end do
       write (*, '(6x,a,f5.3,a,a,*(1x,i0))') 'angles dt = ', dt, merge(' previous+paper     ', ' extrapolate+default', &
-         & predictor == predictor_previous), ' iterations:', (res(k)%iterations, k=1, ubound(res, 1))
+         & predictor == predictor_previous), ' iterations:', (res(k)%iterations, k=1, last)
+      write (*, '(8x,a,es9.2)') 'largest distance of C from the closed form:', dev
       if (allocated(got)) then
          write (*, '(6x,a)') got%message
          call test_failed(error, got%message)

@@ -10,9 +10,10 @@ module test_classical_cartesian
    use fekap_model, only: model_type, predictor_previous, predictor_extrapolate, predictor_taylor, &
       & convergence_paper, convergence_default, find_node
    use fekap_model_results, only: step_result_type
-   use fekap_classical_cartesian, only: cartesian_stepper_type, new_cartesian_stepper
+   use fekap_classical, only: cartesian_stepper_type, new_cartesian_stepper
    use classical_models, only: four_bar_model, appendage_model, double_crank_model, peaucellier_model, &
-      & slider_crank_model, quick_return_model, four_bar_exact, slider_crank_exact, run_steps, pi
+      & slider_crank_model, prismatic_slider_model, slider_drive_model, quick_return_model, four_bar_exact, &
+      & slider_crank_exact, run_steps, pi
    implicit none
    private
    public :: collect_classical_cartesian
@@ -30,6 +31,8 @@ contains
          & new_unittest('example3_redundant_remove', test_redundant_remove), &
          & new_unittest('example4_straight_line', test_peaucellier), &
          & new_unittest('slider_crank_closed_form', test_slider_crank), &
+         & new_unittest('prismatic_slider', test_prismatic), &
+         & new_unittest('coordinate_drive', test_coordinate_drive), &
          & new_unittest('example5_quick_return', test_quick_return), &
          & new_unittest('under_constrained', test_under_constrained), &
          & new_unittest('no_convergence', test_no_convergence), &
@@ -283,6 +286,56 @@ contains
          call check(error, res(k)%pos(2, jb), 0.0_dp, 'y at step '//int_str(k), abs=1.0e-12_dp)
       end do
    end subroutine test_slider_crank
+
+   !> A prismatic slider block: the slider follows the closed form and the block keeps its angle.
+   subroutine test_prismatic(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      type(step_result_type), allocatable :: res(:)
+      real(dp) :: x, vx, ax
+      integer :: k, jb, jk
+      call prismatic_slider_model(model)
+      call run_model(error, model, res)
+      if (allocated(error)) return
+      jb = find_node(model, 'B')
+      jk = find_node(model, 'K')
+      do k = 0, ubound(res, 1)
+         call slider_crank_exact(res(k)%t, x, vx, ax)
+         call check(error, res(k)%pos(1, jb), x, 'x at step '//int_str(k), rel=1.0e-9_dp, abs=1.0e-9_dp*4)
+         call check(error, res(k)%acc(1, jb), ax, 'ax at step '//int_str(k), rel=1.0e-9_dp, abs=1.0e-9_dp*(2*pi)**2)
+         call check(error, res(k)%pos(1, jk), x + 0.5_dp, 'block end x', abs=1.0e-9_dp)
+         call check(error, res(k)%pos(2, jk), 0.0_dp, 'block end y', abs=1.0e-12_dp)
+         call check(error, res(k)%angle(3), 0.0_dp, 'block angle', abs=1.0e-12_dp)
+         call check(error, res(k)%omega(3), 0.0_dp, 'block angular velocity', abs=1.0e-12_dp)
+      end do
+   end subroutine test_prismatic
+
+   !> The slider-crank driven by the slider's x: the crank follows the closed form.
+   subroutine test_coordinate_drive(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      type(step_result_type), allocatable :: res(:)
+      real(dp) :: x, c
+      integer :: k, ja, jb
+      call slider_drive_model(model)
+      call run_model(error, model, res)
+      if (allocated(error)) return
+      ja = find_node(model, 'A')
+      jb = find_node(model, 'B')
+      do k = 0, ubound(res, 1)
+         x = sqrt(8.0_dp) + 0.5_dp*sin(2*pi*res(k)%t)
+         c = (x**2 - 8)/(2*x)
+         call check(error, res(k)%pos(1, jb), x, 'B.x at step '//int_str(k), abs=1.0e-12_dp)
+         call check(error, res(k)%vel(1, jb), pi*cos(2*pi*res(k)%t), 'B.vx at step '//int_str(k), abs=1.0e-10_dp)
+         call check(error, res(k)%pos(1, ja), c, 'A.x at step '//int_str(k), abs=1.0e-9_dp)
+         call check(error, res(k)%pos(2, ja), sqrt(1 - c**2), 'A.y at step '//int_str(k), abs=1.0e-9_dp)
+      end do
+      model%analysis%dt = 1.0e-4_dp
+      model%analysis%t_end = 0.01_dp
+      call run_model(error, model, res)
+      if (allocated(error)) return
+      call check_differences(error, res, model%analysis%dt)
+   end subroutine test_coordinate_drive
 
    !> Example 5: P stays on y = 500, C on the lever, the stroke is 300, and the
    !> rates equal differences of positions (a slot on a moving link).

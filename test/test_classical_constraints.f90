@@ -9,7 +9,7 @@ module test_classical_constraints
    use fekap_model, only: model_type
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system
    use classical_models, only: appendage_model, quick_return_model, slider_crank_model, peaucellier_model, &
-      & double_crank_model
+      & double_crank_model, prismatic_slider_model, slider_drive_model
    implicit none
    private
    public :: collect_classical_constraints
@@ -23,7 +23,9 @@ contains
          & new_unittest('derivatives_appendage', test_appendage), &
          & new_unittest('derivatives_quick_return', test_quick_return), &
          & new_unittest('derivatives_slider_crank', test_slider_crank), &
-         & new_unittest('derivatives_peaucellier', test_peaucellier) &
+         & new_unittest('derivatives_peaucellier', test_peaucellier), &
+         & new_unittest('derivatives_prismatic', test_prismatic), &
+         & new_unittest('derivatives_coordinate_drive', test_coordinate_drive) &
          & ]
    end subroutine collect_classical_constraints
 
@@ -89,6 +91,20 @@ contains
       call peaucellier_model(model)
       call check_derivatives(error, model)
    end subroutine test_peaucellier
+
+   subroutine test_prismatic(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      call prismatic_slider_model(model)
+      call check_derivatives(error, model)
+   end subroutine test_prismatic
+
+   subroutine test_coordinate_drive(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      call slider_drive_model(model)
+      call check_derivatives(error, model)
+   end subroutine test_coordinate_drive
 
    !> At q = q0 + perturbation, with arbitrary rates q' and time t:
    !> Phi_q by central differences (worst entry reported), -Phi_t and gamma

@@ -238,7 +238,7 @@ contains
          self%counts%residual_assemblies = self%counts%residual_assemblies + 1
          r = norm2(p)
          if (iter == 0) r0 = r
-         if (self%conv%mode == convergence_paper) then
+         if (self%conv%mode == convergence_paper .or. (iter == 0 .and. r <= self%conv%floor)) then
             if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
          end if
          if (iter >= self%analysis%max_iter) then

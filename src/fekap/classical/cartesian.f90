@@ -94,6 +94,7 @@ contains
       integer, allocatable :: jpvt(:)
       integer :: n, m, rank, k, info
       character(len=12) :: b1, b2
+      character(:), allocatable :: verb
 
       n = self%system%n
       m = self%system%m
@@ -122,10 +123,14 @@ contains
          end if
          self%redundant = m > rank
          if (self%redundant .and. .not. self%analysis%remove_redundant) then
-            call input_error(error, 'the constraint equations are redundant: '//labels(self, jpvt(rank + 1:m))// &
-               & ' repeat'//merge('s', ' ', count_labels(self, jpvt(rank + 1:m)) == 1)//' constraints of others;'// &
-               & ' the finite element method (method fem) handles this mechanism, or set `redundant remove`')
-            error%message = squeeze(error%message)
+            if (count_labels(self, jpvt(rank + 1:m)) == 1) then
+               verb = ' repeats'
+            else
+               verb = ' repeat'
+            end if
+            call input_error(error, 'the constraint equations are redundant: '//labels(self, jpvt(rank + 1:m))//verb// &
+               & ' constraints of others; the finite element method (method fem) handles this mechanism,'// &
+               & ' or set `redundant remove`')
             return
          end if
       end if
@@ -161,16 +166,6 @@ contains
       end do
    end function count_labels
 
-   !> Drop the double blank left by the singular verb form.
-   pure function squeeze(text) result(out)
-      character(*), intent(in) :: text
-      character(:), allocatable :: out
-      integer :: k
-      out = text
-      k = index(out, 'repeat  ')
-      if (k > 0) out = out(1:k + 5)//out(k + 7:)
-   end function squeeze
-
    pure function sort(v) result(s)
       integer, intent(in) :: v(:)
       integer :: s(size(v))
@@ -201,7 +196,7 @@ contains
       self%q = self%system%bodies%q0
       self%history%count = 0
       call self%system%residual(self%q, t, self%phi)
-      scale = norm2(self%phi(self%active))
+      scale = active_norm(self)
       call solve_positions(self, t, scale, iterations, error)
       if (allocated(error)) then
          error%message = 'the initial configuration cannot be assembled: '//error%message
@@ -232,7 +227,7 @@ contains
       self%q = self%history%q(:, 1)
       call set_driven_angles(self, t)
       call self%system%residual(self%q, t, self%phi)
-      scale = norm2(self%phi(self%active))
+      scale = active_norm(self)
       ! Predictor, with the driven angles set to their values at t (the paper's (8)).
       call self%history%predict(self%analysis%predictor, t, self%q)
       call set_driven_angles(self, t)
@@ -272,9 +267,9 @@ contains
       do
          call self%system%residual(self%q, t, self%phi)
          self%counts%residual_assemblies = self%counts%residual_assemblies + 1
-         r = norm2(self%phi(self%active))
+         r = active_norm(self)
          if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. r <= self%conv%floor) then
+         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%floor)) then
             if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
          end if
          if (iterations >= self%analysis%max_iter) then
@@ -283,7 +278,9 @@ contains
          end if
          call self%system%jacobian(self%q, self%jac_all)
          self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         self%rhs = -self%phi(self%active)
+         do k = 1, size(self%active)
+            self%rhs(k) = -self%phi(self%active(k))
+         end do
          call factor_and_solve(self, t, error)
          if (allocated(error)) return
          iterations = iterations + 1
@@ -299,6 +296,17 @@ contains
       end do
    end subroutine solve_positions
 
+   !> Euclidean norm of the active residuals in self%phi.
+   pure real(dp) function active_norm(self) result(r)
+      type(cartesian_stepper_type), intent(in) :: self
+      integer :: k
+      r = 0
+      do k = 1, size(self%active)
+         r = r + self%phi(self%active(k))**2
+      end do
+      r = sqrt(r)
+   end function active_norm
+
    !> Factor the active rows of self%jac_all and solve for self%rhs in place.
    subroutine factor_and_solve(self, t, error)
       type(cartesian_stepper_type), intent(inout) :: self
@@ -306,7 +314,9 @@ contains
       type(error_type), allocatable, intent(out) :: error
       integer :: info, k
       real(dp) :: big
-      self%jac = self%jac_all(self%active, :)
+      do k = 1, size(self%active)
+         self%jac(k, :) = self%jac_all(self%active(k), :)
+      end do
       big = maxval(abs(self%jac))
       call dense_lu_factor(self%jac, self%ipiv, info)
       self%counts%lu_factorisations = self%counts%lu_factorisations + 1

@@ -97,15 +97,22 @@ contains
       type(model_type), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
       type(equation_type) :: e
-      integer :: nnode, nlink, ndrive, i, j, k, b, c, l
+      integer :: nnode, ndrive, i, j, k, b, c, l
       integer, allocatable :: at(:)
 
+      if (.not. allocated(model%links) .or. .not. allocated(model%nodes)) then
+         call input_error(error, 'the model has no links')
+         return
+      end if
+      if (size(model%links) == 0) then
+         call input_error(error, 'the model has no links')
+         return
+      end if
       call new_body_map(self%bodies, model, error)
       if (allocated(error)) return
       self%n = 3*self%bodies%nbody
       self%t_start = model%analysis%t_start
       nnode = size(self%bodies%x0, 2)
-      nlink = size(self%bodies%link_body)
       allocate (self%eq(0))
 
       ! Revolute joints: at each node, every further body with a link end there
@@ -193,10 +200,6 @@ contains
          end do
       end if
       self%m = size(self%eq)
-      if (nlink == 0) then
-         call input_error(error, 'the model has no links')
-         return
-      end if
       call self%select_segments(self%bodies%q0)
    end subroutine new_constraint_system
 

@@ -139,7 +139,7 @@ contains
       character(:), allocatable :: text
       character(len=32) :: buf
       integer :: k
-      if (x == 0) then
+      if (abs(x) < tiny(x)) then
          text = '0'
          return
       end if
