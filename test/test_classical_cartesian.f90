@@ -465,13 +465,15 @@ contains
       call run_steps(stepper, model, res, got)
       last = ubound(res, 1)
       if (allocated(got)) last = stepper%counts%steps - 1
+      write (*, '(6x,a,f5.3,a,a,*(1x,i0))') 'cartesian dt = ', dt, merge(' previous+paper     ', ' extrapolate+default', &
+         & predictor == predictor_previous), ' iterations:', (res(k)%iterations, k=1, last)
       dev = 0
       do k = 1, last
          call four_bar_exact(res(k)%t, b, vb, ab, c, vc, ac)
          dev = max(dev, norm2(res(k)%pos(:, 3) - c))
+         if (norm2(res(k)%pos(:, 3) - c) > 1.0e-6_dp) write (*, '(8x,a,f5.3,a,2f9.4,a,2f9.4)') 'at t = ', res(k)%t, &
+            & ' C = ', res(k)%pos(:, 3), ' is on the other assembly branch; the closed form is', c
       end do
-      write (*, '(6x,a,f5.3,a,a,*(1x,i0))') 'cartesian dt = ', dt, merge(' previous+paper     ', ' extrapolate+default', &
-         & predictor == predictor_previous), ' iterations:', (res(k)%iterations, k=1, last)
       write (*, '(8x,a,es9.2)') 'largest distance of C from the closed form:', dev
       if (allocated(got)) then
          write (*, '(8x,a)') got%message
