@@ -5,9 +5,8 @@
 module classical_models
    use fekap_kinds, only: dp
    use fekap_error, only: error_type
-   use fekap_model, only: model_type, node_type, link_type, weld_type, support_type, drive_type, &
-      & slideline_type, section_type, load_type, find_node, find_link, dof_x, dof_y, dof_rot, &
-      & joint_pin_in_slot, joint_prismatic
+   use fekap_model, only: model_type, link_type, weld_type, support_type, drive_type, slideline_type, &
+      & find_node, find_link, dof_x, dof_y, dof_rot, joint_pin_in_slot, joint_prismatic
    use fekap_model_drive_law, only: law_type, new_rate_law, new_harmonic_law
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: stepper_type
