@@ -5,6 +5,9 @@ program tester
    use test_element_beam, only: collect_element_beam
    use test_solver_fem, only: collect_solver_fem
    use test_contact_slideline, only: collect_contact_slideline
+   use test_classical_angles, only: collect_classical_angles
+   use test_classical_constraints, only: collect_classical_constraints
+   use test_classical_cartesian, only: collect_classical_cartesian
    implicit none
 
    abstract interface
@@ -28,6 +31,9 @@ program tester
    call run('element_beam', collect_element_beam)
    call run('solver_fem', collect_solver_fem)
    call run('contact_slideline', collect_contact_slideline)
+   call run('classical_angles', collect_classical_angles)
+   call run('classical_constraints', collect_classical_constraints)
+   call run('classical_cartesian', collect_classical_cartesian)
 
    if (failed > 0) error stop 1
 

@@ -1,0 +1,409 @@
+!> The Cartesian-coordinate method (the paper's (13)-(26), Nikravesh's KAP):
+!> every rigid body has coordinates (x, y, phi) (see fekap_classical_bodies),
+!> the joints give the constraint equations Phi(q, t) = 0 of
+!> fekap_classical_constraints, and Newton's method with the nonsymmetric
+!> Jacobian Phi_q solves them at each time; velocities follow from
+!> Phi_q q' = -Phi_t (23) and accelerations from Phi_q q'' = gamma (25).
+!>
+!> Redundant constraints (a Jacobian of deficient row rank, as in the double
+!> parallel crank) are found by a QR factorisation with column pivoting of
+!> Phi_q^T at the initial configuration: the equations left after the
+!> numerical rank (|R(k,k)| <= 1e-10 |R(1,1)|) depend on the others. They are
+!> an input error unless the analysis asks to remove them; then they are
+!> dropped, and the choice is renewed at the start of every step from the
+!> last converged configuration, so that the kept equations stay well
+!> conditioned as the mechanism moves.
+module fekap_classical_cartesian
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, input_error, analysis_error
+   use fekap_model, only: model_type, model_size, analysis_type, convergence_paper
+   use fekap_model_results, only: step_result_type, new_step_result
+   use fekap_solver_stepper, only: stepper_type
+   use fekap_solver_convergence, only: convergence_type, is_converged
+   use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
+   use fekap_classical_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
+   use fekap_classical_stepping, only: history_type, new_history, drive_value, new_step_convergence, &
+      & no_convergence_text, real_text
+   implicit none
+   private
+
+   public :: cartesian_stepper_type, new_cartesian_stepper
+
+   !> Relative threshold of the numerical rank of Phi_q.
+   real(dp), parameter :: rank_tol = 1.0e-10_dp
+   !> Relative pivot below which an LU factor counts as singular.
+   real(dp), parameter :: pivot_tol = 1.0e-13_dp
+
+   !> Cartesian-coordinate stepper.
+   type, extends(stepper_type) :: cartesian_stepper_type
+      private
+      type(constraint_system_type) :: system
+      type(analysis_type) :: analysis
+      type(convergence_type) :: conv
+      integer :: nnode = 0, nlink = 0
+      !> The equations solved (all of them unless redundant ones were removed).
+      integer, allocatable :: active(:)
+      logical :: redundant = .false.
+      !> Coordinates and their rates.
+      real(dp), allocatable :: q(:), qd(:), qdd(:)
+      !> Work arrays: all residuals, the full Jacobian, the square Jacobian and a right-hand side.
+      real(dp), allocatable :: phi(:), jac_all(:, :), jac(:, :), rhs(:)
+      integer, allocatable :: ipiv(:)
+      type(history_type) :: history
+      integer :: step = 0
+   contains
+      procedure :: start => cartesian_start
+      procedure :: advance => cartesian_advance
+   end type cartesian_stepper_type
+
+contains
+
+   !> Bodies and constraint equations of `model`, checked at the initial
+   !> configuration: not enough independent equations is an input error, and
+   !> so are redundant ones unless analysis%remove_redundant.
+   subroutine new_cartesian_stepper(self, model, error)
+      type(cartesian_stepper_type), intent(out) :: self
+      type(model_type), intent(in) :: model
+      type(error_type), allocatable, intent(out) :: error
+      integer :: n, m
+
+      call new_constraint_system(self%system, model, error)
+      if (allocated(error)) return
+      self%analysis = model%analysis
+      self%conv = new_step_convergence(model%analysis, model_size(model))
+      self%nnode = size(model%nodes)
+      self%nlink = size(model%links)
+      n = self%system%n
+      m = self%system%m
+      allocate (self%q(n), self%qd(n), self%qdd(n), self%rhs(n), source=0.0_dp)
+      allocate (self%phi(m), self%jac_all(m, n), self%jac(n, n), source=0.0_dp)
+      allocate (self%ipiv(n))
+      self%q = self%system%bodies%q0
+      call new_history(self%history, n)
+      call select_equations(self, self%q, .true., error)
+   end subroutine new_cartesian_stepper
+
+   !> Choose the n equations to solve from the rank-revealing QR of Phi_q^T at q.
+   !> At the start, a rank below n and redundant equations are diagnosed.
+   subroutine select_equations(self, q, initial, error)
+      type(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: q(:)
+      logical, intent(in) :: initial
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: a(:, :)
+      integer, allocatable :: jpvt(:)
+      integer :: n, m, rank, k, info
+      character(len=12) :: b1, b2
+      character(:), allocatable :: verb
+
+      n = self%system%n
+      m = self%system%m
+      call self%system%jacobian(q, self%jac_all)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      a = transpose(self%jac_all)
+      allocate (jpvt(m))
+      rank = 0
+      if (m > 0) then
+         call dense_pivoted_qr(a, jpvt, info)
+         if (info /= 0) then
+            call analysis_error(error, 'the QR factorisation of the constraint Jacobian failed')
+            return
+         end if
+         do k = 1, min(n, m)
+            if (abs(a(k, k)) > rank_tol*abs(a(1, 1))) rank = k
+         end do
+      end if
+      if (initial) then
+         if (rank < n) then
+            write (b1, '(i0)') n
+            write (b2, '(i0)') rank
+            call input_error(error, 'the mechanism is not determined by its constraints: '//trim(b1)// &
+               & ' body coordinates but '//trim(b2)//' independent constraint equations; add drives or supports')
+            return
+         end if
+         self%redundant = m > rank
+         if (self%redundant .and. .not. self%analysis%remove_redundant) then
+            if (count_labels(self, jpvt(rank + 1:m)) == 1) then
+               verb = ' repeats'
+            else
+               verb = ' repeat'
+            end if
+            call input_error(error, 'the constraint equations are redundant: '//labels(self, jpvt(rank + 1:m))//verb// &
+               & ' constraints of others; the finite element method (method fem) handles this mechanism,'// &
+               & ' or set `redundant remove`')
+            return
+         end if
+      end if
+      self%active = sort(jpvt(1:n))
+   end subroutine select_equations
+
+   !> The distinct labels of the equations idx, separated by commas.
+   function labels(self, idx) result(text)
+      type(cartesian_stepper_type), intent(in) :: self
+      integer, intent(in) :: idx(:)
+      character(:), allocatable :: text
+      integer :: k, j
+      logical :: seen
+      text = ''
+      do k = 1, size(idx)
+         seen = .false.
+         do j = 1, k - 1
+            if (self%system%eq(idx(j))%label == self%system%eq(idx(k))%label) seen = .true.
+         end do
+         if (seen) cycle
+         if (len(text) > 0) text = text//', '
+         text = text//self%system%eq(idx(k))%label
+      end do
+   end function labels
+
+   integer function count_labels(self, idx) result(c)
+      type(cartesian_stepper_type), intent(in) :: self
+      integer, intent(in) :: idx(:)
+      integer :: k, j
+      c = 0
+      do k = 1, size(idx)
+         if (all([(self%system%eq(idx(j))%label /= self%system%eq(idx(k))%label, j=1, k - 1)])) c = c + 1
+      end do
+   end function count_labels
+
+   pure function sort(v) result(s)
+      integer, intent(in) :: v(:)
+      integer :: s(size(v))
+      integer :: i, j, x
+      s = v
+      do i = 2, size(s)
+         x = s(i)
+         j = i - 1
+         do while (j >= 1)
+            if (s(j) <= x) exit
+            s(j + 1) = s(j)
+            j = j - 1
+         end do
+         s(j + 1) = x
+      end do
+   end function sort
+
+   !> The initial configuration at t_start (assembled by Newton's method if
+   !> the given coordinates violate a constraint), with its rates.
+   subroutine cartesian_start(self, result, error)
+      class(cartesian_stepper_type), intent(inout) :: self
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: t, scale
+      integer :: iterations
+      self%step = 0
+      t = self%analysis%t_start
+      self%q = self%system%bodies%q0
+      self%history%count = 0
+      call self%system%residual(self%q, t, self%phi)
+      scale = active_norm(self)
+      call solve_positions(self, t, scale, iterations, error)
+      if (allocated(error)) then
+         error%message = 'the initial configuration cannot be assembled: '//error%message
+         return
+      end if
+      call self%history%push(self%q, t)
+      call finish_step(self, t, iterations, result, error)
+   end subroutine cartesian_start
+
+   !> Newton's method on the constraint equations at time t from the
+   !> predictor, then velocities and accelerations.
+   subroutine cartesian_advance(self, t, result, error)
+      class(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: scale
+      integer :: iterations
+
+      self%step = self%step + 1
+      self%counts%steps = self%counts%steps + 1
+      if (self%redundant) then
+         call select_equations(self, self%history%q(:, 1), .false., error)
+         if (allocated(error)) return
+      end if
+      call self%system%select_segments(self%history%q(:, 1))
+      ! The scale of the default test: the residual of the drive increment alone.
+      self%q = self%history%q(:, 1)
+      call set_driven_angles(self, t)
+      call self%system%residual(self%q, t, self%phi)
+      scale = active_norm(self)
+      ! Predictor, with the driven angles set to their values at t (the paper's (8)).
+      call self%history%predict(self%analysis%predictor, t, self%q)
+      call set_driven_angles(self, t)
+      call solve_positions(self, t, scale, iterations, error)
+      if (allocated(error)) return
+      call self%history%push(self%q, t)
+      call finish_step(self, t, iterations, result, error)
+   end subroutine cartesian_advance
+
+   !> Angles of bodies driven directly by a rotation drive take their value at t.
+   subroutine set_driven_angles(self, t)
+      type(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      integer :: k
+      real(dp) :: f, df, ddf
+      do k = 1, size(self%active)
+         associate (e => self%system%eq(self%active(k)))
+            if (e%kind /= eq_angle .or. e%drive == 0 .or. e%bj /= 0) cycle
+            call drive_value(self%system%laws(e%drive), self%system%initial(e%drive), self%system%t_start, t, f, df, ddf)
+            self%q(3*e%bi) = e%const + f
+         end associate
+      end do
+   end subroutine set_driven_angles
+
+   !> Newton iterations on the active equations from self%q; iterations are
+   !> counted as linear solves until the shared convergence test passes.
+   subroutine solve_positions(self, t, scale, iterations, error)
+      type(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, scale
+      integer, intent(out) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: r, r0, correction
+      integer :: k
+
+      iterations = 0
+      r0 = 0
+      do
+         call self%system%residual(self%q, t, self%phi)
+         self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+         r = active_norm(self)
+         if (iterations == 0) r0 = r
+         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%floor)) then
+            if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
+         end if
+         if (iterations >= self%analysis%max_iter) then
+            call analysis_error(error, no_convergence_text(self%step, t, iterations, r))
+            return
+         end if
+         call self%system%jacobian(self%q, self%jac_all)
+         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+         do k = 1, size(self%active)
+            self%rhs(k) = -self%phi(self%active(k))
+         end do
+         call factor_and_solve(self, t, error)
+         if (allocated(error)) return
+         iterations = iterations + 1
+         self%counts%iterations = self%counts%iterations + 1
+         self%q = self%q + self%rhs
+         if (self%conv%mode /= convergence_paper) then
+            correction = 0
+            do k = 1, self%system%n/3
+               correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
+            end do
+            if (is_converged(self%conv, r, r0, scale, correction)) exit
+         end if
+      end do
+   end subroutine solve_positions
+
+   !> Euclidean norm of the active residuals in self%phi.
+   pure real(dp) function active_norm(self) result(r)
+      type(cartesian_stepper_type), intent(in) :: self
+      integer :: k
+      r = 0
+      do k = 1, size(self%active)
+         r = r + self%phi(self%active(k))**2
+      end do
+      r = sqrt(r)
+   end function active_norm
+
+   !> Factor the active rows of self%jac_all and solve for self%rhs in place.
+   subroutine factor_and_solve(self, t, error)
+      type(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(error_type), allocatable, intent(out) :: error
+      integer :: info, k
+      real(dp) :: big
+      do k = 1, size(self%active)
+         self%jac(k, :) = self%jac_all(self%active(k), :)
+      end do
+      big = maxval(abs(self%jac))
+      call dense_lu_factor(self%jac, self%ipiv, info)
+      self%counts%lu_factorisations = self%counts%lu_factorisations + 1
+      if (info == 0) then
+         do k = 1, size(self%jac, 1)
+            if (abs(self%jac(k, k)) <= pivot_tol*big) info = k
+         end do
+      end if
+      if (info /= 0) then
+         call analysis_error(error, singular_text(self, t))
+         return
+      end if
+      call dense_lu_solve(self%jac, self%ipiv, self%rhs, info)
+   end subroutine factor_and_solve
+
+   function singular_text(self, t) result(text)
+      type(cartesian_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      character(:), allocatable :: text
+      character(len=12) :: buf
+      write (buf, '(i0)') self%step
+      text = 'step '//trim(buf)//' at t = '//real_text(t)// &
+         & ': the constraint Jacobian is singular (a singular configuration of the mechanism)'
+   end function singular_text
+
+   !> Rates at the accepted configuration (when asked for) and the step's result.
+   subroutine finish_step(self, t, iterations, result, error)
+      type(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      integer, intent(in) :: iterations
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: gamma(self%system%m)
+      integer :: k, b, l
+
+      if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
+      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) &
+         & call new_step_result(result, self%nnode, self%nlink)
+      result%step = self%step
+      result%t = t
+      result%iterations = iterations
+      call self%system%residual(self%q, t, self%phi)
+      self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+      result%residual = norm2(self%phi)
+      result%has_velocity = self%analysis%velocities
+      result%has_acceleration = self%analysis%velocities .and. self%analysis%accelerations
+      self%qd = 0
+      self%qdd = 0
+      if (result%has_velocity) then
+         ! Velocities (23): Phi_q q' = -Phi_t.
+         call self%system%jacobian(self%q, self%jac_all)
+         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+         call self%system%velocity_rhs(t, self%phi)
+         self%rhs = self%phi(self%active)
+         call factor_and_solve(self, t, error)
+         if (allocated(error)) return
+         self%counts%velocity_solves = self%counts%velocity_solves + 1
+         self%qd = self%rhs
+         if (result%has_acceleration) then
+            ! Accelerations (25): Phi_q q'' = gamma, with the factors of the velocity solve.
+            call self%system%acceleration_rhs(self%q, self%qd, t, gamma)
+            self%qdd = gamma(self%active)
+            call dense_lu_solve(self%jac, self%ipiv, self%qdd, k)
+            self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+            call self%history%set_rates(self%qd, self%qdd)
+         end if
+      end if
+
+      associate (bodies => self%system%bodies)
+         do k = 1, self%nnode
+            b = bodies%node_body(k)
+            if (b == 0) then
+               result%pos(:, k) = bodies%x0(:, k)
+               result%vel(:, k) = 0
+               result%acc(:, k) = 0
+            else
+               call bodies%position(b, bodies%node_local(:, k), self%q, self%qd, self%qdd, &
+                  & result%pos(:, k), result%vel(:, k), result%acc(:, k))
+            end if
+         end do
+         do l = 1, self%nlink
+            b = bodies%link_body(l)
+            result%angle(l) = self%q(3*b) + bodies%link_offset(l)
+            result%omega(l) = self%qd(3*b)
+            result%alpha(l) = self%qdd(3*b)
+         end do
+      end associate
+   end subroutine finish_step
+
+end module fekap_classical_cartesian

@@ -1,0 +1,84 @@
+!> The few LAPACK routines the constraint-equation methods need, with explicit
+!> interfaces and thin assumed-shape wrappers that derive the leading
+!> dimensions from the arrays. Private to the classical methods until the
+!> shared LAPACK interface module of the assembly area exists.
+module fekap_classical_lapack
+   use fekap_kinds, only: dp
+   implicit none
+   private
+
+   public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
+
+   interface
+      subroutine dgetrf(m, n, a, lda, ipiv, info)
+         import :: dp
+         integer, intent(in) :: m, n, lda
+         real(dp), intent(inout) :: a(lda, *)
+         integer, intent(out) :: ipiv(*)
+         integer, intent(out) :: info
+      end subroutine dgetrf
+
+      subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+         import :: dp
+         character(len=1), intent(in) :: trans
+         integer, intent(in) :: n, nrhs, lda, ldb
+         real(dp), intent(in) :: a(lda, *)
+         integer, intent(in) :: ipiv(*)
+         real(dp), intent(inout) :: b(ldb, *)
+         integer, intent(out) :: info
+      end subroutine dgetrs
+
+      subroutine dgeqp3(m, n, a, lda, jpvt, tau, work, lwork, info)
+         import :: dp
+         integer, intent(in) :: m, n, lda, lwork
+         real(dp), intent(inout) :: a(lda, *)
+         integer, intent(inout) :: jpvt(*)
+         real(dp), intent(out) :: tau(*)
+         real(dp), intent(inout) :: work(*)
+         integer, intent(out) :: info
+      end subroutine dgeqp3
+   end interface
+
+contains
+
+   !> LU factorisation with partial pivoting of the square matrix a (dgetrf).
+   !> info > 0: U(info, info) is exactly zero.
+   subroutine dense_lu_factor(a, ipiv, info)
+      !> The matrix on entry, its L and U factors on return.
+      real(dp), contiguous, intent(inout) :: a(:, :)
+      !> Row interchanges.
+      integer, contiguous, intent(out) :: ipiv(:)
+      integer, intent(out) :: info
+      call dgetrf(size(a, 1), size(a, 2), a, max(1, size(a, 1)), ipiv, info)
+   end subroutine dense_lu_factor
+
+   !> Solve a x = b with the factors from dense_lu_factor (dgetrs); b becomes x.
+   subroutine dense_lu_solve(a, ipiv, b, info)
+      real(dp), contiguous, intent(in) :: a(:, :)
+      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp), contiguous, intent(inout) :: b(:)
+      integer, intent(out) :: info
+      call dgetrs('N', size(a, 1), 1, a, max(1, size(a, 1)), ipiv, b, max(1, size(b)), info)
+   end subroutine dense_lu_solve
+
+   !> QR factorisation with column pivoting of a (dgeqp3): a P = Q R.
+   !> On return the upper triangle of a holds R and jpvt the column order.
+   subroutine dense_pivoted_qr(a, jpvt, info)
+      real(dp), contiguous, intent(inout) :: a(:, :)
+      !> Column k of a P is column jpvt(k) of the original a.
+      integer, contiguous, intent(out) :: jpvt(:)
+      integer, intent(out) :: info
+      real(dp), allocatable :: tau(:), work(:)
+      real(dp) :: query(1)
+      integer :: m, n
+      m = size(a, 1)
+      n = size(a, 2)
+      jpvt = 0
+      allocate (tau(max(1, min(m, n))))
+      call dgeqp3(m, n, a, max(1, m), jpvt, tau, query, -1, info)
+      if (info /= 0) return
+      allocate (work(max(1, int(query(1)))))
+      call dgeqp3(m, n, a, max(1, m), jpvt, tau, work, size(work), info)
+   end subroutine dense_pivoted_qr
+
+end module fekap_classical_lapack
