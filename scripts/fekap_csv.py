@@ -72,8 +72,15 @@ def pyplot():
 
 
 def parse_number(text: str) -> float:
-    """Convert one CSV field to float, accepting Fortran spellings (1.0D+00, 1.0-100)."""
+    """Convert one CSV field to float, accepting Fortran spellings (1.0D+00, 1.0-100).
+
+    An empty field is a value the run did not compute at that step (FEKAP leaves
+    velocities and accelerations out of a row at a singular configuration): NaN,
+    which matplotlib draws as a gap.
+    """
     text = text.strip()
+    if not text:
+        return float("nan")
     try:
         return float(text)
     except ValueError:

@@ -24,6 +24,8 @@ module fekap_assembly_band
       logical :: is_lu = .false.
       !> 1-norm of the factored matrix, for the condition estimate.
       real(dp) :: anorm = 0
+      !> Diagonal of the factored matrix, to measure its pivots against.
+      real(dp), allocatable :: diag(:)
    contains
       procedure :: zero => band_zero
       procedure :: add => band_add
@@ -31,6 +33,7 @@ module fekap_assembly_band
       procedure :: solve => band_solve
       procedure :: rcond => band_rcond
       procedure :: multiply => band_multiply
+      procedure :: pivot_ratio => band_pivot_ratio
    end type band_matrix_type
 
 contains
@@ -43,6 +46,7 @@ contains
       self%kd = kd
       allocate (self%a(kd + 1, n), self%f(3*kd + 1, n), source=0.0_dp)
       allocate (self%ipiv(n), source=0)
+      allocate (self%diag(n), source=0.0_dp)
    end subroutine new_band_matrix
 
    pure subroutine band_zero(self)
@@ -69,6 +73,7 @@ contains
       kd = self%kd
       ld = size(self%f, 1)
       self%anorm = one_norm(self)
+      self%diag = self%a(kd + 1, :)
       self%f(1:kd + 1, :) = self%a
       self%is_lu = .false.
       call dpbtrf('U', self%n, kd, self%f, ld, info)
@@ -118,6 +123,29 @@ contains
          call dpbcon('U', self%n, self%kd, self%f, size(self%f, 1), self%anorm, rcond, work, iwork, info)
       end if
    end function band_rcond
+
+   !> Smallest pivot of the factor relative to the matrix's own diagonal entry:
+   !> min_j U(j,j)^2 / A(j,j) for Cholesky, min_j |U(j,j)| / |A(j,j)| for LU.
+   !> Invariant under a diagonal scaling of the unknowns, so stiffness ratios
+   !> do not enter; it tends to 0 as the matrix becomes singular.
+   pure real(dp) function band_pivot_ratio(self) result(ratio)
+      class(band_matrix_type), intent(in) :: self
+      integer :: j
+      real(dp) :: pivot
+      ratio = 1
+      do j = 1, self%n
+         if (self%is_lu) then
+            pivot = abs(self%f(2*self%kd + 1, j))
+         else
+            pivot = self%f(self%kd + 1, j)**2
+         end if
+         if (abs(self%diag(j)) > 0) then
+            ratio = min(ratio, pivot/abs(self%diag(j)))
+         else
+            ratio = 0
+         end if
+      end do
+   end function band_pivot_ratio
 
    !> y = A x with the assembled (unfactored) matrix.
    pure subroutine band_multiply(self, x, y)

@@ -17,6 +17,8 @@ module fekap_model_results
       real(dp) :: residual = 0
       !> Times the step was cut in halves to converge.
       integer :: cuts = 0
+      !> A remark for the listing (a near-singular configuration, rates left out), or empty.
+      character(:), allocatable :: note
       logical :: has_velocity = .false.
       logical :: has_acceleration = .false.
       !> (2, number of nodes): x, y of every model node.

@@ -39,6 +39,12 @@ contains
          node = model%output%points(i)
          values(1:3) = [result%t, result%pos(:, node)]
          nval = 3
+         if (velocities .and. .not. result%has_velocity) then
+            ! Not computed at this step (a singular configuration): empty fields.
+            call write_row(unit, result%step, model%nodes(node)%name, values(1:nval), &
+               & blanks=merge(4, 2, accelerations))
+            cycle
+         end if
          if (velocities) then
             values(4:5) = result%vel(:, node)
             nval = 5
@@ -74,6 +80,11 @@ contains
          link = model%output%links(i)
          values(1:2) = [result%t, result%angle(link)]
          nval = 2
+         if (velocities .and. .not. result%has_velocity) then
+            call write_row(unit, result%step, model%links(link)%name, values(1:nval), &
+               & blanks=merge(2, 1, accelerations))
+            cycle
+         end if
          if (velocities) then
             values(3) = result%omega(link)
             nval = 3
@@ -113,12 +124,13 @@ contains
       end do
    end subroutine write_mesh_csv
 
-   !> `step,t,name,v2,...`: values(1) is t.
-   subroutine write_row(unit, step, name, values)
+   !> `step,t,name,v2,...`: values(1) is t; `blanks` empty fields follow.
+   subroutine write_row(unit, step, name, values, blanks)
       integer, intent(in) :: unit, step
       character(*), intent(in) :: name
       real(dp), intent(in) :: values(:)
-      character(len=32 + len(name) + real_width*size(values)) :: line
+      integer, intent(in), optional :: blanks
+      character(len=40 + len(name) + real_width*size(values)) :: line
       integer :: i, n
       write (line, '(i0)') step
       n = len_trim(line)
@@ -128,6 +140,10 @@ contains
       do i = 2, size(values)
          call append_real(values(i))
       end do
+      if (present(blanks)) then
+         line(n + 1:n + blanks) = repeat(',', blanks)
+         n = n + blanks
+      end if
       write (unit, '(a)') line(1:n)
    contains
       subroutine append_real(x)

@@ -29,6 +29,9 @@ module fekap_solver_fem
    real(dp), parameter :: admissible_strain = 1.0e-8_dp
    !> A Newton correction longer than this many model sizes is divergence.
    real(dp), parameter :: divergence_length = 1.0e3_dp
+   !> Pivot ratios (see band_pivot_ratio) below which the tangent at a
+   !> configuration counts as singular, and as near-singular (a warning).
+   real(dp), parameter :: singular_pivot = 1.0e-12_dp, near_singular_pivot = 1.0e-6_dp
    !> Configurations kept for the extrapolating predictor (quadratic extrapolation).
    integer, parameter :: history = 3
 
@@ -61,6 +64,8 @@ module fekap_solver_fem
       real(dp), allocatable :: r(:), rhs(:, :), qt(:), work(:)
       !> Step cuts in the last advance, for the listing.
       integer :: last_cuts = 0
+      !> Remark on the accepted configuration for the listing (empty if none).
+      character(:), allocatable :: note
       !> Master segment of each slideline: during the step, and at the accepted configuration.
       integer, allocatable :: seg(:), seg_accepted(:)
    contains
@@ -366,10 +371,12 @@ contains
       real(dp), intent(in) :: t
       real(dp), intent(out) :: qt(:)
       type(error_type), allocatable, intent(out) :: error
-      call refactor_at_accepted(self, error)
-      if (allocated(error)) return
+      integer :: info
       qt = self%q
       call set_driven(self, t, qt)
+      ! At a singular configuration there is no tangent response: start from the last configuration.
+      call refactor_at_accepted(self, info)
+      if (info > 0) return
       associate (eqd => self%mesh%eq_dof, dd => self%mesh%driven_dof)
          self%rhs(:, 1) = -matmul(self%kfd, qt(dd) - self%q(dd))
          if (self%loaded) self%rhs(:, 1) = self%rhs(:, 1) + (t - self%t)*self%mesh%f_ext(eqd)
@@ -378,23 +385,18 @@ contains
       end associate
    end subroutine tangent_predictor
 
-   !> Make kff the factor of the tangent at the accepted configuration, unless it is already.
-   subroutine refactor_at_accepted(self, error)
+   !> Make kff the factor of the tangent at the accepted configuration, unless
+   !> it is already; info > 0 names the equation where it is singular.
+   subroutine refactor_at_accepted(self, info)
       type(fem_stepper_type), intent(inout) :: self
-      type(error_type), allocatable, intent(out) :: error
-      integer :: info
-      character(len=200) :: msg
+      integer, intent(out) :: info
+      info = 0
       if (self%factor_current) return
       call assemble_tangent(self%mesh, self%q, self%t, self%seg, self%r, self%kff, self%kfd)
       self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
       self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
       call factor(self, info)
-      if (info > 0) then
-         write (msg, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent stiffness is singular at'
-         call analysis_error(error, trim(msg)//' '//describe_dof(self%mesh, self%model, self%mesh%eq_dof(info))//')')
-         return
-      end if
-      self%factor_current = .true.
+      self%factor_current = info == 0
    end subroutine refactor_at_accepted
 
    !> Driven dofs at time t: the initial value plus the law's change since t_start.
@@ -503,6 +505,7 @@ contains
       self%q = q
       self%t = t
       self%seg_accepted = self%seg
+      self%note = ''
       self%has_velocity = .false.
       self%has_acceleration = .false.
       self%counts%steps = self%counts%steps + 1
@@ -528,11 +531,23 @@ contains
    subroutine solve_rates(self, error)
       type(fem_stepper_type), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven)
-      integer :: i, k
+      real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven), ratio
+      integer :: i, k, info
+      character(len=160) :: note
       if (.not. self%model%analysis%velocities) return
-      call refactor_at_accepted(self, error)
-      if (allocated(error)) return
+      call refactor_at_accepted(self, info)
+      ratio = 0
+      if (info == 0) ratio = self%kff%pivot_ratio()
+      if (ratio < singular_pivot) then
+         write (note, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent has no inverse): '// &
+            & 'velocities and accelerations are left out of this step'
+         self%note = trim(note)
+         return
+      else if (ratio < near_singular_pivot) then
+         write (note, '(a,es12.5,a,es9.2,a)') 't = ', self%t, ': near a stationary configuration (pivot ratio ', ratio, &
+            & '): velocities and accelerations are ill-conditioned'
+         self%note = trim(note)
+      end if
       associate (mesh => self%mesh, eqd => self%mesh%eq_dof)
          do i = 1, mesh%ndriven
             call self%model%drives(i)%law%eval(self%t, f, vd(i), ad(i))
@@ -576,6 +591,7 @@ contains
       type(step_result_type), intent(inout) :: result
       integer :: i, dof
       result%t = self%t
+      result%note = self%note
       result%has_velocity = self%has_velocity
       result%has_acceleration = self%has_acceleration
       do i = 1, size(self%model%nodes)

@@ -103,6 +103,10 @@ contains
             rows = rows + size(model%output%points) + size(model%output%links) + 1
             call flush_all(units)
          end if
+         if (allocated(result%note) .and. units%listing >= 0) then
+            if (len(result%note) > 0) write (units%listing, '(10x,a)') 'note: step '//trim(int_text(n))//', '// &
+               & result%note
+         end if
          call system_clock(c0)
          seconds(2) = seconds(2) + real(c0 - c1, dp)/clock_rate
       end do
@@ -113,6 +117,12 @@ contains
          flush (units%listing)
       end if
    end subroutine run_analysis
+
+   pure function int_text(n) result(text)
+      integer, intent(in) :: n
+      character(len=12) :: text
+      write (text, '(i0)') n
+   end function int_text
 
    subroutine flush_all(units)
       type(run_units_type), intent(in) :: units
