@@ -2,6 +2,8 @@
 program tester
    use fekap_testing, only: unittest_type, run_testsuite
    use test_drive_law, only: collect_drive_law
+   use test_deck_expression, only: collect_deck_expression
+   use test_deck, only: collect_deck
    implicit none
 
    abstract interface
@@ -22,6 +24,8 @@ program tester
    failed = 0
 
    call run('drive_law', collect_drive_law)
+   call run('deck_expression', collect_deck_expression)
+   call run('deck', collect_deck)
 
    if (failed > 0) error stop 1
 
