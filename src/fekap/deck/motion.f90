@@ -196,7 +196,7 @@ contains
       type(drive_type), intent(in) :: drive
       real(dp) :: f, initial, d(2), diff
       logical :: fine
-      character(len=120) :: text
+      character(len=400) :: text
       character(:), allocatable :: what
       if (drive%law%kind == law_rate .and. .not. drive%law%absolute) return
       call start_value(drive%law, model%analysis%t_start, f, fine)

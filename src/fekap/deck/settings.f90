@@ -67,7 +67,7 @@ contains
             end select
          else if (is_word_of(key, 'time', 4)) then
             if (.not. ctx%require(iline, 'time START END STEP', 'a time line')) cycle
-            if (extra(4, 'time START END STEP')) cycle
+            if (extra(5, 'time START END STEP')) cycle
             ok = .true.
             do k = 1, 3
                call ctx%real_field(iline, k + 1, t(k), fine)

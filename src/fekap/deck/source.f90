@@ -84,6 +84,7 @@ contains
       type(text_type), intent(in) :: stack(:)
       type(text_type), allocatable :: lines(:)
       type(line_type) :: line
+      type(mark_type) :: mark
       integer :: k, bad, lnum, col, empty_col, ifile, at_include
       character(:), allocatable :: target, included, message, included_text
       character(len=40) :: where
@@ -117,14 +118,17 @@ contains
          line%card = card_none
          if (size(line%tokens) > 0) line%card = card_of(line%tokens(1)%text)
          call append_line(source, line)
-         if (empty_col > 0) call diagnostics%add(mark_type(file=name, line=k, col=empty_col, length=1, &
-            & text=line%text, order=source%nlines), 'empty field', label='two commas with nothing between them')
+         if (empty_col > 0) then
+            mark = mark_of(source, line, 0)
+            mark%col = empty_col
+            call diagnostics%add(mark, 'empty field', label='two commas with nothing between them')
+         end if
          if (line%card == card_end .and. size(line%tokens) == 1) then
             ended = .true.
             if (main) source%terminated = .true.
          else if (line%card == card_include) then
             at_include = source%nlines
-            target = adjustl(trim(line%code(line%tokens(1)%col + len(line%tokens(1)%text):)))
+            target = trim(adjustl(line%code(line%tokens(1)%col + len(line%tokens(1)%text):)))
             if (len(target) == 0) then
                call diagnostics%add(mark_of(source, line, 1), 'INCLude needs a file name', &
                   & label='write INCLude FILE (relative to this deck''s directory)')
@@ -170,7 +174,7 @@ contains
       mark%line = line%number
       mark%text = line%text
       mark%order = source%nlines
-      if (itok <= size(line%tokens)) then
+      if (itok >= 1 .and. itok <= size(line%tokens)) then
          mark%col = line%tokens(itok)%col
          mark%length = len(line%tokens(itok)%text)
       else
