@@ -36,6 +36,7 @@ contains
          & new_unittest('fields_and_comments', test_fields), &
          & new_unittest('include', test_include), &
          & new_unittest('read_deck_file', test_read_file), &
+         & new_unittest('documented_example', test_documented_example), &
          & new_unittest('diagnostic_format', test_format), &
          & new_unittest('all_errors_collected', test_all_errors), &
          & new_unittest('unknown_card', test_unknown_card), &
@@ -404,7 +405,8 @@ contains
       call check(error, model%nodes(2)%x(1), atan2(-1.0_dp, 3.0_dp))
       call check(error, model%nodes(2)%x(2), 1.0_dp)
       call check(error, model%nodes(2)%loc%line, 8)
-      call expect_error(error, base_head//'LOADs'//nl//' B 1,,2'//nl//'END', 't.deck:9:6:', 'empty field')
+      call expect_error(error, base_head//'LOADs'//nl//' B 1,,2'//nl//'END', 't.deck:9:6:', 'empty field', &
+         & also='   9 |  B 1,,2'//nl//'     |      ^ two commas')
    end subroutine test_fields
 
    subroutine test_include(error)
@@ -465,6 +467,47 @@ contains
       call check(error, model%nodes(3)%loc%file == 'decks/fourbar.deck', 'loc file')
       call check(error, all(model%output%points == [2, 3]), 'track B C')
    end subroutine test_read_file
+
+   !> The complete example deck of docs/deck-format.md reads and matches decks/fourbar.deck.
+   subroutine test_documented_example(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      type(error_type), allocatable :: failure
+      character(len=512) :: line
+      character(:), allocatable :: text
+      integer :: unit, ios
+      logical :: in_section, in_block
+      open (newunit=unit, file='docs/deck-format.md', status='old', action='read', iostat=ios)
+      if (ios /= 0) then
+         call test_failed(error, 'cannot open docs/deck-format.md')
+         return
+      end if
+      text = ''
+      in_section = .false.
+      in_block = .false.
+      do
+         read (unit, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         if (index(line, '## Example 1') == 1) in_section = .true.
+         if (.not. in_section) cycle
+         if (line(1:3) == '```') then
+            if (in_block) exit
+            in_block = .true.
+            cycle
+         end if
+         if (in_block) text = text//trim(line)//nl
+      end do
+      close (unit)
+      call read_deck_string(model, text, 'deck-format.md', failure)
+      if (allocated(failure)) then
+         call test_failed(error, failure%message)
+         return
+      end if
+      call check(error, size(model%nodes), 4)
+      call check(error, model%nodes(3)%x(2), sqrt(15.0_dp))
+      call check(error, size(model%welds) + size(model%loads) + size(model%slidelines), 0)
+      call check(error, all(model%output%links == [1, 2, 3]), 'angles')
+   end subroutine test_documented_example
 
    !> The exact shape of a diagnostic: place, card line, caret under the field.
    subroutine test_format(error)
