@@ -163,6 +163,7 @@ contains
    subroutine test_integer(error)
       type(error_type), allocatable, intent(out) :: error
       type(error_type), allocatable :: failure
+      character(:), allocatable :: detail
       integer :: n
       call evaluate_integer('25', n, failure)
       call check(error, .not. allocated(failure), '25 is an integer')
@@ -173,9 +174,11 @@ contains
       call check(error, allocated(failure), '2.5 is not an integer')
       call evaluate_integer('1e20', n, failure)
       call check(error, allocated(failure), '1e20 does not fit')
-      call evaluate_integer('x', n, failure)
-      call check(error, allocated(failure), 'x is not an integer')
+      call evaluate_integer('x.deck', n, failure, detail)
+      call check(error, allocated(failure), 'x.deck is not an integer')
       if (allocated(failure)) call check(error, failure%message == 'expected an integer', 'headline')
+      call check(error, allocated(detail), 'detail')
+      if (allocated(detail)) call check(error, detail == "unknown name 'x' (constants: pi deg)", 'detail: '//detail)
    end subroutine test_integer
 
 end module test_deck_expression

@@ -82,13 +82,22 @@ contains
       type(error_type), allocatable, intent(out) :: error
       character(:), allocatable, intent(out), optional :: detail
       real(dp) :: x
-      call evaluate_expression(text, x, error, detail)
+      character(:), allocatable :: why
+      ! A local label: passing the optional deferred-length `detail` straight on
+      ! loses its length with gfortran 12.
+      call evaluate_expression(text, x, error, why)
       value = 0
       if (allocated(error)) then
          if (error%message == msg_not_a_number) error%message = 'expected an integer'
+         if (present(detail)) detail = why
          return
       end if
-      if (abs(x) > real(huge(value), dp) .or. x /= aint(x)) then
+      if (abs(x) > real(huge(value), dp)) then
+         call input_error(error, 'expected an integer')
+         if (present(detail)) detail = 'too large for an integer'
+         return
+      end if
+      if (x /= aint(x)) then
          call input_error(error, 'expected an integer')
          if (present(detail)) detail = 'not a whole number'
          return

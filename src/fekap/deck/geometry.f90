@@ -85,6 +85,7 @@ contains
          ! A section with bad properties is kept (with zero stiffness) so that
          ! links naming it do not report it as undefined.
          n = n + 1
+         list(n) = section_type()   ! the slot may hold a dropped entry
          list(n)%name = ctx%field(iline, 1)
          list(n)%loc = ctx%loc(iline, 1)
          if (good) then
@@ -167,6 +168,7 @@ contains
          if (.not. ctx%require(iline, 'name x y', 'a NODEs line')) cycle
          if (too_many(ctx, iline, 3, 'name x y', 'a NODEs line')) cycle
          n = n + 1
+         list(n) = node_type()   ! the slot may hold a dropped entry
          list(n)%name = ctx%field(iline, 1)
          list(n)%loc = ctx%loc(iline, 1)
          ! A node with a bad coordinate is kept so that links naming it do not
@@ -210,6 +212,7 @@ contains
          if (.not. ctx%require(iline, form, 'a LINKs line')) cycle
          if (too_many(ctx, iline, 5, form, 'a LINKs line')) cycle
          n = n + 1
+         list(n) = link_type()   ! the slot may hold a dropped entry
          list(n)%name = ctx%field(iline, 1)
          list(n)%loc = ctx%loc(iline, 1)
          ok = .true.
@@ -277,6 +280,7 @@ contains
          node = lookup_node(ctx, model, iline, 1)
          if (node == 0) cycle
          n = n + 1
+         list(n) = weld_type()   ! the slot may hold a dropped entry
          list(n)%node = node
          list(n)%loc = ctx%loc(iline, 1)
          allocate (list(n)%links(0))
@@ -342,6 +346,7 @@ contains
          end do
          if (s == 0) then
             n = n + 1
+            list(n) = support_type()   ! the slot may hold a dropped entry
             s = n
             list(s)%node = node
             list(s)%loc = ctx%loc(iline, 1)

@@ -207,11 +207,17 @@ contains
       end if
       if (drive%dof == dof_rot) then
          d = model%nodes(model%links(drive%link)%node(2))%x - model%nodes(model%links(drive%link)%node(1))%x
+         if (all(d == 0)) return   ! a zero-length link, reported in LINKs
          initial = atan2(d(2), d(1))
          diff = modulo(f - initial + pi, 2*pi) - pi
          if (abs(diff) <= angle_tol) return
-         write (text, '(a,g0.10,a,g0.10,a,g0.10,a,g0.10,a)') 'the drive sets the angle to ', f, ' rad (', &
-            & f*180/pi, ' deg) at the start, but the link is at ', initial, ' rad (', initial*180/pi, ' deg)'
+         if (abs(f) < 1.0e300_dp) then
+            write (text, '(a,g0.10,a,g0.10,a,g0.10,a,g0.10,a)') 'the drive sets the angle to ', f, ' rad (', &
+               & f*180/pi, ' deg) at the start, but the link is at ', initial, ' rad (', initial*180/pi, ' deg)'
+         else
+            write (text, '(a,g0.10,a,g0.10,a)') 'the drive sets the angle to ', f, &
+               & ' rad at the start, but the link is at ', initial, ' rad'
+         end if
          what = 'link '//model%links(drive%link)%name
       else
          initial = model%nodes(drive%node)%x(drive%dof)
@@ -276,6 +282,7 @@ contains
          iline = lines(i)
          if (.not. ctx%require(iline, form, 'a LOADs line')) cycle
          n = n + 1
+         list(n) = load_type()   ! the slot may hold a dropped entry
          list(n)%loc = ctx%loc(iline, 1)
          list(n)%node = lookup_node(ctx, model, iline, 1)
          ok = list(n)%node > 0
@@ -334,6 +341,7 @@ contains
          if (.not. ctx%require(iline, 'name slave-node on|guide ...', 'a SLIDelines line')) cycle
          nf = ctx%nfields(iline)
          n = n + 1
+         list(n) = slideline_type()   ! the slot may hold a dropped entry
          list(n)%name = ctx%field(iline, 1)
          list(n)%loc = ctx%loc(iline, 1)
          allocate (list(n)%master_links(0))
