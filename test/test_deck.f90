@@ -756,7 +756,7 @@ contains
       call execute_command_line('mkdir -p '//scratch)
       open (newunit=unit, file=scratch//'binary.deck', access='stream', form='unformatted', status='replace', &
          & action='write')
-      write (unit) 'NODEs'//nl//' A 0'//achar(0)//achar(1)//achar(200)//nl
+      write (unit) 'NODEs'//nl//' A 0'//achar(0)//achar(1)//char(200)//nl
       close (unit)
       call read_deck(model, scratch//'binary.deck', failure)
       call check_failure(error, failure, scratch//'binary.deck:2:5:', 'binary file')
