@@ -8,6 +8,8 @@ program tester
    use test_classical_angles, only: collect_classical_angles
    use test_classical_constraints, only: collect_classical_constraints
    use test_classical_cartesian, only: collect_classical_cartesian
+   use test_deck_expression, only: collect_deck_expression
+   use test_deck, only: collect_deck
    implicit none
 
    abstract interface
@@ -34,6 +36,8 @@ program tester
    call run('classical_angles', collect_classical_angles)
    call run('classical_constraints', collect_classical_constraints)
    call run('classical_cartesian', collect_classical_cartesian)
+   call run('deck_expression', collect_deck_expression)
+   call run('deck', collect_deck)
 
    if (failed > 0) error stop 1
 

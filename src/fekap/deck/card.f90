@@ -1,0 +1,103 @@
+!> The deck's card keywords and FEAP-style keyword matching: a card is the first
+!> field of a line, at least 4 letters long, that is a prefix of a card keyword
+!> (COOR, COORD and COORDINATES all match COORDINATES; COORX does not). END is
+!> matched in full.
+module fekap_deck_card
+   implicit none
+   private
+
+   public :: card_of, card_name, card_list, is_word_of, lower
+
+   integer, parameter, public :: card_none = 0, card_title = 1, card_sections = 2, card_nodes = 3, &
+      & card_links = 4, card_welds = 5, card_supports = 6, card_drives = 7, card_loads = 8, &
+      & card_slidelines = 9, card_analysis = 10, card_output = 11, card_include = 12, card_end = 13
+   !> Number of distinct cards.
+   integer, parameter, public :: ncards = 13
+
+   !> Keywords (upper case) and the card each selects; aliases share a card.
+   character(*), parameter :: keywords(15) = [character(len=11) :: 'TITLE', 'SECTIONS', 'NODES', &
+      & 'COORDINATES', 'LINKS', 'ELEMENTS', 'WELDS', 'SUPPORTS', 'BOUNDARY', 'DRIVES', 'LOADS', &
+      & 'SLIDELINES', 'ANALYSIS', 'OUTPUT', 'INCLUDE']
+   integer, parameter :: keyword_card(15) = [card_title, card_sections, card_nodes, card_nodes, &
+      & card_links, card_links, card_welds, card_supports, card_supports, card_drives, card_loads, &
+      & card_slidelines, card_analysis, card_output, card_include]
+   !> Names for messages: the capital letters are the shortest accepted form.
+   character(*), parameter :: display(ncards) = [character(len=10) :: 'TITLe', 'SECTions', 'NODEs', &
+      & 'LINKs', 'WELDs', 'SUPPorts', 'DRIVes', 'LOADs', 'SLIDelines', 'ANALysis', 'OUTPut', &
+      & 'INCLude', 'END']
+
+contains
+
+   !> The card that `field` selects, or card_none.
+   pure integer function card_of(field) result(card)
+      character(*), intent(in) :: field
+      integer :: i
+      character(len(field)) :: up
+      card = card_none
+      up = upper(field)
+      if (up == 'END') then
+         card = card_end
+         return
+      end if
+      if (len(field) < 4 .or. len(field) > len(keywords)) return
+      do i = 1, len(field)
+         if (.not. (up(i:i) >= 'A' .and. up(i:i) <= 'Z')) return
+      end do
+      do i = 1, size(keywords)
+         if (keywords(i)(1:len(field)) == up) then
+            card = keyword_card(i)
+            return
+         end if
+      end do
+   end function card_of
+
+   !> The card's name for messages (TITLe, NODEs, ...).
+   pure function card_name(card) result(name)
+      integer, intent(in) :: card
+      character(:), allocatable :: name
+      if (card >= 1 .and. card <= ncards) then
+         name = trim(display(card))
+      else
+         name = '(none)'
+      end if
+   end function card_name
+
+   !> All card names, blank-separated, with their aliases.
+   pure function card_list() result(list)
+      character(:), allocatable :: list
+      list = 'TITLe SECTions NODEs (COORdinates) LINKs (ELEMents) WELDs SUPPorts (BOUNdary) DRIVes LOADs ' &
+         & //'SLIDelines ANALysis OUTPut INCLude END'
+   end function card_list
+
+   !> Whether `field` names the word `word` (case-insensitive): in full, or as a
+   !> prefix of at least `shortest` letters.
+   pure logical function is_word_of(field, word, shortest)
+      character(*), intent(in) :: field, word
+      integer, intent(in) :: shortest
+      is_word_of = .false.
+      if (len(field) > len(word) .or. len(field) < min(shortest, len(word))) return
+      is_word_of = lower(field) == lower(word(1:len(field)))
+   end function is_word_of
+
+   pure function upper(text) result(up)
+      character(*), intent(in) :: text
+      character(len(text)) :: up
+      integer :: i
+      up = text
+      do i = 1, len(text)
+         if (text(i:i) >= 'a' .and. text(i:i) <= 'z') up(i:i) = achar(iachar(text(i:i)) - 32)
+      end do
+   end function upper
+
+   !> `text` in lower case (ASCII letters only).
+   pure function lower(text) result(low)
+      character(*), intent(in) :: text
+      character(len(text)) :: low
+      integer :: i
+      low = text
+      do i = 1, len(text)
+         if (text(i:i) >= 'A' .and. text(i:i) <= 'Z') low(i:i) = achar(iachar(text(i:i)) + 32)
+      end do
+   end function lower
+
+end module fekap_deck_card

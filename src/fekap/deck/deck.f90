@@ -1,0 +1,186 @@
+!> The deck reader: reads a FEKAP input deck (see docs/deck-format.md) into a
+!> model_type, checks it, and reports every problem of the deck at once as one
+!> input error with compiler-like diagnostics.
+module fekap_deck
+   use fekap_error, only: error_type, input_error
+   use fekap_model, only: model_type
+   use fekap_deck_card, only: card_none, card_title, card_sections, card_nodes, card_links, card_welds, &
+      & card_supports, card_drives, card_loads, card_slidelines, card_analysis, card_output, card_include, &
+      & card_end, ncards, card_name, card_list, card_of
+   use fekap_deck_context, only: context_type
+   use fekap_deck_diagnostic, only: mark_type
+   use fekap_deck_source, only: load_file, load_string
+   use fekap_deck_geometry, only: read_sections, read_nodes, read_links, read_welds, read_supports
+   use fekap_deck_motion, only: read_drives, read_loads, read_slidelines
+   use fekap_deck_settings, only: read_title, read_analysis, read_output
+   implicit none
+   private
+
+   public :: read_deck, read_deck_string
+
+   !> A block whose lines are skipped (after an unknown card or stray data).
+   integer, parameter :: card_skip = -1
+
+contains
+
+   !> Read the deck file `filename` (and the files it INCLUDEs) into `model`.
+   subroutine read_deck(model, filename, error)
+      type(model_type), intent(out) :: model
+      !> Path of the deck, also its name in diagnostics.
+      character(*), intent(in) :: filename
+      !> An input error whose message lists every problem of the deck.
+      type(error_type), allocatable, intent(out) :: error
+      type(context_type) :: ctx
+      call load_file(ctx%source, ctx%diagnostics, filename)
+      call finish(ctx, model, filename, error)
+   end subroutine read_deck
+
+   !> Read a deck given as text, lines separated by new_line('a'); `name` stands
+   !> for the file name in diagnostics and INCLude is relative to the current directory.
+   subroutine read_deck_string(model, text, name, error)
+      type(model_type), intent(out) :: model
+      character(*), intent(in) :: text
+      character(*), intent(in) :: name
+      type(error_type), allocatable, intent(out) :: error
+      type(context_type) :: ctx
+      call load_string(ctx%source, ctx%diagnostics, text, name)
+      call finish(ctx, model, name, error)
+   end subroutine read_deck_string
+
+   subroutine finish(ctx, model, name, error)
+      type(context_type), intent(inout) :: ctx
+      type(model_type), intent(inout) :: model
+      character(*), intent(in) :: name
+      type(error_type), allocatable, intent(out) :: error
+      model%file = name
+      model%title = ''
+      if (ctx%source%readable) then
+         if (ctx%source%nlines == 0) then
+            call ctx%diagnostics%add(mark_type(file=name, line=1, text=''), &
+               & 'empty deck: there are no cards in it; a deck has NODEs, SECTions, LINKs, DRIVes or LOADs, and END')
+         else
+            call interpret(ctx, model)
+         end if
+      end if
+      if (ctx%diagnostics%count > 0) call input_error(error, ctx%diagnostics%render())
+   end subroutine finish
+
+   !> Sort the lines into the cards' blocks, read the cards in dependency order, check the whole.
+   subroutine interpret(ctx, model)
+      type(context_type), intent(inout) :: ctx
+      type(model_type), intent(inout) :: model
+      integer, allocatable :: block(:)
+      integer :: i, card, current, nfields, last
+      logical :: seen(ncards)
+      allocate (block(ctx%source%nlines), source=card_none)
+      seen = .false.
+      current = card_none
+      do i = 1, ctx%source%nlines
+         associate (line => ctx%source%lines(i))
+            card = line%card
+            nfields = size(line%tokens)
+            if (card == card_include) cycle   ! the included lines follow, in the open block
+            if (card /= card_none .and. card /= card_title .and. nfields > 1) then
+               call ctx%error(i, 1, "'"//line%tokens(1)%text//"' reads as the card "//card_name(card)// &
+                  & ', but more fields follow', label='a card keyword stands alone on its line, '// &
+                  & 'and a name cannot be a card keyword (4 or more letters that begin one)')
+               cycle
+            end if
+            if (card == card_end) cycle
+            if (card == card_title) then
+               block(i) = card_title
+               current = card_skip
+               cycle
+            end if
+            if (card /= card_none) then
+               current = card
+               seen(card) = .true.
+               cycle
+            end if
+            if (nfields == 0) cycle
+            ! A data line.
+            if (nfields == 1 .and. looks_like_keyword(line%tokens(1)%text)) then
+               call ctx%error(i, 1, "unknown card '"//line%tokens(1)%text//"'", label='cards: '//card_list())
+               current = card_skip
+            else if (current == card_none) then
+               call ctx%error(i, 1, 'data line before the first card', &
+                  & label='start a block with a card such as NODEs or LINKs')
+               current = card_skip
+            else if (current /= card_skip) then
+               block(i) = current
+            end if
+         end associate
+      end do
+
+      call read_title(ctx, model, pack([(i, i=1, ctx%source%nlines)], block == card_title))
+      call read_analysis(ctx, model, lines_of(card_analysis))
+      call read_sections(ctx, model, lines_of(card_sections))
+      call read_nodes(ctx, model, lines_of(card_nodes))
+      call read_links(ctx, model, lines_of(card_links))
+      call read_welds(ctx, model, lines_of(card_welds))
+      call read_supports(ctx, model, lines_of(card_supports))
+      call read_slidelines(ctx, model, lines_of(card_slidelines))
+      call read_drives(ctx, model, lines_of(card_drives))
+      call read_loads(ctx, model, lines_of(card_loads))
+      call read_output(ctx, model, lines_of(card_output))
+
+      ! The deck as a whole.
+      last = ctx%source%nlines
+      if (.not. ctx%source%terminated) then
+         do i = 1, ctx%source%nlines
+            if (ctx%source%lines(i)%file == 1 .and. ctx%source%lines(i)%number == ctx%source%last_line) last = i
+         end do
+         call ctx%error(last, size(ctx%source%lines(last)%tokens) + 1, 'unterminated deck: there is no END card', &
+            & label='add END after the last block')
+      end if
+      call require(card_nodes, 'NODEs', 'name x y')
+      call require(card_sections, 'SECTions', 'name E=... G=... A=... I=... k=...')
+      call require(card_links, 'LINKs', 'name first-node second-node section')
+      if (count(block == card_drives) + count(block == card_loads) == 0) then
+         call ctx%error(last, 1, 'missing required block DRIVes or LOADs: nothing moves the mechanism', &
+            & label='add DRIVes (e.g. rotation LINK rate 2*pi) or LOADs')
+      end if
+      if (size(model%links) > 0 .and. size(model%links) == count(block == card_links)) call check_nodes_used()
+
+   contains
+
+      function lines_of(which) result(lines)
+         integer, intent(in) :: which
+         integer, allocatable :: lines(:)
+         lines = pack([(i, i=1, ctx%source%nlines)], block == which)
+      end function lines_of
+
+      subroutine require(which, name_, form)
+         integer, intent(in) :: which
+         character(*), intent(in) :: name_, form
+         if (count(block == which) > 0) return
+         if (seen(which)) then
+            call ctx%error(last, 1, 'the '//name_//' block has no lines', label='add lines: '//form)
+         else
+            call ctx%error(last, 1, 'missing required block '//name_, label='add a '//name_//' block with lines: '//form)
+         end if
+      end subroutine require
+
+      subroutine check_nodes_used()
+         integer :: k
+         do k = 1, size(model%nodes)
+            if (any([(any(model%links(i)%node == k), i=1, size(model%links))])) cycle
+            call ctx%error_at(model%nodes(k)%loc, 'node '//model%nodes(k)%name//' is not on any link', &
+               & label='connect it with a link (LINKs) or delete it')
+         end do
+      end subroutine check_nodes_used
+
+   end subroutine interpret
+
+   !> A lone word of 4 or more letters where data is expected: a misspelt card.
+   pure logical function looks_like_keyword(field)
+      character(*), intent(in) :: field
+      integer :: i
+      looks_like_keyword = len(field) >= 4 .and. card_of(field) == card_none
+      do i = 1, len(field)
+         looks_like_keyword = looks_like_keyword .and. &
+            & ((field(i:i) >= 'a' .and. field(i:i) <= 'z') .or. (field(i:i) >= 'A' .and. field(i:i) <= 'Z'))
+      end do
+   end function looks_like_keyword
+
+end module fekap_deck

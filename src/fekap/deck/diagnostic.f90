@@ -1,0 +1,161 @@
+!> Compiler-like diagnostics of a deck: collected while reading, sorted by their
+!> place in the deck, and rendered as one text:
+!>
+!>     decks/x.deck:12:7: error: expected a real number
+!>        12 | C  3  sqrt(1S)
+!>           |       ^~~~~~~~ unexpected 'S' after the number 1
+!>
+!> A diagnostic may carry a note pointing at a second place ("first defined here").
+module fekap_deck_diagnostic
+   implicit none
+   private
+
+   public :: mark_type, diagnostic_type, diagnostics_type
+
+   !> Most diagnostics rendered; the rest are only counted.
+   integer, parameter :: max_shown = 100
+
+   !> A place in the deck: file, line, columns, and the line's text for display.
+   type :: mark_type
+      character(:), allocatable :: file
+      !> Line number in the file (0: the whole file).
+      integer :: line = 0
+      !> First column and number of columns to underline (0: no caret).
+      integer :: col = 0
+      integer :: length = 0
+      !> The line as shown under the message ('' shows no source line).
+      character(:), allocatable :: text
+      !> Sort key: the position of the line in the deck as read (includes spliced).
+      integer :: order = 0
+   end type mark_type
+
+   !> One error, with an optional note at a second place.
+   type :: diagnostic_type
+      type(mark_type) :: at
+      character(:), allocatable :: message
+      !> Short text after the caret.
+      character(:), allocatable :: label
+      logical :: has_note = .false.
+      type(mark_type) :: note_at
+      character(:), allocatable :: note
+   end type diagnostic_type
+
+   !> The diagnostics of one deck.
+   type :: diagnostics_type
+      type(diagnostic_type), allocatable :: items(:)
+      integer :: count = 0
+   contains
+      !> Record an error at a place, with optional label and note.
+      procedure :: add => diagnostics_add
+      !> All diagnostics as one text, in deck order.
+      procedure :: render => diagnostics_render
+   end type diagnostics_type
+
+contains
+
+   pure subroutine diagnostics_add(self, at, message, label, note_at, note)
+      class(diagnostics_type), intent(inout) :: self
+      !> Where the error is.
+      type(mark_type), intent(in) :: at
+      !> What is wrong and, where it helps, what to do.
+      character(*), intent(in) :: message
+      character(*), intent(in), optional :: label
+      !> A second place, e.g. the first definition of a duplicate name.
+      type(mark_type), intent(in), optional :: note_at
+      character(*), intent(in), optional :: note
+      type(diagnostic_type), allocatable :: grown(:)
+      if (.not. allocated(self%items)) allocate (self%items(16))
+      if (self%count == size(self%items)) then
+         allocate (grown(2*size(self%items)))
+         grown(1:self%count) = self%items(1:self%count)
+         call move_alloc(grown, self%items)
+      end if
+      self%count = self%count + 1
+      associate (d => self%items(self%count))
+         d%at = at
+         d%message = message
+         d%label = ''
+         if (present(label)) d%label = label
+         d%has_note = present(note_at) .and. present(note)
+         if (d%has_note) then
+            d%note_at = note_at
+            d%note = note
+         end if
+      end associate
+   end subroutine diagnostics_add
+
+   pure function diagnostics_render(self) result(text)
+      class(diagnostics_type), intent(in) :: self
+      character(:), allocatable :: text
+      integer, allocatable :: order(:)
+      integer :: i, j, k
+      character(len=16) :: count_text
+      text = ''
+      if (self%count == 0) return
+      ! Stable insertion sort by place in the deck.
+      order = [(i, i=1, self%count)]
+      do i = 2, self%count
+         k = order(i)
+         j = i - 1
+         do while (j >= 1)
+            if (.not. before(self%items(k)%at, self%items(order(j))%at)) exit
+            order(j + 1) = order(j)
+            j = j - 1
+         end do
+         order(j + 1) = k
+      end do
+      do i = 1, min(self%count, max_shown)
+         associate (d => self%items(order(i)))
+            text = text//render_one(d%at, 'error', d%message, d%label)
+            if (d%has_note) text = text//render_one(d%note_at, 'note', d%note, '')
+         end associate
+      end do
+      if (self%count > max_shown) then
+         write (count_text, '(i0)') self%count - max_shown
+         text = text//'... and '//trim(count_text)//' more errors not shown'//new_line('a')
+      end if
+      write (count_text, '(i0)') self%count
+      if (self%count == 1) then
+         text = text//'1 error in the deck'
+      else
+         text = text//trim(count_text)//' errors in the deck'
+      end if
+   end function diagnostics_render
+
+   pure logical function before(a, b)
+      type(mark_type), intent(in) :: a, b
+      before = a%order < b%order .or. (a%order == b%order .and. a%col < b%col)
+   end function before
+
+   pure function render_one(at, severity, message, label) result(text)
+      type(mark_type), intent(in) :: at
+      character(*), intent(in) :: severity, message, label
+      character(:), allocatable :: text
+      character(len=16) :: num
+      character(:), allocatable :: gutter
+      integer :: width
+      character(*), parameter :: nl = new_line('a')
+      text = at%file//':'
+      if (at%line > 0) then
+         write (num, '(i0)') at%line
+         text = text//trim(num)//':'
+         if (at%col > 0) then
+            write (num, '(i0)') at%col
+            text = text//trim(num)//':'
+         end if
+      end if
+      text = text//' '//severity//': '//message//nl
+      if (.not. allocated(at%text) .or. at%line <= 0) return
+      if (len(at%text) == 0) return
+      write (num, '(i0)') at%line
+      width = max(4, len_trim(num) + 1)
+      gutter = repeat(' ', width)
+      text = text//repeat(' ', width - len_trim(num))//trim(num)//' | '//at%text//nl
+      if (at%col > 0) then
+         text = text//gutter//' | '//repeat(' ', at%col - 1)//'^'//repeat('~', max(at%length, 1) - 1)
+         if (len(label) > 0) text = text//' '//label
+         text = text//nl
+      end if
+   end function render_one
+
+end module fekap_deck_diagnostic

@@ -1,0 +1,540 @@
+!> Arithmetic expressions of deck fields: `sqrt(15)`, `100*sqrt(10)`,
+!> `atan2(-1,3)`, `60*deg`, `5/6`, `2*pi`, `1.5d0`.
+!>
+!> Grammar (no blanks inside a field):
+!>   expr    = term {("+" | "-") term}
+!>   term    = unary {("*" | "/") unary}
+!>   unary   = ("+" | "-") unary | power
+!>   power   = primary [("^" | "**") unary]          (right associative: 2^3^2 = 2^9)
+!>   primary = number | constant | function "(" expr {"," expr} ")" | "(" expr ")"
+!> Constants pi and deg (= pi/180); functions sqrt sin cos tan asin acos atan
+!> atan2(y,x) exp log abs. Names are case-insensitive.
+!>
+!> Every operation is checked before it is carried out, so that no NaN, no
+!> infinity and no overflow is ever computed (the tests run with floating-point
+!> traps): a result that would not be a finite number is reported instead.
+module fekap_deck_expression
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, input_error
+   implicit none
+   private
+
+   public :: evaluate_expression, evaluate_integer
+   public :: safe_add, safe_multiply, safe_divide
+
+   !> Headline of an error in the form of the field.
+   character(*), parameter, public :: msg_not_a_number = 'expected a real number'
+   !> Headline of an error in the value of the field.
+   character(*), parameter, public :: msg_not_finite = 'not a finite number'
+
+   real(dp), parameter :: pi = acos(-1.0_dp)
+   !> Largest argument of exp (and b*log|a| of a**b) that is safely finite.
+   real(dp), parameter :: log_huge = log(huge(1.0_dp)) - 1.0e-6_dp
+
+   integer, parameter :: ok = 0, bad_syntax = 1, bad_value = 2
+
+   !> Parsing state of one field.
+   type :: parser_type
+      character(:), allocatable :: text
+      integer :: pos = 1
+      integer :: status = ok
+      character(:), allocatable :: detail
+   end type parser_type
+
+contains
+
+   !> Evaluate the expression `text`. On failure `error` holds the headline
+   !> (msg_not_a_number or msg_not_finite) and `detail` (when present) a short label
+   !> saying what is wrong, for the caret line of a diagnostic.
+   pure subroutine evaluate_expression(text, value, error, detail)
+      !> The field, without blanks.
+      character(*), intent(in) :: text
+      real(dp), intent(out) :: value
+      type(error_type), allocatable, intent(out) :: error
+      character(:), allocatable, intent(out), optional :: detail
+      type(parser_type) :: p
+      p%text = text
+      p%detail = ''
+      value = 0
+      if (len(text) == 0) then
+         call fail(p, bad_syntax, 'empty field')
+      else
+         call parse_sum(p, value)
+         if (p%status == ok .and. p%pos <= len(p%text)) then
+            call fail(p, bad_syntax, "unexpected '"//p%text(p%pos:p%pos)//"'")
+         end if
+      end if
+      if (p%status == ok) return
+      value = 0
+      if (p%status == bad_syntax) then
+         call input_error(error, msg_not_a_number)
+      else
+         call input_error(error, msg_not_finite)
+      end if
+      if (present(detail)) detail = p%detail
+   end subroutine evaluate_expression
+
+   !> Evaluate `text` as an expression whose value is a whole number that fits
+   !> a default integer.
+   pure subroutine evaluate_integer(text, value, error, detail)
+      character(*), intent(in) :: text
+      integer, intent(out) :: value
+      type(error_type), allocatable, intent(out) :: error
+      character(:), allocatable, intent(out), optional :: detail
+      real(dp) :: x
+      character(:), allocatable :: why
+      ! A local label: passing the optional deferred-length `detail` straight on
+      ! loses its length with gfortran 12.
+      call evaluate_expression(text, x, error, why)
+      value = 0
+      if (allocated(error)) then
+         if (error%message == msg_not_a_number) error%message = 'expected an integer'
+         if (present(detail)) detail = why
+         return
+      end if
+      if (abs(x) > real(huge(value), dp)) then
+         call input_error(error, 'expected an integer')
+         if (present(detail)) detail = 'too large for an integer'
+         return
+      end if
+      if (x /= aint(x)) then
+         call input_error(error, 'expected an integer')
+         if (present(detail)) detail = 'not a whole number'
+         return
+      end if
+      value = nint(x)
+   end subroutine evaluate_integer
+
+   !> a + b, or ok = .false. if it would overflow.
+   pure subroutine safe_add(a, b, c, ok_)
+      real(dp), intent(in) :: a, b
+      real(dp), intent(out) :: c
+      logical, intent(out) :: ok_
+      ! Halving is exact at this end of the range, so a/2 + b/2 rounds like a + b.
+      c = a/2 + b/2
+      ok_ = abs(c) <= huge(c)/2
+      c = 0
+      if (ok_) c = a + b
+   end subroutine safe_add
+
+   !> a * b, or ok = .false. if it would overflow.
+   pure subroutine safe_multiply(a, b, c, ok_)
+      real(dp), intent(in) :: a, b
+      real(dp), intent(out) :: c
+      logical, intent(out) :: ok_
+      integer :: e
+      c = 0
+      ok_ = .true.
+      if (a == 0 .or. b == 0) return
+      e = exponent(a) + exponent(b)
+      ok_ = e <= maxexponent(a)
+      if (ok_ .and. e >= maxexponent(a) - 1) then
+         c = (a/4)*b   ! below 2**1022: cannot overflow
+         ok_ = abs(c) <= huge(c)/4
+      end if
+      c = 0
+      if (ok_) c = a*b
+   end subroutine safe_multiply
+
+   !> a / b, or ok = .false. if b is zero or the quotient would overflow.
+   pure subroutine safe_divide(a, b, c, ok_)
+      real(dp), intent(in) :: a, b
+      real(dp), intent(out) :: c
+      logical, intent(out) :: ok_
+      integer :: e
+      c = 0
+      ok_ = b /= 0
+      if (.not. ok_ .or. a == 0) return
+      e = exponent(a) - exponent(b)
+      ok_ = e <= maxexponent(a)
+      if (ok_ .and. e >= maxexponent(a) - 1) then
+         c = (a/4)/b   ! below 2**1023: cannot overflow
+         ok_ = abs(c) <= huge(c)/4
+      end if
+      c = 0
+      if (ok_) c = a/b
+   end subroutine safe_divide
+
+   pure subroutine fail(p, status, detail)
+      type(parser_type), intent(inout) :: p
+      integer, intent(in) :: status
+      character(*), intent(in) :: detail
+      if (p%status /= ok) return
+      p%status = status
+      p%detail = detail
+   end subroutine fail
+
+   pure character function peek(p)
+      type(parser_type), intent(in) :: p
+      peek = ' '
+      if (p%pos <= len(p%text)) peek = p%text(p%pos:p%pos)
+   end function peek
+
+   pure recursive subroutine parse_sum(p, v)
+      type(parser_type), intent(inout) :: p
+      real(dp), intent(out) :: v
+      real(dp) :: w, r
+      character :: op
+      logical :: fine
+      call parse_product(p, v)
+      do while (p%status == ok)
+         op = peek(p)
+         if (op /= '+' .and. op /= '-') exit
+         p%pos = p%pos + 1
+         call parse_product(p, w)
+         if (p%status /= ok) exit
+         if (op == '-') w = -w
+         call safe_add(v, w, r, fine)
+         v = r
+         if (.not. fine) call fail(p, bad_value, 'the sum overflows')
+      end do
+      if (p%status /= ok) v = 0
+   end subroutine parse_sum
+
+   pure recursive subroutine parse_product(p, v)
+      type(parser_type), intent(inout) :: p
+      real(dp), intent(out) :: v
+      real(dp) :: w, r
+      character :: op
+      logical :: fine
+      call parse_unary(p, v)
+      do while (p%status == ok)
+         op = peek(p)
+         if (op /= '*' .and. op /= '/') exit
+         if (op == '*' .and. p%pos < len(p%text)) then
+            if (p%text(p%pos + 1:p%pos + 1) == '*') exit   ! '**' is a power, handled below
+         end if
+         p%pos = p%pos + 1
+         call parse_unary(p, w)
+         if (p%status /= ok) exit
+         if (op == '*') then
+            call safe_multiply(v, w, r, fine)
+            v = r
+            if (.not. fine) call fail(p, bad_value, 'the product overflows')
+         else if (w == 0) then
+            call fail(p, bad_value, 'division by zero')
+         else
+            call safe_divide(v, w, r, fine)
+            v = r
+            if (.not. fine) call fail(p, bad_value, 'the quotient overflows')
+         end if
+      end do
+      if (p%status /= ok) v = 0
+   end subroutine parse_product
+
+   pure recursive subroutine parse_unary(p, v)
+      type(parser_type), intent(inout) :: p
+      real(dp), intent(out) :: v
+      select case (peek(p))
+      case ('-')
+         p%pos = p%pos + 1
+         call parse_unary(p, v)
+         v = -v
+      case ('+')
+         p%pos = p%pos + 1
+         call parse_unary(p, v)
+      case default
+         call parse_power(p, v)
+      end select
+      if (p%status /= ok) v = 0
+   end subroutine parse_unary
+
+   pure recursive subroutine parse_power(p, v)
+      type(parser_type), intent(inout) :: p
+      real(dp), intent(out) :: v
+      real(dp) :: e, power
+      call parse_primary(p, v)
+      if (p%status /= ok) return
+      if (peek(p) == '^') then
+         p%pos = p%pos + 1
+      else if (p%pos < len(p%text) .and. peek(p) == '*') then
+         if (p%text(p%pos + 1:p%pos + 1) /= '*') return
+         p%pos = p%pos + 2
+      else
+         return
+      end if
+      call parse_unary(p, e)
+      if (p%status /= ok) then
+         v = 0
+         return
+      end if
+      call checked_power(p, v, e, power)
+      v = power
+   end subroutine parse_power
+
+   !> a**b without ever computing an invalid or overflowing power.
+   pure subroutine checked_power(p, a, b, v)
+      type(parser_type), intent(inout) :: p
+      real(dp), intent(in) :: a, b
+      real(dp), intent(out) :: v
+      real(dp) :: l
+      logical :: fine, whole
+      v = 0
+      if (b == 0) then
+         v = 1
+         return
+      end if
+      whole = b == aint(b)
+      if (a == 0) then
+         if (b < 0) call fail(p, bad_value, 'zero to a negative power')
+         return
+      end if
+      if (a < 0 .and. .not. whole) then
+         call fail(p, bad_value, 'negative number to a non-integer power')
+         return
+      end if
+      call safe_multiply(b, log(abs(a)), l, fine)
+      if (.not. fine .or. l > log_huge) then
+         if (fine .or. b*sign(1.0_dp, log(abs(a))) > 0) then
+            call fail(p, bad_value, 'the power overflows')
+            return
+         end if
+         return   ! underflows to zero
+      end if
+      if (l < -800) return   ! underflows to zero
+      v = abs(a)**b
+      if (a < 0 .and. mod(b, 2.0_dp) /= 0) v = -v
+   end subroutine checked_power
+
+   pure recursive subroutine parse_primary(p, v)
+      type(parser_type), intent(inout) :: p
+      real(dp), intent(out) :: v
+      character :: c
+      integer :: start
+      character(:), allocatable :: name
+      v = 0
+      c = peek(p)
+      if (c == '(') then
+         p%pos = p%pos + 1
+         call parse_sum(p, v)
+         if (p%status /= ok) return
+         call expect(p, ')')
+      else if (is_digit(c) .or. c == '.') then
+         call parse_number(p, v)
+      else if (is_letter(c)) then
+         start = p%pos
+         do while (p%pos <= len(p%text))
+            c = p%text(p%pos:p%pos)
+            if (.not. (is_letter(c) .or. is_digit(c) .or. c == '_')) exit
+            p%pos = p%pos + 1
+         end do
+         name = lower(p%text(start:p%pos - 1))
+         if (peek(p) == '(') then
+            call parse_call(p, name, v)
+         else
+            select case (name)
+            case ('pi')
+               v = pi
+            case ('deg')
+               v = pi/180
+            case ('nan', 'inf', 'infinity')
+               call fail(p, bad_value, "'"//p%text(start:p%pos - 1)//"' is not a finite number")
+            case default
+               call fail(p, bad_syntax, "unknown name '"//p%text(start:p%pos - 1)//"' (constants: pi deg)")
+            end select
+         end if
+      else if (c == ' ') then
+         call fail(p, bad_syntax, 'expression ends too early')
+      else
+         call fail(p, bad_syntax, "unexpected '"//c//"'")
+      end if
+      if (p%status /= ok) v = 0
+   end subroutine parse_primary
+
+   pure recursive subroutine parse_call(p, name, v)
+      type(parser_type), intent(inout) :: p
+      character(*), intent(in) :: name
+      real(dp), intent(out) :: v
+      real(dp) :: x, y
+      v = 0
+      select case (name)
+      case ('sqrt', 'sin', 'cos', 'tan', 'asin', 'acos', 'atan', 'exp', 'log', 'abs', 'atan2')
+      case default
+         call fail(p, bad_syntax, "unknown function '"//name// &
+            & "' (functions: sqrt sin cos tan asin acos atan atan2 exp log abs)")
+         return
+      end select
+      p%pos = p%pos + 1   ! the '('
+      call parse_sum(p, x)
+      if (p%status /= ok) return
+      if (name == 'atan2') then
+         call expect(p, ',')
+         if (p%status /= ok) return
+         call parse_sum(p, y)
+         if (p%status /= ok) return
+      end if
+      call expect(p, ')')
+      if (p%status /= ok) return
+      select case (name)
+      case ('sqrt')
+         if (x < 0) then
+            call fail(p, bad_value, 'square root of a negative number')
+         else
+            v = sqrt(x)
+         end if
+      case ('sin')
+         v = sin(x)
+      case ('cos')
+         v = cos(x)
+      case ('tan')
+         v = tan(x)
+      case ('asin', 'acos')
+         if (abs(x) > 1) then
+            call fail(p, bad_value, name//' of a number outside [-1, 1]')
+         else if (name == 'asin') then
+            v = asin(x)
+         else
+            v = acos(x)
+         end if
+      case ('atan')
+         v = atan(x)
+      case ('atan2')
+         if (x == 0 .and. y == 0) then
+            call fail(p, bad_value, 'atan2(0,0) is undefined')
+         else
+            v = atan2(x, y)
+         end if
+      case ('exp')
+         if (x > log_huge) then
+            call fail(p, bad_value, 'exp overflows')
+         else if (x > -800) then
+            v = exp(x)
+         end if
+      case ('log')
+         if (x <= 0) then
+            call fail(p, bad_value, 'log of a number that is not positive')
+         else
+            v = log(x)
+         end if
+      case ('abs')
+         v = abs(x)
+      end select
+      if (p%status /= ok) v = 0
+   end subroutine parse_call
+
+   !> A decimal number: digits [. digits] [(e|d) [+|-] digits], read without
+   !> the risk of an overflow trap inside the run-time library.
+   pure subroutine parse_number(p, v)
+      type(parser_type), intent(inout) :: p
+      real(dp), intent(out) :: v
+      integer :: start, exponent, point, first, ndigits, decimal, ios
+      character(:), allocatable :: mantissa, digits
+      character(len=16) :: exponent_text
+      logical :: negative_exponent
+      v = 0
+      start = p%pos
+      mantissa = ''
+      point = 0        ! digits before the decimal point
+      first = 0        ! position in mantissa of the first non-zero digit
+      ndigits = 0
+      do while (p%pos <= len(p%text))
+         if (is_digit(peek(p))) then
+            mantissa = mantissa//peek(p)
+            ndigits = ndigits + 1
+            if (first == 0 .and. peek(p) /= '0') first = ndigits
+         else if (peek(p) == '.' .and. point == 0) then
+            point = ndigits + 1
+         else
+            exit
+         end if
+         p%pos = p%pos + 1
+      end do
+      if (point == 0) point = ndigits + 1
+      if (ndigits == 0) then
+         call fail(p, bad_syntax, "a lone '.'")
+         return
+      end if
+      exponent = 0
+      if (index('eEdD', peek(p)) > 0) then
+         p%pos = p%pos + 1
+         negative_exponent = peek(p) == '-'
+         if (peek(p) == '-' .or. peek(p) == '+') p%pos = p%pos + 1
+         if (.not. is_digit(peek(p))) then
+            call fail(p, bad_syntax, 'exponent without digits')
+            return
+         end if
+         do while (is_digit(peek(p)))
+            exponent = min(10*exponent + (iachar(peek(p)) - iachar('0')), 100000)
+            p%pos = p%pos + 1
+         end do
+         if (negative_exponent) exponent = -exponent
+      end if
+      if (is_letter(peek(p)) .or. is_digit(peek(p)) .or. peek(p) == '.' .or. peek(p) == '_') then
+         call fail(p, bad_syntax, "unexpected '"//peek(p)//"' after the number "//p%text(start:p%pos - 1))
+         return
+      end if
+      if (first == 0) return   ! zero
+      ! Decimal exponent of the leading digit: the number is d.ddd * 10**decimal.
+      decimal = exponent + (point - 1) - first
+      if (decimal > 308 .or. (decimal == 308 .and. above_huge(mantissa(first:)))) then
+         call fail(p, bad_value, 'the number is too large')
+         return
+      end if
+      if (decimal < -400) return   ! underflows to zero
+      write (exponent_text, '(i0)') decimal
+      digits = mantissa(first:first)//'.'//mantissa(first + 1:)//'e'//trim(exponent_text)
+      read (digits, *, iostat=ios) v
+      if (ios /= 0) then
+         call fail(p, bad_syntax, 'not a number')
+         v = 0
+      end if
+   end subroutine parse_number
+
+   !> Whether the significant digits d.ddd... of a number times 1e308 exceed
+   !> huge(1.0_dp) = 1.7976931348623157e308 (a little conservatively: digits
+   !> beyond these 17 that are not all zero count as too large).
+   pure logical function above_huge(significant)
+      character(*), intent(in) :: significant
+      character(*), parameter :: top = '17976931348623157'
+      character(len=len(top)) :: head
+      head = significant   ! padded with blanks, compared as zeros below
+      head = translate_blanks(head)
+      above_huge = head > top
+      if (head == top .and. len(significant) > len(top)) then
+         above_huge = verify(significant(len(top) + 1:), '0') > 0
+      end if
+   end function above_huge
+
+   pure function translate_blanks(text) result(out)
+      character(*), intent(in) :: text
+      character(len(text)) :: out
+      integer :: i
+      out = text
+      do i = 1, len(text)
+         if (out(i:i) == ' ') out(i:i) = '0'
+      end do
+   end function translate_blanks
+
+   pure subroutine expect(p, c)
+      type(parser_type), intent(inout) :: p
+      character, intent(in) :: c
+      if (peek(p) == c) then
+         p%pos = p%pos + 1
+      else if (peek(p) == ' ') then
+         call fail(p, bad_syntax, "missing '"//c//"'")
+      else
+         call fail(p, bad_syntax, "expected '"//c//"' instead of '"//peek(p)//"'")
+      end if
+   end subroutine expect
+
+   pure logical function is_digit(c)
+      character, intent(in) :: c
+      is_digit = c >= '0' .and. c <= '9'
+   end function is_digit
+
+   pure logical function is_letter(c)
+      character, intent(in) :: c
+      is_letter = (c >= 'a' .and. c <= 'z') .or. (c >= 'A' .and. c <= 'Z')
+   end function is_letter
+
+   pure function lower(text) result(low)
+      character(*), intent(in) :: text
+      character(len(text)) :: low
+      integer :: i
+      low = text
+      do i = 1, len(text)
+         if (text(i:i) >= 'A' .and. text(i:i) <= 'Z') low(i:i) = achar(iachar(text(i:i)) + 32)
+      end do
+   end function lower
+
+end module fekap_deck_expression

@@ -1,0 +1,312 @@
+!> Reading the cards that set up the run rather than the mechanism: TITLe,
+!> ANALysis and OUTPut. A setting given twice takes the later value (a deck may
+!> INCLude a base deck and then override it).
+module fekap_deck_settings
+   use fekap_kinds, only: dp
+   use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
+      & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, find_node, find_link
+   use fekap_deck_card, only: lower, is_word_of
+   use fekap_deck_context, only: context_type
+   use fekap_deck_expression, only: safe_add
+   implicit none
+   private
+
+   public :: read_title, read_analysis, read_output
+
+   !> Most time steps of one run.
+   real(dp), parameter :: max_steps = 1.0e7_dp
+
+contains
+
+   !> TITLe: the rest of the line (up to a `!` comment) is the title.
+   subroutine read_title(ctx, model, lines)
+      type(context_type), intent(inout) :: ctx
+      type(model_type), intent(inout) :: model
+      !> The TITLe card lines themselves.
+      integer, intent(in) :: lines(:)
+      integer :: i, first
+      first = 0
+      do i = 1, size(lines)
+         associate (line => ctx%source%lines(lines(i)))
+            if (first > 0) then
+               call ctx%error_at(ctx%loc(lines(i), 1), 'the title is given twice', label='keep one TITLe card', &
+                  & note_loc=ctx%loc(first, 1), note='first given here')
+               cycle
+            end if
+            first = lines(i)
+            model%title = trim(adjustl(line%code(line%tokens(1)%col + len(line%tokens(1)%text):)))
+         end associate
+      end do
+   end subroutine read_title
+
+   !> ANALysis: `method`, `time`, `compute`, `tolerance`, `length`, `iterations`,
+   !> `predictor`, `convergence`, `gauss`, `redundant` lines; then the time span is checked.
+   subroutine read_analysis(ctx, model, lines)
+      type(context_type), intent(inout) :: ctx
+      type(model_type), intent(inout) :: model
+      integer, intent(in) :: lines(:)
+      character(*), parameter :: keys = 'method time compute tolerance length iterations predictor convergence '// &
+         & 'gauss redundant'
+      integer :: i, iline, k, time_line, ivalue
+      real(dp) :: t(3), span, v
+      logical :: ok, fine
+      character(:), allocatable :: key
+      time_line = 0
+      do i = 1, size(lines)
+         iline = lines(i)
+         key = lower(ctx%field(iline, 1))
+         if (is_word_of(key, 'method', 4)) then
+            if (.not. one_value('method fem|cartesian|angles')) cycle
+            select case (choice(2, 'fem cartesian angles'))
+            case (1)
+               model%analysis%method = method_fem
+            case (2)
+               model%analysis%method = method_cartesian
+            case (3)
+               model%analysis%method = method_angles
+            end select
+         else if (is_word_of(key, 'time', 4)) then
+            if (.not. ctx%require(iline, 'time START END STEP', 'a time line')) cycle
+            if (extra(5, 'time START END STEP')) cycle
+            ok = .true.
+            do k = 1, 3
+               call ctx%real_field(iline, k + 1, t(k), fine)
+               ok = ok .and. fine
+            end do
+            if (.not. ok) cycle
+            model%analysis%t_start = t(1)
+            model%analysis%t_end = t(2)
+            model%analysis%dt = t(3)
+            time_line = iline
+         else if (is_word_of(key, 'compute', 4)) then
+            if (.not. ctx%require(iline, 'compute WHAT [WHAT ...]', 'a compute line')) cycle
+            model%analysis%velocities = .false.
+            model%analysis%accelerations = .false.
+            do k = 2, ctx%nfields(iline)
+               select case (choice(k, 'positions velocities accelerations'))
+               case (2)
+                  model%analysis%velocities = .true.
+               case (3)
+                  ! Accelerations need the velocities.
+                  model%analysis%velocities = .true.
+                  model%analysis%accelerations = .true.
+               end select
+            end do
+         else if (is_word_of(key, 'tolerance', 3)) then
+            if (.not. one_value('tolerance VALUE')) cycle
+            call ctx%real_field(iline, 2, v, ok)
+            if (.not. ok) cycle
+            if (v <= 0 .or. v >= 1) then
+               call ctx%error(iline, 2, 'the tolerance must be between 0 and 1', label='e.g. tolerance 1e-10')
+               cycle
+            end if
+            model%analysis%tol = v
+         else if (is_word_of(key, 'length', 4)) then
+            if (.not. one_value('length VALUE')) cycle
+            call ctx%real_field(iline, 2, v, ok)
+            if (.not. ok) cycle
+            if (v <= 0 .or. v >= 1) then
+               call ctx%error(iline, 2, 'the length tolerance must be between 0 and 1', &
+                  & label='relative to the model size, e.g. length 1e-12')
+               cycle
+            end if
+            model%analysis%length_tol = v
+         else if (is_word_of(key, 'iterations', 4)) then
+            if (.not. one_value('iterations N')) cycle
+            call ctx%integer_field(iline, 2, ivalue, ok)
+            if (.not. ok) cycle
+            if (ivalue < 1) then
+               call ctx%error(iline, 2, 'the number of iterations must be at least 1', label='e.g. iterations 25')
+               cycle
+            end if
+            model%analysis%max_iter = ivalue
+         else if (is_word_of(key, 'predictor', 4)) then
+            if (.not. one_value('predictor previous|extrapolate|taylor')) cycle
+            select case (choice(2, 'previous extrapolate taylor'))
+            case (1)
+               model%analysis%predictor = predictor_previous
+            case (2)
+               model%analysis%predictor = predictor_extrapolate
+            case (3)
+               model%analysis%predictor = predictor_taylor
+            end select
+         else if (is_word_of(key, 'convergence', 4)) then
+            if (.not. one_value('convergence default|paper')) cycle
+            select case (choice(2, 'default paper'))
+            case (1)
+               model%analysis%convergence = convergence_default
+            case (2)
+               model%analysis%convergence = convergence_paper
+            end select
+         else if (is_word_of(key, 'gauss', 4)) then
+            if (.not. one_value('gauss 1|2')) cycle
+            call ctx%integer_field(iline, 2, ivalue, ok)
+            if (.not. ok) cycle
+            if (ivalue /= 1 .and. ivalue /= 2) then
+               call ctx%error(iline, 2, 'gauss takes 1 or 2 points', label='1 (reduced, default) or 2 (full)')
+               cycle
+            end if
+            model%analysis%gauss_points = ivalue
+         else if (is_word_of(key, 'redundant', 4)) then
+            if (.not. one_value('redundant stop|remove')) cycle
+            select case (choice(2, 'stop remove'))
+            case (1)
+               model%analysis%remove_redundant = .false.
+            case (2)
+               model%analysis%remove_redundant = .true.
+            end select
+         else
+            call ctx%error(iline, 1, "unknown ANALysis parameter '"//ctx%field(iline, 1)//"'", label='allowed: '//keys)
+         end if
+      end do
+      if (time_line > 0) call check_time(time_line)
+
+   contains
+
+      !> The line is `key VALUE`.
+      logical function one_value(form)
+         character(*), intent(in) :: form
+         one_value = ctx%require(iline, form, 'the line')
+         if (one_value) one_value = .not. extra(3, form)
+      end function one_value
+
+      logical function extra(itok, form)
+         integer, intent(in) :: itok
+         character(*), intent(in) :: form
+         extra = ctx%nfields(iline) >= itok
+         if (extra) call ctx%error(iline, itok, "unexpected field '"//ctx%field(iline, itok)//"'", &
+            & label='the line is: '//form)
+      end function extra
+
+      !> Which of the blank-separated words field itok is (0 after reporting none).
+      integer function choice(itok, words)
+         integer, intent(in) :: itok
+         character(*), intent(in) :: words
+         choice = word_index(ctx%field(iline, itok), words)
+         if (choice == 0) call ctx%error(iline, itok, "unknown value '"//ctx%field(iline, itok)//"' of "// &
+            & ctx%field(iline, 1), label='allowed: '//words)
+      end function choice
+
+      subroutine check_time(iline_)
+         integer, intent(in) :: iline_
+         associate (a => model%analysis)
+            if (a%dt <= 0) then
+               call ctx%error(iline_, 4, 'the time step must be positive', label='time START END STEP with STEP > 0')
+            end if
+            if (a%t_end <= a%t_start) then
+               call ctx%error(iline_, 3, 'the end time must be after the start time', &
+                  & label='time START END STEP with END > START')
+            end if
+            if (a%dt <= 0 .or. a%t_end <= a%t_start) return
+            call safe_add(a%t_end, -a%t_start, span, fine)
+            if (.not. fine .or. span/max_steps > a%dt) then
+               call ctx%error(iline_, 4, 'more than 10,000,000 time steps', label='take a larger step')
+            end if
+         end associate
+      end subroutine check_time
+
+   end subroutine read_analysis
+
+   !> OUTPut: `track NODE ...`, `angles LINK ...`, `every K`, `files csv|listing|vtk ...`.
+   !> Without track every node is tracked; without angles every link is reported.
+   subroutine read_output(ctx, model, lines)
+      type(context_type), intent(inout) :: ctx
+      type(model_type), intent(inout) :: model
+      integer, intent(in) :: lines(:)
+      character(*), parameter :: keys = 'track angles every files'
+      integer :: i, iline, k, idx, every, which
+      logical :: ok, tracked, angled
+      character(:), allocatable :: key
+      integer, allocatable :: points(:), links(:)
+      tracked = .false.
+      angled = .false.
+      allocate (points(0), links(0))
+      do i = 1, size(lines)
+         iline = lines(i)
+         key = lower(ctx%field(iline, 1))
+         if (is_word_of(key, 'track', 4)) then
+            if (.not. ctx%require(iline, 'track NODE [NODE ...]', 'a track line')) cycle
+            tracked = .true.
+            do k = 2, ctx%nfields(iline)
+               idx = find_node(model, ctx%field(iline, k))
+               if (idx == 0) then
+                  call ctx%error(iline, k, "undefined node '"//ctx%field(iline, k)//"'", label='define it in NODEs')
+               else if (.not. any(points == idx)) then
+                  points = [points, idx]
+               end if
+            end do
+         else if (is_word_of(key, 'angles', 4)) then
+            if (.not. ctx%require(iline, 'angles LINK [LINK ...]', 'an angles line')) cycle
+            angled = .true.
+            do k = 2, ctx%nfields(iline)
+               idx = find_link(model, ctx%field(iline, k))
+               if (idx == 0) then
+                  call ctx%error(iline, k, "undefined link '"//ctx%field(iline, k)//"'", label='define it in LINKs')
+               else if (.not. any(links == idx)) then
+                  links = [links, idx]
+               end if
+            end do
+         else if (is_word_of(key, 'every', 4)) then
+            if (.not. ctx%require(iline, 'every K', 'an every line')) cycle
+            if (ctx%nfields(iline) > 2) then
+               call ctx%error(iline, 3, "unexpected field '"//ctx%field(iline, 3)//"'", label='the line is: every K')
+               cycle
+            end if
+            call ctx%integer_field(iline, 2, every, ok)
+            if (.not. ok) cycle
+            if (every < 1) then
+               call ctx%error(iline, 2, 'every needs a positive whole number', label='every 1 writes every step')
+               cycle
+            end if
+            model%output%every = every
+         else if (is_word_of(key, 'files', 4)) then
+            if (.not. ctx%require(iline, 'files csv|listing|vtk ...', 'a files line')) cycle
+            model%output%csv = .false.
+            model%output%listing = .false.
+            model%output%vtk = .false.
+            do k = 2, ctx%nfields(iline)
+               which = word_index(ctx%field(iline, k), 'csv listing vtk')
+               select case (which)
+               case (1)
+                  model%output%csv = .true.
+               case (2)
+                  model%output%listing = .true.
+               case (3)
+                  model%output%vtk = .true.
+               case default
+                  call ctx%error(iline, k, "unknown output file kind '"//ctx%field(iline, k)//"'", &
+                     & label='allowed: csv listing vtk')
+               end select
+            end do
+         else
+            call ctx%error(iline, 1, "unknown OUTPut parameter '"//ctx%field(iline, 1)//"'", label='allowed: '//keys)
+         end if
+      end do
+      if (.not. tracked) points = [(k, k=1, size(model%nodes))]
+      if (.not. angled) links = [(k, k=1, size(model%links))]
+      model%output%points = points
+      model%output%links = links
+   end subroutine read_output
+
+   !> Position (1, 2, ...) of field among the blank-separated `words`; a word may be
+   !> shortened to 4 letters. 0 if it is none of them.
+   pure integer function word_index(field, words) result(idx)
+      character(*), intent(in) :: field, words
+      integer :: start, i, n
+      idx = 0
+      n = 0
+      start = 1
+      do i = 1, len(words) + 1
+         if (i <= len(words)) then
+            if (words(i:i) /= ' ') cycle
+         end if
+         n = n + 1
+         if (is_word_of(field, words(start:i - 1), 4)) then
+            idx = n
+            return
+         end if
+         start = i + 1
+      end do
+   end function word_index
+
+end module fekap_deck_settings

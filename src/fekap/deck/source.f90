@@ -1,0 +1,281 @@
+!> The deck as read: every non-blank line of the deck file and of the files it
+!> INCLUDEs, spliced in place, each with its fields and the card it starts.
+!>
+!> INCLude is textual: the included lines continue the block that is open at the
+!> INCLude line, and the block open at the end of the included file continues
+!> after it. A relative name is resolved against the directory of the including
+!> file (the current directory for a deck given as a string). END ends the file
+!> it is in; it is required in the main deck and optional in an included one;
+!> text after END is an error.
+module fekap_deck_source
+   use fekap_deck_card, only: card_of, card_none, card_include, card_end
+   use fekap_deck_diagnostic, only: diagnostics_type, mark_type
+   use fekap_deck_lexer, only: token_type, text_type, split_lines, lex_line, find_control
+   implicit none
+   private
+
+   public :: source_type, line_type, load_file, load_string
+
+   !> Deepest nesting of INCLude.
+   integer, parameter :: max_depth = 16
+
+   !> One non-blank line of the deck.
+   type :: line_type
+      !> Index into source%files, and the line number in that file.
+      integer :: file = 0
+      integer :: number = 0
+      !> The line as displayed in diagnostics.
+      character(:), allocatable :: text
+      !> The line without its comment.
+      character(:), allocatable :: code
+      type(token_type), allocatable :: tokens(:)
+      !> The card this line starts (card_none for a data line).
+      integer :: card = card_none
+   end type line_type
+
+   !> All lines of a deck.
+   type :: source_type
+      !> Names of the files read (the main deck first).
+      type(text_type), allocatable :: files(:)
+      integer :: nfiles = 0
+      type(line_type), allocatable :: lines(:)
+      integer :: nlines = 0
+      !> The main deck ends with END.
+      logical :: terminated = .false.
+      !> The main deck could be read (it exists and is text).
+      logical :: readable = .false.
+      !> Line number of the last non-blank line of the main deck (0: none).
+      integer :: last_line = 0
+   end type source_type
+
+contains
+
+   !> Read the deck file `path` and everything it includes.
+   subroutine load_file(source, diagnostics, path)
+      type(source_type), intent(out) :: source
+      type(diagnostics_type), intent(inout) :: diagnostics
+      character(*), intent(in) :: path
+      type(text_type) :: stack(0)
+      character(:), allocatable :: buffer, message
+      logical :: ok
+      call read_whole_file(path, buffer, ok, message)
+      if (.not. ok) then
+         call diagnostics%add(mark_type(file=path, text=''), message)
+         return
+      end if
+      call load_text(source, diagnostics, buffer, path, directory_of(path), stack)
+   end subroutine load_file
+
+   !> Read a deck given as text (lines separated by new_line characters); `name`
+   !> stands for the file name in diagnostics, INCLude is relative to the current directory.
+   subroutine load_string(source, diagnostics, text, name)
+      type(source_type), intent(out) :: source
+      type(diagnostics_type), intent(inout) :: diagnostics
+      character(*), intent(in) :: text, name
+      type(text_type) :: stack(0)
+      call load_text(source, diagnostics, text, name, '', stack)
+   end subroutine load_string
+
+   recursive subroutine load_text(source, diagnostics, buffer, name, directory, stack)
+      type(source_type), intent(inout) :: source
+      type(diagnostics_type), intent(inout) :: diagnostics
+      character(*), intent(in) :: buffer, name, directory
+      !> Files being included, outermost first (empty for the main deck).
+      type(text_type), intent(in) :: stack(:)
+      type(text_type), allocatable :: lines(:)
+      type(line_type) :: line
+      type(mark_type) :: mark
+      integer :: k, bad, lnum, col, empty_col, ifile, at_include
+      character(:), allocatable :: target, included, message, included_text
+      character(len=40) :: where
+      logical :: main, ok, ended
+      main = size(stack) == 0
+      call add_file(source, name, ifile)
+      bad = find_control(buffer)
+      if (bad > 0) then
+         lnum = 1 + count_lf(buffer(:bad - 1))
+         col = bad - index(buffer(:bad - 1), achar(10), back=.true.)
+         write (where, '(a,i0)') 'character code ', iachar(buffer(bad:bad))
+         call diagnostics%add(mark_type(file=name, line=lnum, col=col, text='', order=source%nlines + 1), &
+            & 'binary file: '//trim(where)//' is not text; a deck is a plain text file')
+         return
+      end if
+      if (main) source%readable = .true.
+      call split_lines(buffer, lines)
+      ended = .false.
+      do k = 1, size(lines)
+         line%file = ifile
+         line%number = k
+         line%text = lines(k)%s
+         call lex_line(line%text, line%code, line%tokens, empty_col)
+         if (size(line%tokens) == 0 .and. empty_col == 0) cycle
+         if (main) source%last_line = k
+         if (ended) then
+            call diagnostics%add(mark_of(source, line, 1), 'text after END', &
+               & label='END ends the deck; move this before END or delete it')
+            exit
+         end if
+         line%card = card_none
+         if (size(line%tokens) > 0) line%card = card_of(line%tokens(1)%text)
+         call append_line(source, line)
+         if (empty_col > 0) then
+            mark = mark_of(source, line, 0)
+            mark%col = empty_col
+            call diagnostics%add(mark, 'empty field', label='two commas with nothing between them')
+         end if
+         if (line%card == card_end .and. size(line%tokens) == 1) then
+            ended = .true.
+            if (main) source%terminated = .true.
+         else if (line%card == card_include) then
+            at_include = source%nlines
+            target = trim(adjustl(line%code(line%tokens(1)%col + len(line%tokens(1)%text):)))
+            if (len(target) == 0) then
+               call diagnostics%add(mark_of(source, line, 1), 'INCLude needs a file name', &
+                  & label='write INCLude FILE (relative to this deck''s directory)')
+               cycle
+            end if
+            if (target(1:1) == '/') then
+               included = target
+            else
+               included = directory//target
+            end if
+            if (on_stack(included, stack, name)) then
+               call diagnostics%add(mark_of(source, line, 2), 'INCLude cycle: '//included// &
+                  & ' is already being read', label='a deck cannot include itself')
+               cycle
+            end if
+            if (size(stack) + 1 >= max_depth) then
+               call diagnostics%add(mark_of(source, line, 2), 'INCLude nested too deeply')
+               cycle
+            end if
+            call read_whole_file(included, included_text, ok, message)
+            if (.not. ok) then
+               call diagnostics%add(mark_of(source, line, 2), message)
+               cycle
+            end if
+            call load_text(source, diagnostics, included_text, included, directory_of(included), &
+               & [stack, text_type(name)])
+            deallocate (included_text)
+            if (source%nlines == at_include) then
+               call diagnostics%add(mark_of(source, source%lines(at_include), 2), 'the included file '// &
+                  & included//' has no cards or data', label='an empty INCLude is probably a mistake')
+            end if
+         end if
+      end do
+   end subroutine load_text
+
+   !> The place of field `itok` of the last appended line (the whole line if it has no such field).
+   pure function mark_of(source, line, itok) result(mark)
+      type(source_type), intent(in) :: source
+      type(line_type), intent(in) :: line
+      integer, intent(in) :: itok
+      type(mark_type) :: mark
+      mark%file = source%files(line%file)%s
+      mark%line = line%number
+      mark%text = line%text
+      mark%order = source%nlines
+      if (itok >= 1 .and. itok <= size(line%tokens)) then
+         mark%col = line%tokens(itok)%col
+         mark%length = len(line%tokens(itok)%text)
+      else
+         mark%col = len_trim(line%code) + 1
+         mark%length = 1
+      end if
+   end function mark_of
+
+   pure logical function on_stack(path, stack, current)
+      character(*), intent(in) :: path, current
+      type(text_type), intent(in) :: stack(:)
+      integer :: i
+      on_stack = path == current
+      do i = 1, size(stack)
+         on_stack = on_stack .or. path == stack(i)%s
+      end do
+   end function on_stack
+
+   !> The directory part of a path, with its trailing '/', or '' for a bare name.
+   pure function directory_of(path) result(directory)
+      character(*), intent(in) :: path
+      character(:), allocatable :: directory
+      directory = path(:index(path, '/', back=.true.))
+   end function directory_of
+
+   pure integer function count_lf(text) result(n)
+      character(*), intent(in) :: text
+      integer :: i
+      n = 0
+      do i = 1, len(text)
+         if (text(i:i) == achar(10)) n = n + 1
+      end do
+   end function count_lf
+
+   pure subroutine add_file(source, name, ifile)
+      type(source_type), intent(inout) :: source
+      character(*), intent(in) :: name
+      integer, intent(out) :: ifile
+      type(text_type), allocatable :: grown(:)
+      if (.not. allocated(source%files)) allocate (source%files(8))
+      if (source%nfiles == size(source%files)) then
+         allocate (grown(2*size(source%files)))
+         grown(1:source%nfiles) = source%files(1:source%nfiles)
+         call move_alloc(grown, source%files)
+      end if
+      source%nfiles = source%nfiles + 1
+      source%files(source%nfiles)%s = name
+      ifile = source%nfiles
+   end subroutine add_file
+
+   pure subroutine append_line(source, line)
+      type(source_type), intent(inout) :: source
+      type(line_type), intent(in) :: line
+      type(line_type), allocatable :: grown(:)
+      if (.not. allocated(source%lines)) allocate (source%lines(64))
+      if (source%nlines == size(source%lines)) then
+         allocate (grown(2*size(source%lines)))
+         grown(1:source%nlines) = source%lines(1:source%nlines)
+         call move_alloc(grown, source%lines)
+      end if
+      source%nlines = source%nlines + 1
+      source%lines(source%nlines) = line
+   end subroutine append_line
+
+   !> The whole content of a file, or ok = .false. and a message naming the file.
+   subroutine read_whole_file(path, buffer, ok, message)
+      character(*), intent(in) :: path
+      character(:), allocatable, intent(out) :: buffer
+      logical, intent(out) :: ok
+      character(:), allocatable, intent(out) :: message
+      logical :: exists
+      integer :: unit, ios, n
+      character(len=256) :: iomsg
+      ok = .false.
+      buffer = ''
+      inquire (file=path, exist=exists)
+      if (.not. exists) then
+         message = "cannot open '"//path//"': no such file"
+         return
+      end if
+      open (newunit=unit, file=path, access='stream', form='unformatted', action='read', status='old', &
+         & iostat=ios, iomsg=iomsg)
+      if (ios /= 0) then
+         message = "cannot open '"//path//"': "//trim(iomsg)
+         return
+      end if
+      inquire (unit=unit, size=n)
+      if (n < 0) then
+         close (unit)
+         message = "cannot read '"//path//"': its size is unknown (is it a directory?)"
+         return
+      end if
+      deallocate (buffer)
+      allocate (character(len=n) :: buffer)
+      if (n > 0) read (unit, iostat=ios, iomsg=iomsg) buffer
+      close (unit)
+      if (ios /= 0) then
+         message = "cannot read '"//path//"': "//trim(iomsg)
+         return
+      end if
+      ok = .true.
+   end subroutine read_whole_file
+
+end module fekap_deck_source
