@@ -1,5 +1,162 @@
+!> fekap: read a deck, run the analysis it asks for, write the results.
+!> The only place that prints errors and sets the exit code.
 program fekap_main
-   use fekap_kinds, only: dp
+   use, intrinsic :: iso_c_binding, only: c_int
+   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+   use fekap_error, only: error_type, fatal_error, error_input, error_analysis
+   use fekap_model, only: model_type, method_fem, method_cartesian
+   use fekap_deck, only: read_deck
+   use fekap_solver_stepper, only: stepper_type
+   use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
+   use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
+      & new_cartesian_stepper
+   use fekap_solver_run, only: run_units_type, run_analysis, step_count, no_unit
+   use fekap_output_csv, only: write_mesh_csv
+   use fekap_output_listing, only: write_listing_model, write_listing_plan, plan_text
+   use fekap_app_cli, only: cli_type, parse_command_line, apply_overrides, usage_text, fekap_version
    implicit none
-   print '(a)', 'fekap: not yet'
+
+   interface
+      !> C's exit: a status code that is a variable (F2008 `stop` takes constants only).
+      subroutine c_exit(status) bind(C, name='exit')
+         import :: c_int
+         integer(c_int), value :: status
+      end subroutine c_exit
+   end interface
+
+   type(cli_type) :: cli
+   type(model_type) :: model
+   type(error_type), allocatable :: error
+   class(stepper_type), allocatable :: stepper
+   type(run_units_type) :: units
+   character(:), allocatable :: mesh_text
+
+   call parse_command_line(cli, error)
+   if (allocated(error)) call finish(error)
+   if (cli%help) then
+      write (output_unit, '(a)') usage_text()
+      call c_exit(0_c_int)
+   end if
+   if (cli%version) then
+      write (output_unit, '(a)') 'fekap '//fekap_version
+      call c_exit(0_c_int)
+   end if
+   if (cli%print_outdir) then
+      write (output_unit, '(a)') cli%outdir
+      call c_exit(0_c_int)
+   end if
+
+   call read_deck(model, cli%deck, error)
+   if (allocated(error)) call finish(error)
+   call apply_overrides(cli, model, error)
+   if (allocated(error)) call finish(error)
+
+   call make_stepper(model, stepper, mesh_text, error)
+   if (allocated(error)) call finish(error)
+   call open_outputs(cli%outdir, cli%deck, model, units, error)
+   if (allocated(error)) call finish(error)
+   if (units%listing /= no_unit) then
+      call write_listing_model(units%listing, model, fekap_version)
+      call write_listing_plan(units%listing, model, step_count(model), mesh_text)
+   end if
+   if (.not. cli%quiet) write (output_unit, '(a)') 'fekap: '//cli%deck//': '//plan_text(model, step_count(model))
+
+   call run_analysis(stepper, model, units, error)
+   if (allocated(error)) then
+      error%message = cli%deck//': '//error%message
+      if (.not. cli%quiet) write (output_unit, '(a)') 'fekap: results of the completed steps are in '//cli%outdir//'/'
+      call finish(error)
+   end if
+   if (.not. cli%quiet) write (output_unit, '(a)') 'fekap: results in '//cli%outdir//'/'
+   call c_exit(0_c_int)
+
+contains
+
+   !> The stepper of the deck's method.
+   subroutine make_stepper(model, stepper, mesh_text, error)
+      type(model_type), intent(in) :: model
+      class(stepper_type), allocatable, intent(out) :: stepper
+      character(:), allocatable, intent(out) :: mesh_text
+      type(error_type), allocatable, intent(out) :: error
+      type(fem_stepper_type), allocatable :: fem
+      type(cartesian_stepper_type), allocatable :: cartesian
+      type(angles_stepper_type), allocatable :: angles
+      character(len=160) :: line
+      mesh_text = ''
+      select case (model%analysis%method)
+      case (method_fem)
+         allocate (fem)
+         call new_fem_stepper(fem, model)
+         write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0)') 'mesh: ', size(fem%mesh%elements), ' elements, ', &
+            & fem%mesh%ndof, ' dofs, ', fem%mesh%nfree, ' equations, ', fem%mesh%ndriven, &
+            & ' driven; half-bandwidth ', fem%mesh%kd
+         mesh_text = trim(line)
+         call move_alloc(fem, stepper)
+      case (method_cartesian)
+         allocate (cartesian)
+         call new_cartesian_stepper(cartesian, model, error)
+         if (allocated(error)) return
+         call move_alloc(cartesian, stepper)
+      case default
+         allocate (angles)
+         call new_angles_stepper(angles, model, error)
+         if (allocated(error)) return
+         call move_alloc(angles, stepper)
+      end select
+   end subroutine make_stepper
+
+   !> Create the output directory and open the files the deck asks for.
+   subroutine open_outputs(outdir, deck, model, units, error)
+      character(*), intent(in) :: outdir, deck
+      type(model_type), intent(in) :: model
+      type(run_units_type), intent(out) :: units
+      type(error_type), allocatable, intent(out) :: error
+      integer :: stat, mesh_unit
+      character(:), allocatable :: stem
+      call execute_command_line('mkdir -p "'//outdir//'"', exitstat=stat)
+      if (stat /= 0) then
+         call fatal_error(error, outdir//': cannot create the output directory')
+         return
+      end if
+      stem = deck(index(deck, '/', back=.true.) + 1:)
+      if (index(stem, '.', back=.true.) > 1) stem = stem(:index(stem, '.', back=.true.) - 1)
+      if (model%output%csv) then
+         call open_file(outdir//'/points.csv', units%points, error)
+         if (.not. allocated(error)) call open_file(outdir//'/links.csv', units%links, error)
+         if (.not. allocated(error)) call open_file(outdir//'/steps.csv', units%steps, error)
+         if (.not. allocated(error)) call open_file(outdir//'/mesh.csv', mesh_unit, error)
+         if (allocated(error)) return
+         call write_mesh_csv(mesh_unit, model)
+         close (mesh_unit)
+      end if
+      if (model%output%listing) call open_file(outdir//'/'//stem//'.lis', units%listing, error)
+   end subroutine open_outputs
+
+   !> Open a file for writing, replacing it.
+   subroutine open_file(path, unit, error)
+      character(*), intent(in) :: path
+      integer, intent(out) :: unit
+      type(error_type), allocatable, intent(out) :: error
+      integer :: ios
+      open (newunit=unit, file=path, status='replace', action='write', iostat=ios)
+      if (ios /= 0) then
+         unit = no_unit
+         call fatal_error(error, path//': cannot write this file')
+      end if
+   end subroutine open_file
+
+   !> Print the error and exit with the code of its kind.
+   subroutine finish(error)
+      type(error_type), intent(in) :: error
+      write (error_unit, '(a)') error%message
+      select case (error%kind)
+      case (error_input)
+         call c_exit(2_c_int)
+      case (error_analysis)
+         call c_exit(3_c_int)
+      case default
+         call c_exit(1_c_int)
+      end select
+   end subroutine finish
+
 end program fekap_main

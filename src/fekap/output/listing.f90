@@ -95,7 +95,7 @@ contains
          do i = 1, size(model%slidelines)
             associate (s => model%slidelines(i))
                write (unit, '(2x,a12,a)') s%name, 'slave '//model%nodes(s%slave)%name// &
-                  & merge(' prismatic ', ' pin-in-slot', s%kind == joint_prismatic)
+                  & trim(merge(' prismatic  ', ' pin-in-slot', s%kind == joint_prismatic))
             end associate
          end do
       end if
@@ -192,7 +192,7 @@ contains
       !> Time in analysis, output and total.
       real(dp), intent(in) :: seconds(3)
       write (unit, '(/,a)') 'SUMMARY'
-      write (unit, '(2x,a30,i12)') 'steps', counts%steps
+      write (unit, '(2x,a30,i12)') 'configurations solved', counts%steps
       write (unit, '(2x,a30,i12)') 'Newton iterations', counts%iterations
       if (counts%steps > 0) write (unit, '(2x,a30,f12.3)') 'iterations per step', &
          & real(counts%iterations, dp)/counts%steps

@@ -16,12 +16,15 @@ module fekap_solver_run
 
    public :: run_units_type, run_analysis, step_count, step_time
 
-   !> Open units of the output files; a negative unit is not written.
+   !> A unit that is not written (newunit numbers are negative, so not -1).
+   integer, parameter, public :: no_unit = -huge(1)
+
+   !> Open units of the output files; no_unit for a file that is not written.
    type :: run_units_type
-      integer :: points = -1
-      integer :: links = -1
-      integer :: steps = -1
-      integer :: listing = -1
+      integer :: points = no_unit
+      integer :: links = no_unit
+      integer :: steps = no_unit
+      integer :: listing = no_unit
    end type run_units_type
 
 contains
@@ -70,10 +73,10 @@ contains
       seconds = 0
       rows = 0
       call system_clock(c_start, clock_rate)
-      if (units%points >= 0) call write_points_header(units%points, vel, acc)
-      if (units%links >= 0) call write_links_header(units%links, vel, acc)
-      if (units%steps >= 0) call write_steps_header(units%steps)
-      if (units%listing >= 0) call write_listing_step_header(units%listing)
+      if (units%points /= no_unit) call write_points_header(units%points, vel, acc)
+      if (units%links /= no_unit) call write_links_header(units%links, vel, acc)
+      if (units%steps /= no_unit) call write_steps_header(units%steps)
+      if (units%listing /= no_unit) call write_listing_step_header(units%listing)
 
       do n = 0, nsteps
          call system_clock(c0)
@@ -89,21 +92,21 @@ contains
          if (allocated(step_error)) then
             write (where_, '(a,i0,a,es12.5,a)') 'step ', n, ' (t = ', step_time(model, n, nsteps), '): '
             call analysis_error(error, trim(where_)//' '//step_error%message)
-            if (units%listing >= 0) then
+            if (units%listing /= no_unit) then
                call write_listing_stop(units%listing, error%message)
                flush (units%listing)
             end if
             exit
          end if
          if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
-            if (units%points >= 0) call write_points_rows(units%points, model, result, vel, acc)
-            if (units%links >= 0) call write_links_rows(units%links, model, result, vel, acc)
-            if (units%steps >= 0) call write_steps_row(units%steps, result)
-            if (units%listing >= 0) call write_listing_step(units%listing, result)
+            if (units%points /= no_unit) call write_points_rows(units%points, model, result, vel, acc)
+            if (units%links /= no_unit) call write_links_rows(units%links, model, result, vel, acc)
+            if (units%steps /= no_unit) call write_steps_row(units%steps, result)
+            if (units%listing /= no_unit) call write_listing_step(units%listing, result)
             rows = rows + size(model%output%points) + size(model%output%links) + 1
             call flush_all(units)
          end if
-         if (allocated(result%note) .and. units%listing >= 0) then
+         if (allocated(result%note) .and. units%listing /= no_unit) then
             if (len(result%note) > 0) write (units%listing, '(10x,a)') 'note: step '//trim(int_text(n))//', '// &
                & result%note
          end if
@@ -112,7 +115,7 @@ contains
       end do
       call system_clock(c1)
       seconds(3) = real(c1 - c_start, dp)/clock_rate
-      if (units%listing >= 0) then
+      if (units%listing /= no_unit) then
          call write_listing_summary(units%listing, stepper%counts, rows, seconds)
          flush (units%listing)
       end if
@@ -126,10 +129,10 @@ contains
 
    subroutine flush_all(units)
       type(run_units_type), intent(in) :: units
-      if (units%points >= 0) flush (units%points)
-      if (units%links >= 0) flush (units%links)
-      if (units%steps >= 0) flush (units%steps)
-      if (units%listing >= 0) flush (units%listing)
+      if (units%points /= no_unit) flush (units%points)
+      if (units%links /= no_unit) flush (units%links)
+      if (units%steps /= no_unit) flush (units%steps)
+      if (units%listing /= no_unit) flush (units%listing)
    end subroutine flush_all
 
 end module fekap_solver_run
