@@ -42,13 +42,15 @@ contains
 
    !> Residual as assemble_residual, and the tangent dR/dq: free-free part into
    !> the band matrix (equation order), free-driven part into kfd(eq, drive).
-   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd)
+   !> `geometric = .false.` assembles the beams' material tangent only (46).
+   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd, geometric)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:), lambda
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
       type(band_matrix_type), intent(inout) :: kff
       real(dp), intent(out) :: kfd(:, :)
+      logical, intent(in), optional :: geometric
       real(dp) :: pe(6), ke(6, 6), xe(6)
       integer :: e, i
       r = -lambda*mesh%f_ext
@@ -58,7 +60,7 @@ contains
          do i = 1, 6
             xe(i) = q(mesh%edof(i, e))
          end do
-         call beam_residual(mesh%elements(e), xe, pe, ke)
+         call beam_residual(mesh%elements(e), xe, pe, ke, geometric)
          do i = 1, 6
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do

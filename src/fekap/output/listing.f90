@@ -194,7 +194,7 @@ contains
       write (unit, '(/,a)') 'SUMMARY'
       write (unit, '(2x,a30,i12)') 'configurations solved', counts%steps
       write (unit, '(2x,a30,i12)') 'Newton iterations', counts%iterations
-      if (counts%steps > 0) write (unit, '(2x,a30,f12.3)') 'iterations per step', &
+      if (counts%steps > 0) write (unit, '(2x,a30,f12.3)') 'iterations per configuration', &
          & real(counts%iterations, dp)/counts%steps
       write (unit, '(2x,a30,i12)') 'residual assemblies', counts%residual_assemblies
       write (unit, '(2x,a30,i12)') 'tangent assemblies', counts%tangent_assemblies

@@ -258,10 +258,7 @@ contains
                iterations = iterations + 1
                self%counts%iterations = self%counts%iterations + 1
                if (self%conv%mode /= convergence_paper) then
-                  if (is_converged(self%conv, residual, r0, scale, correction)) then
-                     self%factor_current = .true.
-                     exit
-                  end if
+                  if (is_converged(self%conv, residual, r0, scale, correction)) exit
                end if
             end do
             call relocate(self, t, qt, moved, error)
@@ -386,13 +383,18 @@ contains
    end subroutine tangent_predictor
 
    !> Make kff the factor of the tangent at the accepted configuration, unless
-   !> it is already; info > 0 names the equation where it is singular.
+   !> it is already; info > 0 names the equation where it is singular. For a
+   !> kinematic analysis this is the material tangent (46): the last Newton
+   !> iterate's tangent will not do, because its residual stresses (strains of
+   !> 1e-12) make a geometric stiffness comparable to the bending stiffness
+   !> EI/L^3 of slender links (1e-8 on Example 5), which spoils accelerations.
+   !> A loaded model is stressed by design and uses the full tangent.
    subroutine refactor_at_accepted(self, info)
       type(fem_stepper_type), intent(inout) :: self
       integer, intent(out) :: info
       info = 0
       if (self%factor_current) return
-      call assemble_tangent(self%mesh, self%q, self%t, self%seg, self%r, self%kff, self%kfd)
+      call assemble_tangent(self%mesh, self%q, self%t, self%seg, self%r, self%kff, self%kfd, geometric=self%loaded)
       self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
       self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
       call factor(self, info)
