@@ -15,7 +15,7 @@ module fekap_element_beam
    implicit none
    private
 
-   public :: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain
+   public :: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain, beam_resultants
 
    !> Immutable definition of one element.
    type :: beam_type
@@ -198,5 +198,20 @@ contains
          strain = max(strain, abs(gam(1)), abs(gam(2)), abs(gam(3))*self%length)
       end do
    end function beam_max_strain
+
+   !> Stress resultants (P, V, M) (30) averaged over the Gauss points.
+   pure function beam_resultants(self, xe) result(sig)
+      type(beam_type), intent(in) :: self
+      real(dp), intent(in) :: xe(6)
+      real(dp) :: sig(3)
+      real(dp) :: bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), xi, w
+      integer :: ig
+      sig = 0
+      do ig = 1, self%ngauss
+         call gauss_point(self%ngauss, ig, xi, w)
+         call point_state(self, xe, xi, bw, gam, grad, hess)
+         sig = sig + self%c*gam/self%ngauss
+      end do
+   end function beam_resultants
 
 end module fekap_element_beam

@@ -25,6 +25,15 @@ module fekap_model_results
       real(dp), allocatable :: pos(:, :), vel(:, :), acc(:, :)
       !> (number of links): direction angle (radians, not wrapped) and its rates.
       real(dp), allocatable :: angle(:), omega(:), alpha(:)
+      !> Field output (filled only when the deck asks for VTK files): the
+      !> analysis mesh's points (2, npoint) with their velocities and
+      !> accelerations, its line cells (2, ncell) as point indices, the link of
+      !> each cell, and each cell's stress resultants (N, V, M) (3, ncell).
+      !> The finite element method gives its elements; the classical methods
+      !> the model's nodes and links (with zero resultants).
+      real(dp), allocatable :: mesh_pos(:, :), mesh_vel(:, :), mesh_acc(:, :)
+      integer, allocatable :: cells(:, :), cell_link(:)
+      real(dp), allocatable :: cell_force(:, :)
    end type step_result_type
 
 contains

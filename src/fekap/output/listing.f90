@@ -205,6 +205,9 @@ contains
       write (unit, '(2x,a30,i12)') 'slideline evaluations', counts%slideline_evaluations
       write (unit, '(2x,a30,i12)') 'rows written', rows
       write (unit, '(2x,a30,f12.4)') 'time in analysis (s)', seconds(1)
+      write (unit, '(2x,a30,f12.4)') '  of which assembly (s)', counts%seconds_assembly
+      write (unit, '(2x,a30,f12.4)') '  of which factorisation (s)', counts%seconds_factorisation
+      write (unit, '(2x,a30,f12.4)') '  of which solves (s)', counts%seconds_solves
       write (unit, '(2x,a30,f12.4)') 'time in output (s)', seconds(2)
       write (unit, '(2x,a30,f12.4)') 'total time (s)', seconds(3)
    end subroutine write_listing_summary

@@ -12,10 +12,11 @@ module fekap_solver_fem
    use fekap_model_results, only: step_result_type
    use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
+   use fekap_element_beam, only: beam_resultants
    use fekap_assembly_assemble, only: assemble_residual, assemble_tangent, assemble_second_derivative, &
       & max_strain, slide_position
    use fekap_contact_slideline, only: slide_geometry, slide_locate, slide_on_element, slide_off_end
-   use fekap_solver_stepper, only: stepper_type
+   use fekap_solver_stepper, only: stepper_type, clock_seconds
    use fekap_solver_convergence, only: convergence_type, is_converged, extrapolate
    implicit none
    private
@@ -193,7 +194,7 @@ contains
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r0, scale, correction, strain
+      real(dp) :: r0, scale, correction, strain, clock
       integer :: i, k, info, element, pass
       logical :: moved
       character(len=300) :: msg
@@ -216,7 +217,9 @@ contains
          ! to the neighbouring segment and iterate again from there.
          relocations: do pass = 0, size(mesh%slides)*8
             do i = 0, self%model%analysis%max_iter
+               clock = clock_seconds()
                call assemble_tangent(mesh, qt, t, self%seg, self%r, self%kff, self%kfd)
+               self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
                self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
                self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
                residual = free_norm(self, self%r)
@@ -242,7 +245,9 @@ contains
                do k = 1, mesh%nfree
                   self%rhs(k, 1) = -self%r(eqd(k))
                end do
+               clock = clock_seconds()
                call self%kff%solve(self%rhs)
+               self%counts%seconds_solves = self%counts%seconds_solves + (clock_seconds() - clock)
                correction = 0
                do k = 1, mesh%nfree
                   correction = max(correction, abs(self%rhs(k, 1))*self%dof_length(eqd(k)))
@@ -392,9 +397,12 @@ contains
    subroutine refactor_at_accepted(self, info)
       type(fem_stepper_type), intent(inout) :: self
       integer, intent(out) :: info
+      real(dp) :: clock
       info = 0
       if (self%factor_current) return
+      clock = clock_seconds()
       call assemble_tangent(self%mesh, self%q, self%t, self%seg, self%r, self%kff, self%kfd, geometric=self%loaded)
+      self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
       self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
       self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
       call factor(self, info)
@@ -517,7 +525,10 @@ contains
    subroutine factor(self, info)
       type(fem_stepper_type), intent(inout) :: self
       integer, intent(out) :: info
+      real(dp) :: clock
+      clock = clock_seconds()
       call self%kff%factor(info)
+      self%counts%seconds_factorisation = self%counts%seconds_factorisation + (clock_seconds() - clock)
       if (self%kff%is_lu) then
          self%counts%lu_factorisations = self%counts%lu_factorisations + 1
       else
@@ -533,7 +544,7 @@ contains
    subroutine solve_rates(self, error)
       type(fem_stepper_type), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven), ratio
+      real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven), ratio, clock
       integer :: i, k, info
       character(len=160) :: note
       if (.not. self%model%analysis%velocities) return
@@ -562,14 +573,18 @@ contains
             self%rhs(k, 1) = -dot_product(self%kfd(k, :), vd)
             if (self%loaded) self%rhs(k, 1) = self%rhs(k, 1) + mesh%f_ext(eqd(k))
          end do
+         clock = clock_seconds()
          call self%kff%solve(self%rhs)
+         self%counts%seconds_solves = self%counts%seconds_solves + (clock_seconds() - clock)
          do k = 1, mesh%nfree
             self%v(eqd(k)) = self%rhs(k, 1)
          end do
          self%counts%velocity_solves = self%counts%velocity_solves + 1
          self%has_velocity = .true.
          if (.not. self%model%analysis%accelerations) return
+         clock = clock_seconds()
          call assemble_second_derivative(mesh, self%q, self%v, self%seg, self%work)
+         self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
          self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(mesh%slides)
          self%a = 0
          do i = 1, mesh%ndriven
@@ -578,7 +593,9 @@ contains
          do k = 1, mesh%nfree
             self%rhs(k, 1) = -dot_product(self%kfd(k, :), ad) - self%work(eqd(k))
          end do
+         clock = clock_seconds()
          call self%kff%solve(self%rhs)
+         self%counts%seconds_solves = self%counts%seconds_solves + (clock_seconds() - clock)
          do k = 1, mesh%nfree
             self%a(eqd(k)) = self%rhs(k, 1)
          end do
@@ -607,7 +624,37 @@ contains
          result%omega(i) = self%v(dof)
          result%alpha(i) = self%a(dof)
       end do
+      if (self%model%output%vtk) call fill_fields(self, result)
    end subroutine fill_result
+
+   !> The mesh-level fields of the result, for VTK output: every point, every
+   !> element as a line cell with its link and stress resultants.
+   subroutine fill_fields(self, result)
+      type(fem_stepper_type), intent(in) :: self
+      type(step_result_type), intent(inout) :: result
+      integer :: ip, e, k
+      real(dp) :: xe(6)
+      associate (mesh => self%mesh)
+         if (.not. allocated(result%mesh_pos)) then
+            allocate (result%mesh_pos(2, mesh%npoint), result%mesh_vel(2, mesh%npoint), &
+               & result%mesh_acc(2, mesh%npoint), result%cell_force(3, size(mesh%elements)))
+            allocate (result%cells(2, size(mesh%elements)), result%cell_link(size(mesh%elements)))
+         end if
+         do ip = 1, mesh%npoint
+            result%mesh_pos(:, ip) = self%q(mesh%tdof(:, ip))
+            result%mesh_vel(:, ip) = self%v(mesh%tdof(:, ip))
+            result%mesh_acc(:, ip) = self%a(mesh%tdof(:, ip))
+         end do
+         do e = 1, size(mesh%elements)
+            result%cells(:, e) = mesh%dof_point(mesh%edof([1, 4], e))
+            result%cell_link(e) = mesh%elink(e)
+            do k = 1, 6
+               xe(k) = self%q(mesh%edof(k, e))
+            end do
+            result%cell_force(:, e) = beam_resultants(mesh%elements(e), xe)
+         end do
+      end associate
+   end subroutine fill_fields
 
    !> Euclidean norm of a residual over the free dofs.
    pure real(dp) function free_norm(self, r) result(norm)

@@ -8,7 +8,7 @@ module fekap_solver_stepper
    implicit none
    private
 
-   public :: stepper_type, work_counts_type
+   public :: stepper_type, work_counts_type, clock_seconds
 
    !> Counts of the work done, for the listing's closing summary.
    type :: work_counts_type
@@ -21,6 +21,10 @@ module fekap_solver_stepper
       integer :: velocity_solves = 0
       integer :: acceleration_solves = 0
       integer :: slideline_evaluations = 0
+      !> Wall-clock seconds in residual/tangent assembly, factorisations and solves.
+      real(dp) :: seconds_assembly = 0
+      real(dp) :: seconds_factorisation = 0
+      real(dp) :: seconds_solves = 0
    end type work_counts_type
 
    type, abstract :: stepper_type
@@ -49,5 +53,14 @@ module fekap_solver_stepper
          type(error_type), allocatable, intent(out) :: error
       end subroutine advance_interface
    end interface
+
+contains
+
+   !> Wall-clock time in seconds, for the phase timers.
+   real(dp) function clock_seconds() result(seconds)
+      integer(8) :: count, rate
+      call system_clock(count, rate)
+      seconds = real(count, dp)/real(rate, dp)
+   end function clock_seconds
 
 end module fekap_solver_stepper
