@@ -4,6 +4,7 @@ module fekap_app_cli
    use fekap_error, only: error_type, input_error
    use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
       & predictor_extrapolate, predictor_taylor
+   use fekap_strings, only: lower
    implicit none
    private
 
@@ -207,14 +208,5 @@ contains
       end if
    end subroutine apply_overrides
 
-   pure function lower(text) result(low)
-      character(*), intent(in) :: text
-      character(len(text)) :: low
-      integer :: i
-      low = text
-      do i = 1, len(text)
-         if (text(i:i) >= 'A' .and. text(i:i) <= 'Z') low(i:i) = achar(iachar(text(i:i)) + 32)
-      end do
-   end function lower
 
 end module fekap_app_cli

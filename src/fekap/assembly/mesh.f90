@@ -13,6 +13,7 @@ module fekap_assembly_mesh
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, joint_prismatic
    use fekap_element_beam, only: beam_type, new_beam
    use fekap_contact_slideline, only: default_penalty, default_tie_penalty
+   use fekap_union_find, only: find_root, join
    implicit none
    private
 
@@ -130,7 +131,7 @@ contains
                ends(j) = link_rot_tmp(end_, l)
             end do
             do j = 2, size(ends)
-               call union(parent, ends(1), ends(j))
+               call join(parent, ends(1), ends(j))
             end do
             deallocate (ends)
          end do
@@ -144,7 +145,7 @@ contains
       end do
       allocate (rot_index(nrot), source=0)
       do i = 1, nrot
-         j = find(parent, i)
+         j = find_root(parent, i)
          if (rot_index(j) == 0) then
             self%ndof = self%ndof + 1
             rot_index(j) = self%ndof
@@ -553,23 +554,7 @@ contains
       end do
    end subroutine new_slides
 
-   pure recursive integer function find(parent, i) result(root)
-      integer, intent(in) :: parent(:), i
-      if (parent(i) == i) then
-         root = i
-      else
-         root = find(parent, parent(i))
-      end if
-   end function find
 
-   pure subroutine union(parent, i, j)
-      integer, intent(inout) :: parent(:)
-      integer, intent(in) :: i, j
-      integer :: ri, rj
-      ri = find(parent, i)
-      rj = find(parent, j)
-      if (ri /= rj) parent(max(ri, rj)) = min(ri, rj)
-   end subroutine union
 
    !> A readable name of a dof, for messages: "x of node C", "rotation of link AB at node A".
    function describe_dof(self, model, dof) result(text)

@@ -12,6 +12,7 @@ module fekap_classical_bodies
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
    use fekap_model, only: model_type, model_size
+   use fekap_union_find, only: find_root, join
    implicit none
    private
 
@@ -85,7 +86,7 @@ contains
       allocate (self%link_body(nlink), source=0)
       allocate (self%first_link(nlink))
       do i = 1, nlink
-         root = find(parent, i)
+         root = find_root(parent, i)
          if (self%link_body(root) == 0) then
             self%nbody = self%nbody + 1
             self%link_body(root) = self%nbody
@@ -132,23 +133,7 @@ contains
       end do
    end subroutine new_body_map
 
-   pure recursive integer function find(parent, i) result(root)
-      integer, intent(in) :: parent(:), i
-      if (parent(i) == i) then
-         root = i
-      else
-         root = find(parent, parent(i))
-      end if
-   end function find
 
-   pure subroutine join(parent, i, j)
-      integer, intent(inout) :: parent(:)
-      integer, intent(in) :: i, j
-      integer :: ri, rj
-      ri = find(parent, i)
-      rj = find(parent, j)
-      if (ri /= rj) parent(max(ri, rj)) = min(ri, rj)
-   end subroutine join
 
    !> Local coordinates in body b of the point initially at x: A(-phi0)(x - c0).
    pure function body_local(self, b, x) result(s)

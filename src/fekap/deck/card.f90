@@ -3,10 +3,11 @@
 !> (COOR, COORD and COORDINATES all match COORDINATES; COORX does not). END is
 !> matched in full.
 module fekap_deck_card
+   use fekap_strings, only: lower, upper
    implicit none
    private
 
-   public :: card_of, card_name, card_list, is_word_of, lower
+   public :: card_of, card_name, card_list, is_word_of
 
    integer, parameter, public :: card_none = 0, card_title = 1, card_sections = 2, card_nodes = 3, &
       & card_links = 4, card_welds = 5, card_supports = 6, card_drives = 7, card_loads = 8, &
@@ -79,25 +80,6 @@ contains
       is_word_of = lower(field) == lower(word(1:len(field)))
    end function is_word_of
 
-   pure function upper(text) result(up)
-      character(*), intent(in) :: text
-      character(len(text)) :: up
-      integer :: i
-      up = text
-      do i = 1, len(text)
-         if (text(i:i) >= 'a' .and. text(i:i) <= 'z') up(i:i) = achar(iachar(text(i:i)) - 32)
-      end do
-   end function upper
 
-   !> `text` in lower case (ASCII letters only).
-   pure function lower(text) result(low)
-      character(*), intent(in) :: text
-      character(len(text)) :: low
-      integer :: i
-      low = text
-      do i = 1, len(text)
-         if (text(i:i) >= 'A' .and. text(i:i) <= 'Z') low(i:i) = achar(iachar(text(i:i)) + 32)
-      end do
-   end function lower
 
 end module fekap_deck_card

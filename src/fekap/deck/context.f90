@@ -5,14 +5,15 @@ module fekap_deck_context
    use fekap_kinds, only: dp
    use fekap_error, only: error_type
    use fekap_model, only: source_loc_type
-   use fekap_deck_card, only: lower, card_of, card_none, card_name
+   use fekap_deck_card, only: card_of, card_none, card_name
+   use fekap_strings, only: lower
    use fekap_deck_diagnostic, only: diagnostics_type, mark_type
    use fekap_deck_expression, only: evaluate_expression, evaluate_integer
    use fekap_deck_source, only: source_type
    implicit none
    private
 
-   public :: context_type, same_name
+   public :: context_type
 
    !> A deck being read.
    type :: context_type
@@ -226,11 +227,5 @@ contains
       end do
    end function context_require
 
-   !> Case-insensitive comparison of names.
-   pure logical function same_name(a, b)
-      character(*), intent(in) :: a, b
-      same_name = len(a) == len(b)
-      if (same_name) same_name = lower(a) == lower(b)
-   end function same_name
 
 end module fekap_deck_context

@@ -16,6 +16,7 @@
 module fekap_deck_expression
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
+   use fekap_strings, only: lower
    implicit none
    private
 
@@ -527,14 +528,5 @@ contains
       is_letter = (c >= 'a' .and. c <= 'z') .or. (c >= 'A' .and. c <= 'Z')
    end function is_letter
 
-   pure function lower(text) result(low)
-      character(*), intent(in) :: text
-      character(len(text)) :: low
-      integer :: i
-      low = text
-      do i = 1, len(text)
-         if (text(i:i) >= 'A' .and. text(i:i) <= 'Z') low(i:i) = achar(iachar(text(i:i)) + 32)
-      end do
-   end function lower
 
 end module fekap_deck_expression

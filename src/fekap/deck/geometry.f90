@@ -5,8 +5,9 @@ module fekap_deck_geometry
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, section_type, node_type, link_type, weld_type, support_type, &
       & find_node, find_link, model_size, dof_x, dof_y, dof_rot
-   use fekap_deck_card, only: lower, is_word_of
-   use fekap_deck_context, only: context_type, same_name
+   use fekap_deck_card, only: is_word_of
+   use fekap_strings, only: lower, same_name
+   use fekap_deck_context, only: context_type
    use fekap_deck_expression, only: safe_multiply
    implicit none
    private

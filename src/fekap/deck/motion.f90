@@ -8,8 +8,9 @@ module fekap_deck_motion
       & dof_x, dof_y, dof_rot, joint_pin_in_slot, joint_prismatic
    use fekap_model_drive_law, only: law_type, new_rate_law, new_harmonic_law, new_polynomial_law, &
       & new_table_law, law_rate, law_harmonic, law_polynomial, law_table
-   use fekap_deck_card, only: lower, is_word_of
-   use fekap_deck_context, only: context_type, same_name
+   use fekap_deck_card, only: is_word_of
+   use fekap_strings, only: lower, same_name
+   use fekap_deck_context, only: context_type
    use fekap_deck_expression, only: safe_add, safe_multiply
    use fekap_deck_geometry, only: has_end, welded, lookup_node, lookup_link, max_coordinate
    implicit none

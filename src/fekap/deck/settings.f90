@@ -5,7 +5,8 @@ module fekap_deck_settings
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
       & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, find_node, find_link
-   use fekap_deck_card, only: lower, is_word_of
+   use fekap_deck_card, only: is_word_of
+   use fekap_strings, only: lower
    use fekap_deck_context, only: context_type
    use fekap_deck_expression, only: safe_add
    implicit none

@@ -5,6 +5,7 @@
 module fekap_model
    use fekap_kinds, only: dp
    use fekap_model_drive_law, only: law_type
+   use fekap_strings, only: same_name
    implicit none
    private
 
@@ -226,21 +227,5 @@ contains
       if (size_ <= 0) size_ = 1
    end function model_size
 
-   pure logical function same_name(a, b)
-      character(*), intent(in) :: a, b
-      integer :: i, ca, cb
-      same_name = len(a) == len(b)
-      if (.not. same_name) return
-      do i = 1, len(a)
-         ca = iachar(a(i:i))
-         cb = iachar(b(i:i))
-         if (ca >= iachar('A') .and. ca <= iachar('Z')) ca = ca + 32
-         if (cb >= iachar('A') .and. cb <= iachar('Z')) cb = cb + 32
-         if (ca /= cb) then
-            same_name = .false.
-            return
-         end if
-      end do
-   end function same_name
 
 end module fekap_model
