@@ -9,8 +9,7 @@ module test_mechanisms
    implicit none
    private
 
-   public :: fourbar_model, fourbar_exact, add_node, add_link, cantilever_model, slider_crank_model, &
-      & slider_crank_exact
+   public :: fourbar_model, add_node, add_link, cantilever_model, slider_crank_model
 
    real(dp), parameter :: pi = acos(-1.0_dp)
 
@@ -83,34 +82,6 @@ contains
       model%output%links = [1, 2, 3]
    end subroutine fourbar_model
 
-   !> Closed-form Example 1 at time t: B and C (upper branch: C to the left of
-   !> B->D) and their first and second time derivatives, from circle
-   !> intersection and the differentiated loop constraints.
-   pure subroutine fourbar_exact(t, b, c, vb, vc, ab, ac)
-      real(dp), intent(in) :: t
-      real(dp), intent(out) :: b(2), c(2), vb(2), vc(2), ab(2), ac(2)
-      real(dp), parameter :: l1 = 2, l2 = 4, l3 = 4, dx(2) = [4.0_dp, 0.0_dp]
-      real(dp) :: th, w, e(2), dist, along, h, m(2, 2), rhs(2), det
-      th = 2*pi*t
-      w = 2*pi
-      b = l1*[cos(th), sin(th)]
-      vb = l1*w*[-sin(th), cos(th)]
-      ab = -w**2*b
-      dist = norm2(dx - b)
-      e = (dx - b)/dist
-      along = (l2**2 - l3**2 + dist**2)/(2*dist)
-      h = sqrt(l2**2 - along**2)
-      c = b + along*e + h*[-e(2), e(1)]
-      ! (C - B).(vc - vb) = 0, (C - D).vc = 0
-      m(1, :) = c - b
-      m(2, :) = c - dx
-      rhs = [dot_product(c - b, vb), 0.0_dp]
-      det = m(1, 1)*m(2, 2) - m(1, 2)*m(2, 1)
-      vc = [rhs(1)*m(2, 2) - m(1, 2)*rhs(2), m(1, 1)*rhs(2) - rhs(1)*m(2, 1)]/det
-      ! (C - B).(ac - ab) + |vc - vb|^2 = 0, (C - D).ac + |vc|^2 = 0
-      rhs = [dot_product(c - b, ab) - sum((vc - vb)**2), -sum(vc**2)]
-      ac = [rhs(1)*m(2, 2) - m(1, 2)*rhs(2), m(1, 1)*rhs(2) - rhs(1)*m(2, 1)]/det
-   end subroutine fourbar_exact
 
    !> A cantilever R-T of length 1 along +x, clamped at R, meshed with nelem
    !> elements, under an end moment M = t * 2*pi*EI/L at T (EI = 1).
@@ -194,22 +165,5 @@ contains
       model%output%links = [1, 2]
    end subroutine slider_crank_model
 
-   !> Closed-form slider position x = cos(th) + sqrt(9 - sin(th)^2), th = 2*pi*t,
-   !> and its first and second time derivatives.
-   pure subroutine slider_crank_exact(t, x, v, a)
-      real(dp), intent(in) :: t
-      real(dp), intent(out) :: x, v, a
-      real(dp) :: th, w, s, c, root, d1, d2
-      th = 2*pi*t
-      w = 2*pi
-      s = sin(th)
-      c = cos(th)
-      root = sqrt(9 - s**2)
-      x = c + root
-      d1 = -s - s*c/root
-      d2 = -c - (c**2 - s**2)/root - s**2*c**2/root**3
-      v = w*d1
-      a = w**2*d2
-   end subroutine slider_crank_exact
 
 end module test_mechanisms

@@ -6,8 +6,8 @@ module test_solver_fem
       & convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
-   use test_mechanisms, only: fourbar_model, fourbar_exact, cantilever_model, slider_crank_model, &
-      & slider_crank_exact
+   use test_mechanisms, only: fourbar_model, cantilever_model, slider_crank_model
+   use classical_models, only: four_bar_exact, slider_crank_exact
    implicit none
    private
    public :: collect_solver_fem
@@ -57,7 +57,7 @@ contains
             if (allocated(error)) return
             total = total + res%iterations
          end if
-         call fourbar_exact(res%t, b, c, vb, vc, ab, ac)
+         call four_bar_exact(res%t, b, vb, ab, c, vc, ac)
          err(1) = max(err(1), maxval(abs(res%pos(:, 2) - b))/2, maxval(abs(res%pos(:, 3) - c))/4)
          if (model%analysis%velocities) err(2) = max(err(2), maxval(abs(res%vel(:, 2) - vb))/(4*acos(-1.0_dp)), &
             & maxval(abs(res%vel(:, 3) - vc))/(4*acos(-1.0_dp)))
