@@ -82,6 +82,7 @@ contains
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
       character(len=160) :: line
+      integer :: i
       mesh_text = ''
       select case (model%analysis%method)
       case (method_fem)
@@ -91,6 +92,11 @@ contains
             & fem%mesh%ndof, ' dofs, ', fem%mesh%nfree, ' equations, ', fem%mesh%ndriven, &
             & ' driven; half-bandwidth ', fem%mesh%kd
          mesh_text = trim(line)
+         do i = 1, size(fem%mesh%slides)
+            write (line, '(a,es12.5,a,es12.5)') 'slideline '//model%slidelines(i)%name//': penalty ', &
+               & fem%mesh%slides(i)%kp, ', rotational tie ', fem%mesh%slides(i)%kr
+            mesh_text = mesh_text//new_line('a')//'  '//trim(line)
+         end do
          call move_alloc(fem, stepper)
       case (method_cartesian)
          allocate (cartesian)

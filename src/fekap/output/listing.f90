@@ -203,6 +203,7 @@ contains
       write (unit, '(2x,a30,i12)') 'velocity solves', counts%velocity_solves
       write (unit, '(2x,a30,i12)') 'acceleration solves', counts%acceleration_solves
       write (unit, '(2x,a30,i12)') 'slideline evaluations', counts%slideline_evaluations
+      write (unit, '(2x,a30,es12.3)') 'smallest pivot ratio', counts%min_pivot_ratio
       write (unit, '(2x,a30,i12)') 'rows written', rows
       write (unit, '(2x,a30,f12.4)') 'time in analysis (s)', seconds(1)
       write (unit, '(2x,a30,f12.4)') '  of which assembly (s)', counts%seconds_assembly

@@ -31,8 +31,12 @@ module fekap_solver_fem
    !> A Newton correction longer than this many model sizes is divergence.
    real(dp), parameter :: divergence_length = 1.0e3_dp
    !> Pivot ratios (see band_pivot_ratio) below which the tangent at a
-   !> configuration counts as singular, and as near-singular (a warning).
-   real(dp), parameter :: singular_pivot = 1.0e-12_dp, near_singular_pivot = 1.0e-6_dp
+   !> configuration counts as singular, and, relative to the largest ratio met
+   !> so far in the run, as near-singular (a warning). The ratio itself also
+   !> reflects the elements' bending-to-shear stiffness (4 EI / (kGA L^2),
+   !> 2e-7 for the 474-long lever of Example 5), so only its drop means a
+   !> stationary configuration.
+   real(dp), parameter :: singular_pivot = 1.0e-13_dp, near_singular_drop = 1.0e-3_dp
    !> Configurations kept for the extrapolating predictor (quadratic extrapolation).
    integer, parameter :: history = 3
 
@@ -65,6 +69,8 @@ module fekap_solver_fem
       real(dp), allocatable :: r(:), rhs(:, :), qt(:), work(:)
       !> Step cuts in the last advance, for the listing.
       integer :: last_cuts = 0
+      !> Largest pivot ratio of a rate tangent so far (the reference for near-singular warnings).
+      real(dp) :: reference_pivot = 0
       !> Remark on the accepted configuration for the listing (empty if none).
       character(:), allocatable :: note
       !> Master segment of each slideline: during the step, and at the accepted configuration.
@@ -551,12 +557,14 @@ contains
       call refactor_at_accepted(self, info)
       ratio = 0
       if (info == 0) ratio = self%kff%pivot_ratio()
+      self%counts%min_pivot_ratio = min(self%counts%min_pivot_ratio, ratio)
+      self%reference_pivot = max(self%reference_pivot, ratio)
       if (ratio < singular_pivot) then
          write (note, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent has no inverse): '// &
             & 'velocities and accelerations are left out of this step'
          self%note = trim(note)
          return
-      else if (ratio < near_singular_pivot) then
+      else if (ratio < near_singular_drop*self%reference_pivot) then
          write (note, '(a,es12.5,a,es9.2,a)') 't = ', self%t, ': near a stationary configuration (pivot ratio ', ratio, &
             & '): velocities and accelerations are ill-conditioned'
          self%note = trim(note)

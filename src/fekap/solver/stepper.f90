@@ -21,6 +21,9 @@ module fekap_solver_stepper
       integer :: velocity_solves = 0
       integer :: acceleration_solves = 0
       integer :: slideline_evaluations = 0
+      !> Smallest pivot ratio of the tangents used for velocities (1: none computed),
+      !> a measure of how close the run came to a singular configuration.
+      real(dp) :: min_pivot_ratio = 1
       !> Wall-clock seconds in residual/tangent assembly, factorisations and solves.
       real(dp) :: seconds_assembly = 0
       real(dp) :: seconds_factorisation = 0
