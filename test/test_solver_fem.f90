@@ -22,6 +22,7 @@ contains
          & new_unittest('fem_advance_rates_vs_differences', test_rates_fd), &
          & new_unittest('fem_advance_material_independence', test_material), &
          & new_unittest('fem_advance_several_elements', test_several_elements), &
+         & new_unittest('fem_advance_full_integration', test_full_integration), &
          & new_unittest('fem_start', test_start), &
          & new_unittest('fem_advance_cantilever_rollup', test_rollup), &
          & new_unittest('fem_advance_rollup_convergence_rate', test_rollup_rate), &
@@ -163,6 +164,18 @@ contains
       if (allocated(error)) return
       call check(error, maxval(err), 0.0_dp, 'four elements per link', abs=1.0e-9_dp)
    end subroutine test_several_elements
+
+   !> Full (two-point) integration moves rigid links exactly too.
+   subroutine test_full_integration(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(model_type) :: model
+      real(dp) :: err(3), iters
+      call fourbar_model(model, 0.05_dp, nelem=2)
+      model%analysis%gauss_points = 2
+      call run_fourbar(model, err, iters, error)
+      if (allocated(error)) return
+      call check(error, maxval(err), 0.0_dp, 'two Gauss points, two elements per link', abs=1.0e-9_dp)
+   end subroutine test_full_integration
 
    subroutine test_start(error)
       type(error_type), allocatable, intent(out) :: error
