@@ -64,10 +64,27 @@ contains
          do i = 1, 6
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do
-         call scatter(mesh, mesh%edof(:, e), ke, kff, kfd)
+         call scatter_element(mesh%scatter_map(:, :, e), ke, kff, kfd)
       end do
       call add_contact(mesh, q, seg, r, kff, kfd)
    end subroutine assemble_tangent
+
+   !> Add an element tangent through its precomputed scatter map.
+   pure subroutine scatter_element(map, ke, kff, kfd)
+      integer, intent(in) :: map(:, :)
+      real(dp), intent(in) :: ke(36)
+      type(band_matrix_type), intent(inout) :: kff
+      real(dp), intent(inout) :: kfd(:, :)
+      integer :: k
+      do k = 1, 36
+         select case (map(1, k))
+         case (1)
+            kff%a(map(2, k), map(3, k)) = kff%a(map(2, k), map(3, k)) + ke(k)
+         case (2)
+            kfd(map(2, k), map(3, k)) = kfd(map(2, k), map(3, k)) + ke(k)
+         end select
+      end do
+   end subroutine scatter_element
 
    !> Add ke on the dofs `dofs` (0: no dof, a fixed ground point) to the
    !> free-free band and the free-driven block.

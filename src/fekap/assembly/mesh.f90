@@ -78,6 +78,10 @@ module fekap_assembly_mesh
       !> (ndof): external nodal loads at unit load factor.
       real(dp), allocatable :: f_ext(:)
       type(slide_type), allocatable :: slides(:)
+      !> (3, 36, nelem): where entry k = i + 6 (j - 1) of element e's tangent goes:
+      !> (1, row, column) of the band storage, (2, equation, drive) of the
+      !> free-driven block, or (0, 0, 0) nowhere (fixed dofs, lower triangle).
+      integer, allocatable :: scatter_map(:, :, :)
    end type mesh_type
 
 contains
@@ -199,6 +203,7 @@ contains
       call set_status(self, model)
       call new_slides(self, model, first_interior)
       call number_equations(self)
+      call build_scatter_map(self)
 
       allocate (self%q0(self%ndof), source=0.0_dp)
       do ip = 1, np
@@ -449,6 +454,29 @@ contains
       end subroutine bfs_levels
 
    end subroutine number_equations
+
+   !> Destinations of every element tangent entry (see mesh_type%scatter_map),
+   !> so that assembly adds without looking up equation numbers.
+   pure subroutine build_scatter_map(self)
+      type(mesh_type), intent(inout) :: self
+      integer :: e, i, j, ei, ej, dj
+      allocate (self%scatter_map(3, 36, size(self%elements)), source=0)
+      do e = 1, size(self%elements)
+         do j = 1, 6
+            dj = self%edof(j, e)
+            ej = self%eq(dj)
+            do i = 1, 6
+               ei = self%eq(self%edof(i, e))
+               if (ei == 0) cycle
+               if (ej > 0) then
+                  if (ei <= ej) self%scatter_map(:, i + 6*(j - 1), e) = [1, self%kd + 1 + ei - ej, ej]
+               else if (self%drive_col(dj) > 0) then
+                  self%scatter_map(:, i + 6*(j - 1), e) = [2, ei, self%drive_col(dj)]
+               end if
+            end do
+         end do
+      end do
+   end subroutine build_scatter_map
 
    !> Dof groups that the tangent couples: every element, and every slideline
    !> (slave translations and tie rotation with every master point's translations).
