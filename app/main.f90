@@ -136,6 +136,17 @@ contains
          close (mesh_unit)
       end if
       if (model%output%listing) call open_file(outdir//'/'//stem//'.lis', units%listing, error)
+      if (allocated(error)) return
+      if (model%output%vtk) then
+         call execute_command_line('mkdir -p "'//outdir//'/vtk"', exitstat=stat)
+         if (stat /= 0) then
+            call fatal_error(error, outdir//'/vtk: cannot create the VTK directory')
+            return
+         end if
+         units%vtk = .true.
+         units%outdir = outdir
+         units%stem = stem
+      end if
    end subroutine open_outputs
 
    !> Open a file for writing, replacing it.

@@ -10,6 +10,7 @@ program tester
    use test_classical_cartesian, only: collect_classical_cartesian
    use test_deck_expression, only: collect_deck_expression
    use test_deck, only: collect_deck
+   use test_output_vtk, only: collect_output_vtk
    implicit none
 
    abstract interface
@@ -38,6 +39,7 @@ program tester
    call run('classical_cartesian', collect_classical_cartesian)
    call run('deck_expression', collect_deck_expression)
    call run('deck', collect_deck)
+   call run('output_vtk', collect_output_vtk)
 
    if (failed > 0) error stop 1
 

@@ -6,7 +6,7 @@ module fekap_model_results
    implicit none
    private
 
-   public :: step_result_type, new_step_result
+   public :: step_result_type, new_step_result, fill_fields_from_nodes
 
    type :: step_result_type
       integer :: step = 0
@@ -45,5 +45,22 @@ contains
       allocate (self%pos(2, nnode), self%vel(2, nnode), self%acc(2, nnode), source=0.0_dp)
       allocate (self%angle(nlink), self%omega(nlink), self%alpha(nlink), source=0.0_dp)
    end subroutine new_step_result
+
+   !> The field output of a method without a mesh (the classical methods):
+   !> points are the model's nodes, cells its links (cell l is link l), and
+   !> the stress resultants are zero (rigid links carry no computed forces).
+   pure subroutine fill_fields_from_nodes(result, links_nodes)
+      type(step_result_type), intent(inout) :: result
+      !> (2, number of links): indices into the nodes of each link's ends.
+      integer, intent(in) :: links_nodes(:, :)
+      integer :: l
+      result%mesh_pos = result%pos
+      result%mesh_vel = result%vel
+      result%mesh_acc = result%acc
+      result%cells = links_nodes
+      result%cell_link = [(l, l=1, size(links_nodes, 2))]
+      if (allocated(result%cell_force)) deallocate (result%cell_force)
+      allocate (result%cell_force(3, size(links_nodes, 2)), source=0.0_dp)
+   end subroutine fill_fields_from_nodes
 
 end module fekap_model_results

@@ -185,12 +185,14 @@ contains
    end subroutine write_listing_step
 
    !> Closing summary: counts of the work done and time per phase.
-   subroutine write_listing_summary(unit, counts, rows, seconds)
+   subroutine write_listing_summary(unit, counts, rows, seconds, vtk_files)
       integer, intent(in) :: unit
       type(work_counts_type), intent(in) :: counts
       integer, intent(in) :: rows
       !> Time in analysis, output and total.
       real(dp), intent(in) :: seconds(3)
+      !> Number of VTK step files written, when VTK output was asked for.
+      integer, intent(in), optional :: vtk_files
       write (unit, '(/,a)') 'SUMMARY'
       write (unit, '(2x,a30,i12)') 'configurations solved', counts%steps
       write (unit, '(2x,a30,i12)') 'Newton iterations', counts%iterations
@@ -205,6 +207,7 @@ contains
       write (unit, '(2x,a30,i12)') 'slideline evaluations', counts%slideline_evaluations
       write (unit, '(2x,a30,es12.3)') 'smallest pivot ratio', counts%min_pivot_ratio
       write (unit, '(2x,a30,i12)') 'rows written', rows
+      if (present(vtk_files)) write (unit, '(2x,a30,i12)') 'VTK files written', vtk_files
       write (unit, '(2x,a30,f12.4)') 'time in analysis (s)', seconds(1)
       write (unit, '(2x,a30,f12.4)') '  of which assembly (s)', counts%seconds_assembly
       write (unit, '(2x,a30,f12.4)') '  of which factorisation (s)', counts%seconds_factorisation

@@ -3,14 +3,15 @@
 !> early keeps every completed step.
 module fekap_solver_run
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, analysis_error
+   use fekap_error, only: error_type, analysis_error, fatal_error
    use fekap_model, only: model_type
-   use fekap_model_results, only: step_result_type, new_step_result
+   use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes
    use fekap_solver_stepper, only: stepper_type
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
       & write_steps_header, write_steps_row
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop
+   use fekap_output_vtk, only: write_vtu, write_pvd
    implicit none
    private
 
@@ -20,12 +21,31 @@ module fekap_solver_run
    integer, parameter, public :: no_unit = -huge(1)
 
    !> Open units of the output files; no_unit for a file that is not written.
+   !> VTK output is many files, opened by the loop: with `vtk`, each written
+   !> step goes to `<outdir>/vtk/<stem>_<step>.vtu` (the directory must exist)
+   !> and the collection `<outdir>/<stem>.pvd` is rewritten after each of them.
    type :: run_units_type
       integer :: points = no_unit
       integer :: links = no_unit
       integer :: steps = no_unit
       integer :: listing = no_unit
+      logical :: vtk = .false.
+      !> The output directory and the deck's stem, for the VTK file names.
+      character(:), allocatable :: outdir, stem
    end type run_units_type
+
+   !> What the loop keeps between VTK steps.
+   type :: vtk_state_type
+      !> The fields come from the model's nodes and links (a method without a mesh).
+      logical :: from_nodes = .false.
+      !> (2, nlink): end nodes of each link, for from_nodes.
+      integer, allocatable :: links_nodes(:, :)
+      !> (2, npoint): point positions at the first step.
+      real(dp), allocatable :: initial_pos(:, :)
+      !> Time and step number of every file written so far.
+      real(dp), allocatable :: times(:)
+      integer, allocatable :: steps(:)
+   end type vtk_state_type
 
 contains
 
@@ -60,7 +80,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(step_result_type) :: result
       type(error_type), allocatable :: step_error
-      integer :: n, nsteps, rows
+      type(vtk_state_type) :: vtk
+      integer :: n, nsteps, rows, l
       integer(8) :: clock_rate, c0, c1, c_start
       real(dp) :: seconds(3)
       character(len=100) :: where_
@@ -77,6 +98,12 @@ contains
       if (units%links /= no_unit) call write_links_header(units%links, vel, acc)
       if (units%steps /= no_unit) call write_steps_header(units%steps)
       if (units%listing /= no_unit) call write_listing_step_header(units%listing)
+      if (units%vtk) then
+         allocate (vtk%links_nodes(2, size(model%links)), vtk%times(0), vtk%steps(0))
+         do l = 1, size(model%links)
+            vtk%links_nodes(:, l) = model%links(l)%node
+         end do
+      end if
 
       do n = 0, nsteps
          call system_clock(c0)
@@ -98,6 +125,12 @@ contains
             end if
             exit
          end if
+         if (units%vtk) then
+            ! A method that fills no mesh fields at its start fills none later.
+            if (n == 0) vtk%from_nodes = .not. allocated(result%mesh_pos)
+            if (vtk%from_nodes) call fill_fields_from_nodes(result, vtk%links_nodes)
+            if (n == 0) vtk%initial_pos = result%mesh_pos
+         end if
          if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
             if (units%points /= no_unit) call write_points_rows(units%points, model, result, vel, acc)
             if (units%links /= no_unit) call write_links_rows(units%links, model, result, vel, acc)
@@ -105,6 +138,13 @@ contains
             if (units%listing /= no_unit) call write_listing_step(units%listing, result)
             rows = rows + size(model%output%points) + size(model%output%links) + 1
             call flush_all(units)
+            if (units%vtk) then
+               call write_vtk_step(units, model, result, vtk, error)
+               if (allocated(error)) then
+                  if (units%listing /= no_unit) call write_listing_stop(units%listing, error%message)
+                  exit
+               end if
+            end if
          end if
          if (allocated(result%note) .and. units%listing /= no_unit) then
             if (len(result%note) > 0) write (units%listing, '(10x,a)') 'note: step '//trim(int_text(n))//', '// &
@@ -116,10 +156,59 @@ contains
       call system_clock(c1)
       seconds(3) = real(c1 - c_start, dp)/clock_rate
       if (units%listing /= no_unit) then
-         call write_listing_summary(units%listing, stepper%counts, rows, seconds)
+         if (units%vtk) then
+            call write_listing_summary(units%listing, stepper%counts, rows, seconds, vtk_files=size(vtk%steps))
+         else
+            call write_listing_summary(units%listing, stepper%counts, rows, seconds)
+         end if
          flush (units%listing)
       end if
    end subroutine run_analysis
+
+   !> Write the step's .vtu file and rewrite the .pvd collection with it added.
+   subroutine write_vtk_step(units, model, result, vtk, error)
+      type(run_units_type), intent(in) :: units
+      type(model_type), intent(in) :: model
+      type(step_result_type), intent(in) :: result
+      type(vtk_state_type), intent(inout) :: vtk
+      type(error_type), allocatable, intent(out) :: error
+      character(len=len(units%stem) + 24), allocatable :: files(:)
+      integer :: unit, i
+      vtk%times = [vtk%times, result%t]
+      vtk%steps = [vtk%steps, result%step]
+      allocate (files(size(vtk%steps)))
+      do i = 1, size(vtk%steps)
+         files(i) = vtu_name(units%stem, vtk%steps(i))
+      end do
+      call open_replace(units%outdir//'/'//trim(files(size(files))), unit, error)
+      if (allocated(error)) return
+      call write_vtu(unit, model, result, vtk%initial_pos)
+      close (unit)
+      call open_replace(units%outdir//'/'//units%stem//'.pvd', unit, error)
+      if (allocated(error)) return
+      call write_pvd(unit, vtk%times, files)
+      close (unit)
+   end subroutine write_vtk_step
+
+   !> `vtk/<stem>_<step, at least 6 digits>.vtu`, relative to the output directory.
+   pure function vtu_name(stem, step) result(name)
+      character(*), intent(in) :: stem
+      integer, intent(in) :: step
+      character(:), allocatable :: name
+      character(len=12) :: digits
+      write (digits, '(i0.6)') step
+      name = 'vtk/'//stem//'_'//trim(digits)//'.vtu'
+   end function vtu_name
+
+   !> Open a file for writing, replacing it.
+   subroutine open_replace(path, unit, error)
+      character(*), intent(in) :: path
+      integer, intent(out) :: unit
+      type(error_type), allocatable, intent(out) :: error
+      integer :: ios
+      open (newunit=unit, file=path, status='replace', action='write', iostat=ios)
+      if (ios /= 0) call fatal_error(error, path//': cannot write this file')
+   end subroutine open_replace
 
    pure function int_text(n) result(text)
       integer, intent(in) :: n
