@@ -269,7 +269,7 @@ contains
             end if
             model%output%every = every
          else if (is_word_of(key, 'files', 4)) then
-            if (.not. ctx%require(iline, 'files csv|listing|vtk ...', 'a files line')) cycle
+            if (.not. ctx%require(iline, 'files csv|listing|vtk [...]', 'a files line')) cycle
             model%output%csv = .false.
             model%output%listing = .false.
             model%output%vtk = .false.
