@@ -98,20 +98,25 @@ def scissor_case(binary: str, work: Path, cells: int, solver: str, repeat: int) 
     runs = []
     for k in range(repeat):
         result = fb.run_deck(binary, deck, work / f"out-scissor-{cells}-{solver}-{k}", measure_memory=True)
-        if result["rc"] != 0 or "summary" not in result:
+        if result["rc"] not in (0, 3) or not result.get("summary"):
             raise SystemExit(f"fekap failed on {deck} (exit {result['rc']}):\n{result['stderr']}")
         s = result["summary"]
         n = s["configurations solved"]
+        its = max(1, s["Newton iterations"])
         runs.append({
-            "ms_per_config": 1e3 * s["time in analysis (s)"] / n,
-            "factorisation_ms": 1e3 * s["of which factorisation (s)"] / n,
-            "iterations_per_step": s["Newton iterations"] / max(1, n - 1),
+            "rc": result["rc"],
+            "ms_per_config": 1e3 * s["time in analysis (s)"] / n if result["rc"] == 0 else float("nan"),
+            "ms_per_iteration": 1e3 * s["time in analysis (s)"] / its,
+            "factorisation_ms_per_iteration": 1e3 * s["of which factorisation (s)"] / its,
+            "iterations_per_step": s["Newton iterations"] / max(1, n - 1) if result["rc"] == 0 else float("nan"),
             "rss_mb": result.get("rss_kb", 0) / 1024,
             "setup_s": result["wall"] - s["total time (s)"],
         })
         plan = result["plan"]
         shutil.rmtree(result["outdir"], ignore_errors=True)
     median = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+    median["status"] = "ok" if all(r["rc"] == 0 for r in runs) else \
+        "did not converge: " + result["stderr"].strip().split(": ", 1)[-1][:160]
     median.update({"cells": cells, "solver": solver, "equations": plan.get("equations", 0),
                    "half_bandwidth": plan.get("half_bandwidth", 0), "repeat": repeat})
     return median
@@ -131,13 +136,19 @@ def fourbar_table(cases: dict) -> str:
 
 
 def scissor_table(cases: list[dict]) -> str:
-    head = ("| N cells | solver | equations | half-bandwidth | ms/config | of which factorisation "
-            "| Newton its/step | peak RSS (MB) | deck reading + setup (s) | runs |\n"
-            "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    head = ("| N cells | solver | equations | half-bandwidth | ms/config | ms/Newton iteration "
+            "| of which factorisation | Newton its/step | peak RSS (MB) | deck reading + setup (s) | runs |\n"
+            "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     rows = [f"| {c['cells']} | {c['solver']} | {c['equations']} | {c['half_bandwidth']} | "
-            f"{c['ms_per_config']:.4g} | {c['factorisation_ms']:.4g} | {c['iterations_per_step']:.2f} | "
+            f"{num(c['ms_per_config'])} | {num(c['ms_per_iteration'])} | "
+            f"{num(c['factorisation_ms_per_iteration'])} | {num(c['iterations_per_step'], '.2f')} | "
             f"{c['rss_mb']:.1f} | {c['setup_s']:.2f} | {c['repeat']} |" for c in cases]
-    return head + "\n" + "\n".join(rows)
+    notes = [f"- N = {c['cells']} ({c['solver']}): {c['status']}" for c in cases if c["status"] != "ok"]
+    return head + "\n" + "\n".join(rows) + ("\n\n" + "\n".join(notes) if notes else "")
+
+
+def num(value: float, form: str = ".4g") -> str:
+    return "-" if value != value else format(value, form)
 
 
 def plot_scissor(cases: list[dict], path: Path) -> None:
@@ -148,16 +159,16 @@ def plot_scissor(cases: list[dict], path: Path) -> None:
     for solver, marker in (("band", "o-"), ("dense", "s--")):
         sel = [c for c in cases if c["solver"] == solver]
         if sel:
-            ax.loglog([c["cells"] for c in sel], [c["ms_per_config"] for c in sel], marker,
+            ax.loglog([c["cells"] for c in sel], [c["ms_per_iteration"] for c in sel], marker,
                       label=f"{solver} solver")
     band = [c for c in cases if c["solver"] == "band"]
     if band:
-        n0, t0 = band[0]["cells"], band[0]["ms_per_config"]
+        n0, t0 = band[0]["cells"], band[0]["ms_per_iteration"]
         ns = [c["cells"] for c in band]
         ax.loglog(ns, [t0 * n / n0 for n in ns], ":", color="grey", label="slope 1 (linear)")
     ax.set_xlabel("cells N")
-    ax.set_ylabel("time per configuration (ms)")
-    ax.set_title("Scissor lift: time per configuration vs size")
+    ax.set_ylabel("analysis time per Newton iteration (ms)")
+    ax.set_title("Scissor lift: cost per Newton iteration vs size")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.tight_layout()
@@ -173,14 +184,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, help="repetitions per case (default 5, quick 1)")
     parser.add_argument("--dt", type=float, help="time step of Example 1 (default 1e-4, quick 1e-3)")
     parser.add_argument("--no-scissor", action="store_true", help="skip the scissor-lift scaling runs")
-    parser.add_argument("--sizes", help="scissor cells, comma-separated (default 10,100,1000,10000)")
+    parser.add_argument("--sizes", help="scissor cells, comma-separated (default 10,100,1000,3000,10000)")
     parser.add_argument("--dense-sizes", help="scissor cells for the dense solver (default 10,100)")
     parser.add_argument("--bin", help="fekap executable (default: $FEKAP_BIN, else build/local/bin/fekap)")
     parser.add_argument("--no-docs", action="store_true", help="do not write docs/performance*")
     args = parser.parse_args(argv)
     repeat = args.repeat or (1 if args.quick else 5)
     dt = args.dt or (1e-3 if args.quick else 1e-4)
-    sizes = [int(x) for x in (args.sizes or ("10,30" if args.quick else "10,100,1000,10000")).split(",") if x]
+    sizes = [int(x) for x in (args.sizes or ("10,30" if args.quick else "10,100,1000,3000,10000")).split(",") if x]
     dense_sizes = [int(x) for x in (args.dense_sizes or ("10" if args.quick else "10,100")).split(",") if x]
     write_docs = not (args.quick or args.no_docs)
     binary = fb.fekap_binary(args.bin)
@@ -212,13 +223,14 @@ def main(argv: list[str] | None = None) -> int:
               "(analysis time), peak RSS")
         for solver, ns in (("band", sizes), ("dense", dense_sizes)):
             for cells in ns:
-                reps = 1 if (cells >= 10000 or (solver == "dense" and cells >= 100)) else min(repeat, 3)
+                reps = 1 if (cells >= 3000 or (solver == "dense" and cells >= 100)) else min(repeat, 3)
                 c = scissor_case(binary, work, cells, solver, reps)
                 scissor_cases.append(c)
                 print(f"  N = {cells:6d} {solver:5s} {c['equations']:7d} equations, half-bandwidth "
-                      f"{c['half_bandwidth']:3d}: {c['ms_per_config']:10.4f} ms/config "
-                      f"(factorisation {c['factorisation_ms']:.4f}), {c['iterations_per_step']:.2f} its/step, "
-                      f"peak RSS {c['rss_mb']:.1f} MB, reading + setup {c['setup_s']:.2f} s")
+                      f"{c['half_bandwidth']:3d}: {c['ms_per_config']:10.4f} ms/config, "
+                      f"{c['ms_per_iteration']:.4f} ms/iteration (factorisation "
+                      f"{c['factorisation_ms_per_iteration']:.4f}), {c['iterations_per_step']:.2f} its/step, "
+                      f"peak RSS {c['rss_mb']:.1f} MB, reading + setup {c['setup_s']:.2f} s; {c['status']}")
 
     shutil.rmtree(work, ignore_errors=True)
     if write_docs:
