@@ -3,9 +3,13 @@
 !> geometric stiffness makes Newton tangents indefinite), a pivoting band LU
 !> (dgbtrf/dgbtrs) of the same matrix. LAPACK has no symmetric indefinite
 !> band solver.
+!>
+!> A matrix made with `dense=.true.` keeps the same band assembly storage but
+!> factors and solves the matrix as a full n x n array with dgetrf/dgetrs: a
+!> reference for the cost of the band solver, not a production path.
 module fekap_assembly_band
    use fekap_kinds, only: dp
-   use fekap_assembly_lapack, only: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dpbcon, dgbcon
+   use fekap_assembly_lapack, only: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dpbcon, dgbcon, dgetrf, dgetrs, dgecon
    implicit none
    private
 
@@ -22,6 +26,10 @@ module fekap_assembly_band
       integer, allocatable :: ipiv(:)
       !> Whether the factor in f is an LU (the fallback) rather than a Cholesky factor.
       logical :: is_lu = .false.
+      !> Dense mode: factor the full matrix with dgetrf into fd (every factor is an LU).
+      logical :: dense = .false.
+      !> Dense LU factor (dense mode only).
+      real(dp), allocatable :: fd(:, :)
       !> 1-norm of the factored matrix, for the condition estimate.
       real(dp) :: anorm = 0
       !> Diagonal of the factored matrix, to measure its pivots against.
@@ -39,12 +47,19 @@ module fekap_assembly_band
 contains
 
    !> Allocate an n x n band matrix of half-bandwidth kd (all storage, once).
-   pure subroutine new_band_matrix(self, n, kd)
+   pure subroutine new_band_matrix(self, n, kd, dense)
       type(band_matrix_type), intent(out) :: self
       integer, intent(in) :: n, kd
+      !> Factor as a full matrix with dgetrf/dgetrs (default .false.).
+      logical, intent(in), optional :: dense
       self%n = n
       self%kd = kd
-      allocate (self%a(kd + 1, n), self%f(3*kd + 1, n), source=0.0_dp)
+      if (present(dense)) self%dense = dense
+      if (self%dense) then
+         allocate (self%a(kd + 1, n), self%f(0, 0), self%fd(n, n), source=0.0_dp)
+      else
+         allocate (self%a(kd + 1, n), self%f(3*kd + 1, n), source=0.0_dp)
+      end if
       allocate (self%ipiv(n), source=0)
       allocate (self%diag(n), source=0.0_dp)
    end subroutine new_band_matrix
@@ -74,6 +89,10 @@ contains
       ld = size(self%f, 1)
       self%anorm = one_norm(self)
       self%diag = self%a(kd + 1, :)
+      if (self%dense) then
+         call dense_factor(self, info)
+         return
+      end if
       self%f(1:kd + 1, :) = self%a
       self%is_lu = .false.
       call dpbtrf('U', self%n, kd, self%f, ld, info)
@@ -93,13 +112,33 @@ contains
       call dgbtrf(self%n, self%n, kd, kd, self%f, ld, self%ipiv, info)
    end subroutine band_factor
 
+   !> Dense mode: expand the symmetric band into the full matrix and factor it
+   !> by LU with partial pivoting (dgetrf).
+   pure subroutine dense_factor(self, info)
+      type(band_matrix_type), intent(inout) :: self
+      integer, intent(out) :: info
+      integer :: i, j, kd
+      kd = self%kd
+      self%is_lu = .true.
+      self%fd = 0
+      do j = 1, self%n
+         do i = max(1, j - kd), j
+            self%fd(i, j) = self%a(kd + 1 + i - j, j)
+            self%fd(j, i) = self%a(kd + 1 + i - j, j)
+         end do
+      end do
+      call dgetrf(self%n, self%n, self%fd, self%n, self%ipiv, info)
+   end subroutine dense_factor
+
    !> Solve A x = b in place with the factor (b may hold several columns).
    pure subroutine band_solve(self, b)
       class(band_matrix_type), intent(in) :: self
       real(dp), intent(inout) :: b(:, :)
       integer :: info
       if (self%n == 0) return
-      if (self%is_lu) then
+      if (self%dense) then
+         call dgetrs('N', self%n, size(b, 2), self%fd, self%n, self%ipiv, b, size(b, 1), info)
+      else if (self%is_lu) then
          call dgbtrs('N', self%n, self%kd, self%kd, size(b, 2), self%f, size(self%f, 1), self%ipiv, &
             & b, size(b, 1), info)
       else
@@ -115,8 +154,10 @@ contains
       integer :: info
       rcond = 1
       if (self%n == 0) return
-      allocate (work(3*self%n), iwork(self%n))
-      if (self%is_lu) then
+      allocate (work(4*self%n), iwork(self%n))
+      if (self%dense) then
+         call dgecon('1', self%n, self%fd, self%n, self%anorm, rcond, work, iwork, info)
+      else if (self%is_lu) then
          call dgbcon('1', self%n, self%kd, self%kd, self%f, size(self%f, 1), self%ipiv, self%anorm, &
             & rcond, work, iwork, info)
       else
@@ -134,7 +175,9 @@ contains
       real(dp) :: pivot
       ratio = 1
       do j = 1, self%n
-         if (self%is_lu) then
+         if (self%dense) then
+            pivot = abs(self%fd(j, j))
+         else if (self%is_lu) then
             pivot = abs(self%f(2*self%kd + 1, j))
          else
             pivot = self%f(self%kd + 1, j)**2

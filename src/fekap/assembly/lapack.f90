@@ -4,7 +4,7 @@ module fekap_assembly_lapack
    implicit none
    private
 
-   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dpbcon, dgbcon
+   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dpbcon, dgbcon, dgetrf, dgetrs, dgecon
 
    interface
       !> Cholesky factorisation of a symmetric positive definite band matrix.
@@ -70,6 +70,38 @@ module fekap_assembly_lapack
          integer, intent(inout) :: iwork(*)
          integer, intent(out) :: info
       end subroutine dgbcon
+
+      !> LU factorisation with partial pivoting of a general (dense) matrix.
+      pure subroutine dgetrf(m, n, a, lda, ipiv, info)
+         import :: dp
+         integer, intent(in) :: m, n, lda
+         real(dp), intent(inout) :: a(lda, *)
+         integer, intent(out) :: ipiv(*)
+         integer, intent(out) :: info
+      end subroutine dgetrf
+
+      !> Solve with the factor of dgetrf.
+      pure subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+         import :: dp
+         character, intent(in) :: trans
+         integer, intent(in) :: n, nrhs, lda, ldb
+         real(dp), intent(in) :: a(lda, *)
+         integer, intent(in) :: ipiv(*)
+         real(dp), intent(inout) :: b(ldb, *)
+         integer, intent(out) :: info
+      end subroutine dgetrs
+
+      !> Reciprocal condition number from the factor of dgetrf.
+      subroutine dgecon(norm, n, a, lda, anorm, rcond, work, iwork, info)
+         import :: dp
+         character, intent(in) :: norm
+         integer, intent(in) :: n, lda
+         real(dp), intent(in) :: a(lda, *), anorm
+         real(dp), intent(out) :: rcond
+         real(dp), intent(inout) :: work(*)
+         integer, intent(inout) :: iwork(*)
+         integer, intent(out) :: info
+      end subroutine dgecon
    end interface
 
 end module fekap_assembly_lapack

@@ -4,7 +4,8 @@
 module fekap_deck_settings
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
-      & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, find_node, find_link
+      & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, find_node, find_link, &
+      & solver_band, solver_dense
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower
    use fekap_deck_context, only: context_type
@@ -41,13 +42,13 @@ contains
    end subroutine read_title
 
    !> ANALysis: `method`, `time`, `compute`, `tolerance`, `length`, `iterations`,
-   !> `predictor`, `convergence`, `gauss`, `redundant` lines; then the time span is checked.
+   !> `predictor`, `convergence`, `gauss`, `redundant`, `solver` lines; then the time span is checked.
    subroutine read_analysis(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
       character(*), parameter :: keys = 'method time compute tolerance length iterations predictor convergence '// &
-         & 'gauss redundant'
+         & 'gauss redundant solver'
       integer :: i, iline, k, time_line, ivalue
       real(dp) :: t(3), span, v
       logical :: ok, fine
@@ -156,6 +157,14 @@ contains
             case (2)
                model%analysis%remove_redundant = .true.
             end select
+         else if (is_word_of(key, 'solver', 4)) then
+            if (.not. one_value('solver band|dense')) cycle
+            select case (choice(2, 'band dense'))
+            case (1)
+               model%analysis%solver = solver_band
+            case (2)
+               model%analysis%solver = solver_dense
+            end select
          else
             call ctx%error(iline, 1, "unknown ANALysis parameter '"//ctx%field(iline, 1)//"'", label='allowed: '//keys)
          end if
@@ -261,7 +270,7 @@ contains
             end if
             model%output%every = every
          else if (is_word_of(key, 'files', 4)) then
-            if (.not. ctx%require(iline, 'files csv|listing|vtk ...', 'a files line')) cycle
+            if (.not. ctx%require(iline, 'files csv|listing|vtk [...]', 'a files line')) cycle
             model%output%csv = .false.
             model%output%listing = .false.
             model%output%vtk = .false.

@@ -26,6 +26,9 @@ module fekap_model
    !> Convergence tests: the paper's ||P(i)||/||P(0)|| < tol, or FEKAP's
    !> default (residual against the drive-increment scale and a correction length test).
    integer, parameter, public :: convergence_paper = 1, convergence_default = 2
+   !> Linear solvers of the finite element method: the symmetric band solver
+   !> (default), or a dense LU of the same matrix (for comparison).
+   integer, parameter, public :: solver_band = 1, solver_dense = 2
    !> Slideline kinds: the paper's pin-in-slot (slave rotation free) or a
    !> prismatic joint (slave link keeps its angle relative to the master).
    integer, parameter, public :: joint_pin_in_slot = 1, joint_prismatic = 2
@@ -145,6 +148,8 @@ module fekap_model
       integer :: gauss_points = 1
       !> Cartesian method: drop redundant constraint equations instead of stopping.
       logical :: remove_redundant = .false.
+      !> Linear solver of the finite element method: solver_band or solver_dense.
+      integer :: solver = solver_band
    end type analysis_type
 
    !> What to write.

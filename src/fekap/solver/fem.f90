@@ -84,6 +84,7 @@ contains
 
    !> Build the mesh, the equation numbering and all storage for a validated model.
    subroutine new_fem_stepper(self, model)
+      use fekap_model, only: solver_dense
       type(fem_stepper_type), intent(out) :: self
       type(model_type), intent(in) :: model
       integer :: i, e
@@ -91,7 +92,7 @@ contains
       self%model = model
       call new_mesh(self%mesh, model)
       associate (n => self%mesh%ndof, nf => self%mesh%nfree, nd => self%mesh%ndriven)
-         call new_band_matrix(self%kff, nf, self%mesh%kd)
+         call new_band_matrix(self%kff, nf, self%mesh%kd, dense=model%analysis%solver == solver_dense)
          allocate (self%kfd(nf, nd), self%rhs(nf, 1), self%law0(nd))
          allocate (self%q(n), self%v(n), self%a(n), self%r(n), self%qt(n), self%work(n), source=0.0_dp)
          allocate (self%hist(n, history), self%thist(history), source=0.0_dp)

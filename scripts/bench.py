@@ -1,0 +1,261 @@
+#!/usr/bin/env python3
+"""FEKAP's performance benchmarks (run through scripts/bench, which builds the
+release binary first).
+
+1. Example 1 (decks/fourbar.deck) at dt = 1e-4 over one revolution (10,000
+   configurations): microseconds per configuration for positions only,
+   positions + velocities, and positions + velocities + accelerations, each
+   with CSV output of two tracked points (`files csv listing`, track B C) and
+   without (`files listing`); Newton iterations per step and the split of the
+   analysis time into assembly, factorisation, solves and the rest, and the
+   output time, all from the listing's SUMMARY. Each case is run --repeat
+   times; the median is reported.
+
+     per configuration "analysis" = listing's "time in analysis" / configurations
+     per configuration "total"    = listing's "total time" (analysis + output) / configurations
+
+   Neither includes reading the deck or starting the process.
+
+2. Scale: scissor lifts of N cells (scripts/scissor.py), time per
+   configuration, peak RSS and half-bandwidth for N = 10 ... 10,000 with the
+   band solver, and with a dense LU (ANALysis `solver dense`) where feasible.
+
+The last line printed is
+
+  fourbar us_per_config_full=X us_per_config_positions=X us_per_config_with_output=X iterations_per_step=X
+
+(full and positions: analysis time without output files; with_output: total
+time, full kinematics, CSV of B and C written.)
+
+Without --quick the figures also go to docs/performance.md (between the
+bench markers), docs/performance/bench.json and docs/performance/scissor.png.
+
+Usage: scripts/bench [--quick] [--repeat N] [--no-scissor] [--sizes 10,100,1000,10000]
+                     [--dense-sizes 10,100] [--bin FEKAP] [--no-docs]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import statistics
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import fekap_bench as fb  # noqa: E402
+import scissor  # noqa: E402
+
+COMPUTE = {
+    "positions": "positions",
+    "velocities": "positions velocities",
+    "full": "positions velocities accelerations",
+}
+FILES = {"no_output": "listing", "with_output": "csv listing"}
+# The scissor lifts: a tolerance the largest one can meet (see docs/performance.md).
+SCISSOR_TOL = "1e-6"
+SCISSOR_DT = 0.1
+
+
+def fourbar_case(binary: str, work: Path, dt: float, compute: str, files: str, repeat: int) -> dict:
+    """Median figures of `repeat` runs of Example 1 with these settings."""
+    deck = work / f"fourbar-{compute}-{files}.deck"
+    text = (fb.ROOT / "decks" / "fourbar.deck").read_text()
+    deck.write_text(fb.with_settings(text, {"time": f"0 1 {dt!r}", "compute": COMPUTE[compute]},
+                                     {"track": "B C", "files": FILES[files]}))
+    runs = []
+    for k in range(repeat):
+        result = fb.run_deck(binary, deck, work / f"out-{compute}-{files}-{k}")
+        if result["rc"] != 0 or "summary" not in result:
+            raise SystemExit(f"fekap failed on {deck} (exit {result['rc']}):\n{result['stderr']}")
+        s = result["summary"]
+        n = s["configurations solved"]
+        runs.append({
+            "configs": n,
+            "analysis_us": 1e6 * s["time in analysis (s)"] / n,
+            "total_us": 1e6 * s["total time (s)"] / n,
+            "output_us": 1e6 * s["time in output (s)"] / n,
+            "assembly_us": 1e6 * s["of which assembly (s)"] / n,
+            "factorisation_us": 1e6 * s["of which factorisation (s)"] / n,
+            "solves_us": 1e6 * s["of which solves (s)"] / n,
+            "wall_us": 1e6 * result["wall"] / n,
+            "iterations_per_step": s["Newton iterations"] / max(1, n - 1),
+        })
+        shutil.rmtree(result["outdir"], ignore_errors=True)
+    median = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+    median["other_us"] = median["analysis_us"] - median["assembly_us"] - median["factorisation_us"] \
+        - median["solves_us"]
+    median["spread_analysis_us"] = (min(r["analysis_us"] for r in runs), max(r["analysis_us"] for r in runs))
+    return median
+
+
+def scissor_case(binary: str, work: Path, cells: int, solver: str, repeat: int) -> dict:
+    """Time per configuration, peak RSS and bandwidth of an N-cell scissor lift."""
+    deck = work / f"scissor-{cells}-{solver}.deck"
+    text = scissor.deck_text(cells, dt=SCISSOR_DT, solver=solver, files="listing")
+    deck.write_text(fb.with_settings(text, {"tolerance": SCISSOR_TOL}))
+    runs = []
+    for k in range(repeat):
+        result = fb.run_deck(binary, deck, work / f"out-scissor-{cells}-{solver}-{k}", measure_memory=True)
+        if result["rc"] not in (0, 3) or not result.get("summary"):
+            raise SystemExit(f"fekap failed on {deck} (exit {result['rc']}):\n{result['stderr']}")
+        s = result["summary"]
+        n = s["configurations solved"]
+        its = max(1, s["Newton iterations"])
+        runs.append({
+            "rc": result["rc"],
+            "ms_per_config": 1e3 * s["time in analysis (s)"] / n if result["rc"] == 0 else float("nan"),
+            "ms_per_iteration": 1e3 * s["time in analysis (s)"] / its,
+            "factorisation_ms_per_iteration": 1e3 * s["of which factorisation (s)"] / its,
+            "iterations_per_step": s["Newton iterations"] / max(1, n - 1) if result["rc"] == 0 else float("nan"),
+            "rss_mb": result.get("rss_kb", 0) / 1024,
+            "setup_s": result["wall"] - s["total time (s)"],
+        })
+        plan = result["plan"]
+        shutil.rmtree(result["outdir"], ignore_errors=True)
+    median = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+    median["status"] = "ok" if all(r["rc"] == 0 for r in runs) else \
+        "did not converge: " + result["stderr"].strip().split(": ", 1)[-1][:160]
+    median.update({"cells": cells, "solver": solver, "equations": plan.get("equations", 0),
+                   "half_bandwidth": plan.get("half_bandwidth", 0), "repeat": repeat})
+    return median
+
+
+def fourbar_table(cases: dict) -> str:
+    head = ("| computed | output | us/config analysis | us/config total | assembly | factorisation "
+            "| solves | other analysis | output | Newton its/step |\n"
+            "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    rows = []
+    for (compute, files), c in cases.items():
+        rows.append(f"| {COMPUTE[compute].replace(' ', ' + ')} | {FILES[files]} | {c['analysis_us']:.2f} "
+                    f"| {c['total_us']:.2f} | {c['assembly_us']:.2f} | {c['factorisation_us']:.2f} "
+                    f"| {c['solves_us']:.2f} | {c['other_us']:.2f} | {c['output_us']:.2f} "
+                    f"| {c['iterations_per_step']:.3f} |")
+    return head + "\n" + "\n".join(rows)
+
+
+def scissor_table(cases: list[dict]) -> str:
+    head = ("| N cells | solver | equations | half-bandwidth | ms/config | ms/Newton iteration "
+            "| of which factorisation | Newton its/step | peak RSS (MB) | deck reading + setup (s) | runs |\n"
+            "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    rows = [f"| {c['cells']} | {c['solver']} | {c['equations']} | {c['half_bandwidth']} | "
+            f"{num(c['ms_per_config'])} | {num(c['ms_per_iteration'])} | "
+            f"{num(c['factorisation_ms_per_iteration'])} | {num(c['iterations_per_step'], '.2f')} | "
+            f"{c['rss_mb']:.1f} | {c['setup_s']:.2f} | {c['repeat']} |" for c in cases]
+    notes = [f"- N = {c['cells']} ({c['solver']}): {c['status']}" for c in cases if c["status"] != "ok"]
+    return head + "\n" + "\n".join(rows) + ("\n\n" + "\n".join(notes) if notes else "")
+
+
+def num(value: float, form: str = ".4g") -> str:
+    return "-" if value != value else format(value, form)
+
+
+def plot_scissor(cases: list[dict], path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for solver, marker in (("band", "o-"), ("dense", "s--")):
+        sel = [c for c in cases if c["solver"] == solver]
+        if sel:
+            ax.loglog([c["cells"] for c in sel], [c["ms_per_iteration"] for c in sel], marker,
+                      label=f"{solver} solver")
+    band = [c for c in cases if c["solver"] == "band"]
+    if band:
+        n0, t0 = band[0]["cells"], band[0]["ms_per_iteration"]
+        ns = [c["cells"] for c in band]
+        ax.loglog(ns, [t0 * n / n0 for n in ns], ":", color="grey", label="slope 1 (linear)")
+    ax.set_xlabel("cells N")
+    ax.set_ylabel("analysis time per Newton iteration (ms)")
+    ax.set_title("Scissor lift: cost per Newton iteration vs size")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description="FEKAP benchmarks")
+    parser.add_argument("--quick", action="store_true",
+                        help="reduced run for the tests: dt = 1e-3, 1 repetition, small scissors, no docs")
+    parser.add_argument("--repeat", type=int, help="repetitions per case (default 5, quick 1)")
+    parser.add_argument("--dt", type=float, help="time step of Example 1 (default 1e-4, quick 1e-3)")
+    parser.add_argument("--no-scissor", action="store_true", help="skip the scissor-lift scaling runs")
+    parser.add_argument("--sizes", help="scissor cells, comma-separated (default 10,100,1000,3000,10000)")
+    parser.add_argument("--dense-sizes", help="scissor cells for the dense solver (default 10,100)")
+    parser.add_argument("--bin", help="fekap executable (default: $FEKAP_BIN, else build/local/bin/fekap)")
+    parser.add_argument("--no-docs", action="store_true", help="do not write docs/performance*")
+    args = parser.parse_args(argv)
+    repeat = args.repeat or (1 if args.quick else 5)
+    dt = args.dt or (1e-3 if args.quick else 1e-4)
+    sizes = [int(x) for x in (args.sizes or ("10,30" if args.quick else "10,100,1000,3000,10000")).split(",") if x]
+    dense_sizes = [int(x) for x in (args.dense_sizes or ("10" if args.quick else "10,100")).split(",") if x]
+    write_docs = not (args.quick or args.no_docs)
+    binary = fb.fekap_binary(args.bin)
+    work = fb.scratch_dir("fekap-bench-")
+    info = fb.machine()
+    print(f"machine: {info['nproc']} x {info['cpu']}; {info['gfortran']}; BLAS {info['blas']}")
+    print(f"binary: {binary}")
+
+    print(f"\nExample 1, dt = {dt:g} ({round(1 / dt)} steps), median of {repeat} run(s); "
+          "us per configuration")
+    cases = {}
+    for files in FILES:
+        for compute in COMPUTE:
+            c = fourbar_case(binary, work, dt, compute, files, repeat)
+            cases[(compute, files)] = c
+            print(f"  {COMPUTE[compute]:36s} {FILES[files]:12s} analysis {c['analysis_us']:8.2f}  "
+                  f"total {c['total_us']:8.2f}  (assembly {c['assembly_us']:.2f}, factorisation "
+                  f"{c['factorisation_us']:.2f}, solves {c['solves_us']:.2f}, other {c['other_us']:.2f}, "
+                  f"output {c['output_us']:.2f}; {c['iterations_per_step']:.3f} its/step; "
+                  f"analysis range {c['spread_analysis_us'][0]:.2f}-{c['spread_analysis_us'][1]:.2f})")
+    print("  simulate only what a deck calls for (analysis time, no output files): "
+          f"positions {cases[('positions', 'no_output')]['analysis_us']:.2f} us, "
+          f"+velocities {cases[('velocities', 'no_output')]['analysis_us']:.2f} us, "
+          f"+accelerations {cases[('full', 'no_output')]['analysis_us']:.2f} us per configuration")
+
+    scissor_cases: list[dict] = []
+    if not args.no_scissor:
+        print(f"\nScissor lift, dt = {SCISSOR_DT}, tolerance {SCISSOR_TOL}: per configuration "
+              "(analysis time), peak RSS")
+        for solver, ns in (("band", sizes), ("dense", dense_sizes)):
+            for cells in ns:
+                reps = 1 if (cells >= 3000 or (solver == "dense" and cells >= 100)) else min(repeat, 3)
+                c = scissor_case(binary, work, cells, solver, reps)
+                scissor_cases.append(c)
+                print(f"  N = {cells:6d} {solver:5s} {c['equations']:7d} equations, half-bandwidth "
+                      f"{c['half_bandwidth']:3d}: {c['ms_per_config']:10.4f} ms/config, "
+                      f"{c['ms_per_iteration']:.4f} ms/iteration (factorisation "
+                      f"{c['factorisation_ms_per_iteration']:.4f}), {c['iterations_per_step']:.2f} its/step, "
+                      f"peak RSS {c['rss_mb']:.1f} MB, reading + setup {c['setup_s']:.2f} s; {c['status']}")
+
+    shutil.rmtree(work, ignore_errors=True)
+    if write_docs:
+        doc = fb.ROOT / "docs" / "performance.md"
+        fb.replace_block(doc, "bench-machine",
+                         f"- nproc: {info['nproc']}\n- CPU: {info['cpu']}\n- compiler: {info['gfortran']}\n"
+                         f"- BLAS/LAPACK: {info['blas']}")
+        fb.replace_block(doc, "bench-fourbar",
+                         f"Example 1, dt = {dt:g} ({round(1 / dt)} steps, {round(1 / dt) + 1} configurations), "
+                         f"median of {repeat} runs, microseconds per configuration:\n\n" + fourbar_table(cases))
+        if scissor_cases:
+            fb.replace_block(doc, "bench-scissor", scissor_table(scissor_cases))
+            plot_scissor(scissor_cases, fb.ROOT / "docs" / "performance" / "scissor.png")
+        record = {"machine": info, "dt": dt, "repeat": repeat,
+                  "fourbar": {f"{k[0]}/{k[1]}": v for k, v in cases.items()}, "scissor": scissor_cases}
+        (fb.ROOT / "docs" / "performance").mkdir(parents=True, exist_ok=True)
+        (fb.ROOT / "docs" / "performance" / "bench.json").write_text(json.dumps(record, indent=1) + "\n")
+
+    full = cases[("full", "no_output")]
+    print(f"fourbar us_per_config_full={full['analysis_us']:.3f} "
+          f"us_per_config_positions={cases[('positions', 'no_output')]['analysis_us']:.3f} "
+          f"us_per_config_with_output={cases[('full', 'with_output')]['total_us']:.3f} "
+          f"iterations_per_step={full['iterations_per_step']:.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

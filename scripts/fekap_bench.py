@@ -1,0 +1,156 @@
+"""Shared pieces of FEKAP's benchmark and study scripts: the executable, running
+a deck, reading the listing's SUMMARY and PLAN, and rewriting generated blocks
+of the docs between markers."""
+
+from __future__ import annotations
+
+import csv
+import os
+import re
+import subprocess
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RELEASE_BIN = ROOT / "build" / "local" / "bin" / "fekap"
+
+
+def fekap_binary(explicit: str | None = None) -> str:
+    """The fekap executable: an explicit path, else $FEKAP_BIN, else the release build."""
+    for candidate in (explicit, os.environ.get("FEKAP_BIN"), str(RELEASE_BIN)):
+        if candidate and Path(candidate).is_file():
+            return str(Path(candidate).resolve())
+    raise SystemExit("no fekap executable: run scripts/build first (or set FEKAP_BIN)")
+
+
+def scratch_dir(prefix: str) -> Path:
+    return Path(tempfile.mkdtemp(prefix=prefix))
+
+
+def with_settings(deck_text: str, analysis: dict[str, str] | None = None,
+                  output: dict[str, str] | None = None) -> str:
+    """The deck with ANALysis / OUTPut settings added (a later value replaces an
+    earlier one, so they are appended as extra blocks just before END)."""
+    lines = deck_text.rstrip("\n").split("\n")
+    end = max(i for i, line in enumerate(lines) if line.strip().upper() == "END")
+    extra: list[str] = []
+    if analysis:
+        extra.append("ANALysis")
+        extra += [f"  {key} {value}" for key, value in analysis.items()]
+    if output:
+        extra.append("OUTPut")
+        extra += [f"  {key} {value}" for key, value in output.items()]
+    return "\n".join(lines[:end] + extra + lines[end:]) + "\n"
+
+
+def run_deck(binary: str, deck: Path, outdir: Path, *options: str,
+             timeout: float = 3600, measure_memory: bool = False) -> dict:
+    """Run fekap on a deck; return the exit code, the wall time, the peak RSS
+    (kB, with /usr/bin/time when asked and available) and the listing's summary."""
+    outdir.mkdir(parents=True, exist_ok=True)
+    command = [binary, "-q", "-o", str(outdir), *options, str(deck)]
+    timefile = outdir / "time.txt"
+    if measure_memory and Path("/usr/bin/time").is_file():
+        command = ["/usr/bin/time", "-f", "%e %M", "-o", str(timefile), *command]
+    import time as _time
+    start = _time.perf_counter()
+    proc = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+    wall = _time.perf_counter() - start
+    result = {"rc": proc.returncode, "wall": wall, "stderr": proc.stderr, "outdir": outdir}
+    if timefile.is_file():
+        fields = timefile.read_text().split()
+        if len(fields) >= 2:
+            result["rss_kb"] = int(fields[-1])
+    listing = outdir / (deck.stem + ".lis")
+    if listing.is_file():
+        result.update(read_listing(listing))
+    return result
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?"
+
+
+def read_listing(path: Path) -> dict:
+    """The SUMMARY entries (label -> number) and the PLAN's half-bandwidth and
+    equation count of a listing."""
+    text = path.read_text()
+    summary: dict[str, float] = {}
+    if "SUMMARY" in text:
+        for line in text.split("SUMMARY", 1)[1].splitlines():
+            match = re.match(rf"^\s*(.+?)\s+({_NUMBER})\s*$", line)
+            if match:
+                summary[match.group(1).strip()] = float(match.group(2))
+    plan: dict[str, int] = {}
+    match = re.search(r"half-bandwidth\s+(\d+)", text)
+    if match:
+        plan["half_bandwidth"] = int(match.group(1))
+    match = re.search(r"(\d+)\s+equations", text)
+    if match:
+        plan["equations"] = int(match.group(1))
+    return {"summary": summary, "plan": plan}
+
+
+def steps(outdir: Path) -> list[dict]:
+    """steps.csv as a list of rows with numbers."""
+    with open(outdir / "steps.csv", newline="") as handle:
+        return [{"step": int(r["step"]), "t": float(r["t"]), "iterations": int(r["iterations"]),
+                 "residual": float(r["residual"]), "cuts": int(r["cuts"])} for r in csv.DictReader(handle)]
+
+
+def points(outdir: Path, name: str) -> list[dict]:
+    """Rows of points.csv for one point, with numbers (empty fields are None)."""
+    with open(outdir / "points.csv", newline="") as handle:
+        rows = [r for r in csv.DictReader(handle) if r["point"] == name]
+    return [{k: (float(v) if v not in ("", None) else None) for k, v in r.items() if k != "point"}
+            for r in rows]
+
+
+def replace_block(path: Path, name: str, content: str) -> None:
+    """Replace the text between <!-- NAME:begin --> and <!-- NAME:end --> in a
+    doc (appending the block if the markers are missing)."""
+    begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
+    block = f"{begin}\n{content.rstrip()}\n{end}"
+    text = path.read_text() if path.is_file() else ""
+    if begin in text and end in text:
+        head, rest = text.split(begin, 1)
+        tail = rest.split(end, 1)[1]
+        text = head + block + tail
+    else:
+        text = text.rstrip() + "\n\n" + block + "\n"
+    path.write_text(text)
+
+
+def machine() -> dict[str, str]:
+    """nproc, the CPU model and the gfortran version."""
+    info = {"nproc": str(os.cpu_count())}
+    try:
+        info["nproc"] = subprocess.run(["nproc"], capture_output=True, text=True).stdout.strip()
+    except OSError:
+        pass
+    cpu = "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    info["cpu"] = cpu
+    try:
+        info["gfortran"] = subprocess.run(["gfortran", "--version"], capture_output=True,
+                                          text=True).stdout.splitlines()[0]
+    except (OSError, IndexError):
+        info["gfortran"] = "unknown"
+    blas = "unknown"
+    try:
+        out = subprocess.run(["ldd", str(RELEASE_BIN)], capture_output=True, text=True).stdout
+        blas = ", ".join(sorted({Path(line.split("=>")[1].split()[0]).name for line in out.splitlines()
+                                 if "=>" in line and ("blas" in line or "lapack" in line)})) or blas
+        resolved = [os.path.realpath(line.split("=>")[1].split()[0]) for line in out.splitlines()
+                    if "=>" in line and "blas" in line]
+        if resolved:
+            blas += f" ({resolved[0]})"
+    except (OSError, IndexError):
+        pass
+    info["blas"] = blas
+    return info

@@ -1,0 +1,119 @@
+#!/usr/bin/env python3
+"""The benchmark and study scripts on reduced sizes: scripts/paper_tables.py
+--short, scripts/bench --quick, scripts/scissor.py (a 3-cell lift against its
+exact platform height, with the band and the dense solver) and
+scripts/accuracy_study.py --short. They run with the executable under test
+($FEKAP_BIN, set by scripts/test) and write nothing into docs/.
+
+Run from the repository root:  python3 test/app/test_scripts.py
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from apptest import ROOT, check, fekap_binary, read_rows, run_fekap, run_suite  # noqa: E402
+
+sys.path.insert(0, str(ROOT / "scripts"))
+import scissor  # noqa: E402
+
+OUT = Path(tempfile.mkdtemp(prefix="fekap-scripts-"))
+LAST_LINE = re.compile(r"^fourbar us_per_config_full=(\S+) us_per_config_positions=(\S+) "
+                       r"us_per_config_with_output=(\S+) iterations_per_step=(\S+)$")
+
+
+def script(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
+    result = subprocess.run([*args], cwd=ROOT, capture_output=True, text=True, timeout=timeout)
+    check(result.returncode == 0, f"{' '.join(args)} exited {result.returncode}:\n{result.stdout[-2000:]}\n"
+                                  f"{result.stderr[-2000:]}")
+    return result
+
+
+def test_paper_tables_short() -> None:
+    out = OUT / "tables.md"
+    result = script(sys.executable, "scripts/paper_tables.py", "--short", "--out", str(out),
+                    "--bin", fekap_binary())
+    text = out.read_text()
+    for method in ("angles", "cartesian", "fem"):
+        check(f"FEKAP paper settings: {method}" in text and f"FEKAP default: {method}" in text,
+              f"the tables lack the {method} columns")
+        check(f"method={method}" in result.stdout, f"no {method} run reported")
+    for dt in ("0.025", "0.25", "0.5"):
+        check(f"dt = {dt}" in text, f"no table for dt = {dt}")
+    # The paper's Table 1 first row, copied exactly.
+    check(re.search(r"^\| 0\.025 \| 5 \| 5 \| 6 \|", text, re.M) is not None, "paper's Table 1 row missing")
+    check("Not Converged" in text, "the paper's Table 3 entry is missing")
+    # Every run with the paper's settings ends on the upper branch; all runs exit 0.
+    for line in result.stdout.splitlines():
+        if line.startswith("dt="):
+            check("exit=0" in line, f"a run failed: {line}")
+    rows = [line for line in text.splitlines() if re.match(r"^\| [0-9.]+ \| \w+ \| paper \|", line)]
+    check(len(rows) == 9 and all("upper (correct)" in row for row in rows),
+          "runs with the paper's settings must end on the upper branch:\n" + "\n".join(rows))
+
+
+def test_bench_quick() -> None:
+    result = script(str(ROOT / "scripts" / "bench"), "--quick", "--no-build", "--bin", fekap_binary(),
+                    "--sizes", "10", "--dense-sizes", "10", timeout=180)
+    lines = result.stdout.strip().splitlines()
+    match = LAST_LINE.match(lines[-1])
+    check(match is not None, f"last line has the wrong format: {lines[-1]!r}")
+    values = [float(v) for v in match.groups()]
+    check(all(v > 0 and math.isfinite(v) for v in values), f"non-positive figures: {lines[-1]}")
+    check(1.0 <= values[3] <= 25, f"iterations per step out of range: {values[3]}")
+    check(any("simulate only what a deck calls for" in line for line in lines), "no positions/full split")
+    check(any("N =     10 dense" in line for line in lines), "no dense scissor run")
+
+
+def test_scissor_height_exact() -> None:
+    cells = 3
+    for solver in ("band", "dense"):
+        deck = OUT / f"scissor3-{solver}.deck"
+        script(sys.executable, "scripts/scissor.py", str(cells), "--out", str(deck), "--solver", solver)
+        outdir = OUT / f"scissor3-{solver}"
+        result = run_fekap("-q", "-o", str(outdir), str(deck))
+        check(result.returncode == 0, f"fekap on {deck} exited {result.returncode}: {result.stderr}")
+        rows = read_rows(outdir / "points.csv")
+        check(len(rows) == 2 * 21, f"expected 2 tracked points x 21 steps, got {len(rows)} rows")
+        worst = max(abs(float(r["y"]) - scissor.platform_height(cells, float(r["t"]))) for r in rows)
+        check(worst <= 1e-9, f"{solver}: platform height off by {worst:.3e}")
+        # The right end sits at 2 cos(theta): the lift closes as theta grows.
+        right = [r for r in rows if r["point"] == f"R{cells}"]
+        worst_x = max(abs(float(r["x"]) - 2 * math.cos(scissor.theta(float(r["t"])))) for r in right)
+        check(worst_x <= 1e-9, f"{solver}: x of R{cells} off by {worst_x:.3e}")
+        if solver == "dense":
+            listing = (outdir / f"{deck.stem}.lis").read_text()
+            check(re.search(r"Cholesky factorisations\s+0$", listing, re.M) is not None,
+                  "the dense solver should factor every tangent by LU")
+
+
+def test_scissor_deck_text() -> None:
+    text = scissor.deck_text(2)
+    check(text.count("\n  M") >= 2 and "R0  y" in text and "L0  pin" in text, "unexpected deck:\n" + text)
+    check(abs(scissor.platform_height(2, 0.0) - 2.0) < 1e-15, "height at theta0 = 30 deg is 2 N sin 30 = N")
+
+
+def test_accuracy_study_short() -> None:
+    result = script(sys.executable, "scripts/accuracy_study.py", "--short", "--bin", fekap_binary(),
+                    timeout=180)
+    rows = [line for line in result.stdout.splitlines() if line.startswith("| ") and "---" not in line][1:]
+    check(len(rows) >= 15, f"too few rows:\n{result.stdout}")
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        study, case, setting, rc, position = cells[:5]
+        if case == "Example 1, default test" or study in ("step", "predictor", "penalty"):
+            check(rc == "0" and float(position) < 1e-12, f"expected round-off accuracy: {row}")
+    rollup = {c[2]: float(c[4]) for c in ([x.strip() for x in r.strip("|").split("|")] for r in rows)
+              if c[1] == "cantilever roll-up"}
+    check(rollup["16 elements"] < rollup["4 elements"] / 8, f"roll-up error does not fall as h^2: {rollup}")
+
+
+if __name__ == "__main__":
+    sys.exit(run_suite("scripts", [test_paper_tables_short, test_bench_quick, test_scissor_height_exact,
+                                   test_scissor_deck_text, test_accuracy_study_short]))
