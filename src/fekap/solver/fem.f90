@@ -166,6 +166,7 @@ contains
       real(dp) :: h, h_full, t_try, residual
       integer :: iterations
       character(len=200) :: note
+      character(:), allocatable :: cut_reason
       h_full = t - self%t
       h = h_full
       self%last_cuts = 0
@@ -183,6 +184,7 @@ contains
                call analysis_error(error, step_error%message//trim(note))
                return
             end if
+            if (.not. allocated(cut_reason)) cut_reason = step_error%message
             deallocate (step_error)
             h = h/2
             cycle
@@ -198,6 +200,15 @@ contains
       result%cuts = self%last_cuts
       call solve_rates(self, error)
       if (allocated(error)) return
+      if (allocated(cut_reason)) then
+         ! The listing says why the step was cut (the first rejection).
+         write (note, '(a,i0,a)') 'step cut ', self%last_cuts, ' time(s); first rejection:'
+         if (len(self%note) > 0) then
+            self%note = trim(note)//' '//cut_reason//'; '//self%note
+         else
+            self%note = trim(note)//' '//cut_reason
+         end if
+      end if
       call fill_result(self, result)
    end subroutine fem_advance
 
