@@ -166,7 +166,7 @@ contains
       real(dp) :: h, h_full, t_try, residual
       integer :: iterations
       character(len=200) :: note
-      character(:), allocatable :: cut_reason
+      character(:), allocatable :: cut_reason, last_reason
       h_full = t - self%t
       h = h_full
       self%last_cuts = 0
@@ -184,7 +184,11 @@ contains
                call analysis_error(error, step_error%message//trim(note))
                return
             end if
-            if (.not. allocated(cut_reason)) cut_reason = step_error%message
+            if (allocated(cut_reason)) then
+               last_reason = step_error%message
+            else
+               cut_reason = step_error%message
+            end if
             deallocate (step_error)
             h = h/2
             cycle
@@ -201,8 +205,9 @@ contains
       call solve_rates(self, error)
       if (allocated(error)) return
       if (allocated(cut_reason)) then
-         ! The listing says why the step was cut (the first rejection).
+         ! The listing says why the step was cut (the first and the last rejection).
          write (note, '(a,i0,a)') 'step cut ', self%last_cuts, ' time(s); first rejection:'
+         if (allocated(last_reason)) cut_reason = cut_reason//'; last rejection: '//last_reason
          if (len(self%note) > 0) then
             self%note = trim(note)//' '//cut_reason//'; '//self%note
          else
