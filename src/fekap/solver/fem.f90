@@ -42,6 +42,9 @@ module fekap_solver_fem
    !> Relative angles within this many pi of a multiple of pi at either end
    !> of a step do not count as crossing it (links that start or end collinear).
    real(dp), parameter :: hinge_margin = 1.0e-9_dp
+   !> Least share of a collinear crossing that the response at the new
+   !> configuration must explain in the crossing sense.
+   real(dp), parameter :: hinge_response = 1.0e-3_dp
 
    type, extends(stepper_type) :: fem_stepper_type
       type(model_type) :: model
@@ -658,7 +661,11 @@ contains
                      ! A multiple of pi strictly inside (lo, hi): the links passed through collinear.
                      if (floor(hi - hinge_margin) < ceiling(lo + hinge_margin)) cycle
                      sense = sign(1.0_dp, psi1 - psi0)
-                     if (sense*(dq_old(r1) - dq_old(r2)) < 0 .or. sense*(dq_new(r1) - dq_new(r2)) < 0) then
+                     ! The response at the new configuration must carry psi through in the crossing
+                     ! sense (a response of zero there is the closest approach of a near-toggle, not a
+                     ! crossing); at the last one it must not oppose it (unknown on the first step).
+                     if (sense*(dq_old(r1) - dq_old(r2)) < 0 .or. &
+                        & sense*(dq_new(r1) - dq_new(r2)) <= hinge_response*abs(psi1 - psi0)) then
                         flip_link = [l1, l2]
                         flip_node = links(l1)%node(e1)
                         return
