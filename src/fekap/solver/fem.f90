@@ -39,6 +39,16 @@ module fekap_solver_fem
    real(dp), parameter :: singular_pivot = 1.0e-13_dp, near_singular_drop = 1.0e-3_dp
    !> Configurations kept for the extrapolating predictor (quadratic extrapolation).
    integer, parameter :: history = 3
+   !> Assembly-mode (branch) jump check: a step is rejected when some rotation
+   !> over the step exceeds this many times what the rates at either end of
+   !> the step, or the drive increment, can explain (see branch_jump).
+   real(dp), parameter :: jump_ratio = 2.0_dp
+   !> Relative angles within this many pi of a multiple of pi at either end
+   !> of a step do not count as crossing it (links that start or end collinear).
+   real(dp), parameter :: hinge_margin = 1.0e-9_dp
+   !> Least share of a collinear crossing that the response at the new
+   !> configuration must explain in the crossing sense.
+   real(dp), parameter :: hinge_response = 1.0e-3_dp
 
    type, extends(stepper_type) :: fem_stepper_type
       type(model_type) :: model
@@ -75,6 +85,12 @@ module fekap_solver_fem
       character(:), allocatable :: note
       !> Master segment of each slideline: during the step, and at the accepted configuration.
       integer, allocatable :: seg(:), seg_accepted(:)
+      !> Linear response of every dof to unit changes of the drives, (ndof,
+      !> ndriven), at the accepted configuration (kept by the branch-jump
+      !> check, whatever rates the run computes) and at the new one; and
+      !> whether the first is known.
+      real(dp), allocatable :: jump_response(:, :), jump_response_new(:, :)
+      logical :: has_jump_response = .false.
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
@@ -96,6 +112,7 @@ contains
          allocate (self%kfd(nf, nd), self%rhs(nf, 1), self%law0(nd))
          allocate (self%q(n), self%v(n), self%a(n), self%r(n), self%qt(n), self%work(n), source=0.0_dp)
          allocate (self%hist(n, history), self%thist(history), source=0.0_dp)
+         allocate (self%jump_response(n, nd), self%jump_response_new(n, nd), source=0.0_dp)
       end associate
       do i = 1, self%mesh%ndriven
          call model%drives(i)%law%eval(model%analysis%t_start, f, df, ddf)
@@ -130,6 +147,7 @@ contains
       if (allocated(error)) return
       self%nhist = 0
       self%factor_current = .false.
+      self%has_jump_response = .false.
       result%iterations = 0
       call assemble_residual(self%mesh, self%q, self%t, self%seg, self%r)
       self%counts%residual_assemblies = self%counts%residual_assemblies + 1
@@ -158,6 +176,7 @@ contains
       real(dp) :: h, h_full, t_try, residual
       integer :: iterations
       character(len=200) :: note
+      character(:), allocatable :: cut_reason, last_reason
       h_full = t - self%t
       h = h_full
       self%last_cuts = 0
@@ -175,6 +194,11 @@ contains
                call analysis_error(error, step_error%message//trim(note))
                return
             end if
+            if (allocated(cut_reason)) then
+               last_reason = step_error%message
+            else
+               cut_reason = step_error%message
+            end if
             deallocate (step_error)
             h = h/2
             cycle
@@ -190,6 +214,16 @@ contains
       result%cuts = self%last_cuts
       call solve_rates(self, error)
       if (allocated(error)) return
+      if (allocated(cut_reason)) then
+         ! The listing says why the step was cut (the first and the last rejection).
+         write (note, '(a,i0,a)') 'step cut ', self%last_cuts, ' time(s); first rejection:'
+         if (allocated(last_reason)) cut_reason = cut_reason//'; last rejection: '//last_reason
+         if (len(self%note) > 0) then
+            self%note = trim(note)//' '//cut_reason//'; '//self%note
+         else
+            self%note = trim(note)//' '//cut_reason
+         end if
+      end if
       call fill_result(self, result)
    end subroutine fem_advance
 
@@ -289,6 +323,8 @@ contains
                return
             end if
             call check_gaps(self, t, qt, error)
+            if (allocated(error)) return
+            call branch_jump(self, t, qt, iterations, error)
             if (allocated(error)) return
          end if
          call accept(self, t, qt)
@@ -506,6 +542,147 @@ contains
          end if
       end do
    end subroutine check_gaps
+
+   !> Assembly-mode (branch) jump check. A converged, unstrained configuration
+   !> may still lie on another assembly branch than the last one: Newton from a
+   !> poor predictor can cross over. What the drive increment dd of the step
+   !> explains is its linear response, dq = R dd with R = -K_ff^-1 K_fd the
+   !> response to unit drive changes, at either end of the step: R at the new
+   !> configuration comes from the last Newton factor (one back substitution
+   !> per drive), R at the last one is kept from the last step. Two tests:
+   !> * magnitude: every rotation unknown changes by |d| <= jump_ratio * B with
+   !>   B = max(|dq_n|, |dq|, drive increment) (rotation drives in radians,
+   !>   translation drives in lengths of the shortest link);
+   !> * orientation (hinge_flip): two hinged links that pass through
+   !>   collinear within the step must do so in the sense of the response.
+   !> Rotations and responses to the drive increment are scale-free.
+   subroutine branch_jump(self, t, qt, iterations, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, qt(:)
+      integer, intent(in) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: f, df, ddf, f0, floor, shortest, bound, ratio, worst, dd(self%mesh%ndriven)
+      integer :: i, j, l, worst_dof, flip_link(2), flip_node
+      logical :: has_response
+      character(len=200) :: msg
+      associate (mesh => self%mesh, eqd => self%mesh%eq_dof, dq_new => self%work, dq_old => self%r, &
+         & resp => self%jump_response_new)
+         shortest = huge(1.0_dp)
+         do l = 1, size(self%model%links)
+            shortest = min(shortest, norm2(self%model%nodes(self%model%links(l)%node(2))%x - &
+               & self%model%nodes(self%model%links(l)%node(1))%x))
+         end do
+         floor = 0
+         do j = 1, mesh%ndriven
+            call self%model%drives(j)%law%eval(t, f, df, ddf)
+            call self%model%drives(j)%law%eval(self%t, f0, df, ddf)
+            dd(j) = f - f0
+            if (mesh%dof_kind(mesh%driven_dof(j)) == dof_rot) then
+               floor = max(floor, abs(dd(j)))
+            else
+               floor = max(floor, abs(dd(j))/shortest)
+            end if
+         end do
+         ! Response at the new configuration from the last Newton factor (if
+         ! it was factored in this step and is not singular).
+         has_response = iterations > 0
+         if (has_response) has_response = self%kff%pivot_ratio() >= singular_pivot
+         resp = 0
+         if (has_response) then
+            do j = 1, mesh%ndriven
+               self%rhs(:, 1) = -self%kfd(:, j)
+               call self%kff%solve(self%rhs)
+               resp(eqd, j) = self%rhs(:, 1)
+               resp(mesh%driven_dof(j), j) = 1
+            end do
+         end if
+         dq_new = matmul(resp, dd)
+         dq_old = 0
+         if (self%has_jump_response) dq_old = matmul(self%jump_response, dd)
+         worst = 0
+         worst_dof = 0
+         do i = 1, mesh%ndof
+            if (mesh%dof_kind(i) /= dof_rot) cycle
+            bound = max(floor, abs(dq_new(i)), abs(dq_old(i)))
+            if (bound > 0) then
+               ratio = abs(qt(i) - self%q(i))/bound
+            else
+               ratio = merge(0.0_dp, huge(1.0_dp), abs(qt(i) - self%q(i)) <= 0)
+            end if
+            if (ratio > worst) then
+               worst = ratio
+               worst_dof = i
+            end if
+         end do
+         call hinge_flip(self, qt, dq_old, dq_new, flip_link, flip_node)
+         if (worst > jump_ratio) then
+            write (msg, '(a,es12.5,a,f9.4,a,es9.2,a)') 't = ', t, ': assembly-mode jump rejected (rotation ', &
+               & qt(worst_dof) - self%q(worst_dof), ' rad over the step, ', worst, &
+               & ' times what the drive increment explains) at'
+            call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, worst_dof))
+            self%factor_current = .false.
+            return
+         end if
+         if (flip_link(1) > 0) then
+            write (msg, '(a,es12.5,a)') 't = ', t, ': assembly-mode jump rejected (links'
+            call analysis_error(error, trim(msg)//' '//self%model%links(flip_link(1))%name//' and '// &
+               & self%model%links(flip_link(2))%name//' at node '//self%model%nodes(flip_node)%name// &
+               & ' passed through collinear against the drive increment''s sense)')
+            self%factor_current = .false.
+            return
+         end if
+         self%jump_response = resp
+         self%has_jump_response = has_response
+      end associate
+   end subroutine branch_jump
+
+   !> Orientation part of the branch-jump check. Two links hinged at a node
+   !> have a relative angle psi; in a continuous motion psi crosses k pi (the
+   !> links collinear) in the sense in which the drive increment moves it. A
+   !> jump to the mirror assembly mode near a flattened configuration (a
+   !> fold) crosses against the linear response at the start or at the end of
+   !> the step. Returns the first such pair of links (flip_link(1) = 0 if
+   !> none) and their node. A zero response (not known) does not object.
+   subroutine hinge_flip(self, qt, dq_old, dq_new, flip_link, flip_node)
+      type(fem_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: qt(:), dq_old(:), dq_new(:)
+      integer, intent(out) :: flip_link(2), flip_node
+      integer :: l1, l2, e1, e2, r1, r2
+      real(dp) :: psi0, psi1, lo, hi, sense, pi
+      pi = acos(-1.0_dp)
+      flip_link = 0
+      flip_node = 0
+      associate (mesh => self%mesh, links => self%model%links)
+         do l1 = 1, size(links)
+            do l2 = l1 + 1, size(links)
+               do e1 = 1, 2
+                  do e2 = 1, 2
+                     if (links(l1)%node(e1) /= links(l2)%node(e2)) cycle
+                     r1 = mesh%link_rot(e1, l1)
+                     r2 = mesh%link_rot(e2, l2)
+                     if (r1 == r2) cycle
+                     psi0 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + self%q(r1) - self%q(r2)
+                     psi1 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + qt(r1) - qt(r2)
+                     lo = min(psi0, psi1)/pi
+                     hi = max(psi0, psi1)/pi
+                     ! A multiple of pi strictly inside (lo, hi): the links passed through collinear.
+                     if (floor(hi - hinge_margin) < ceiling(lo + hinge_margin)) cycle
+                     sense = sign(1.0_dp, psi1 - psi0)
+                     ! The response at the new configuration must carry psi through in the crossing
+                     ! sense (a response of zero there is the closest approach of a near-toggle, not a
+                     ! crossing); at the last one it must not oppose it (unknown on the first step).
+                     if (sense*(dq_old(r1) - dq_old(r2)) < 0 .or. &
+                        & sense*(dq_new(r1) - dq_new(r2)) <= hinge_response*abs(psi1 - psi0)) then
+                        flip_link = [l1, l2]
+                        flip_node = links(l1)%node(e1)
+                        return
+                     end if
+                  end do
+               end do
+            end do
+         end do
+      end associate
+   end subroutine hinge_flip
 
    !> Make q at time t the accepted configuration and push it on the history.
    subroutine accept(self, t, q)

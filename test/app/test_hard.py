@@ -1,0 +1,386 @@
+#!/usr/bin/env python3
+"""Hard cases for the FEM: large steps with every predictor, assembly-mode
+jumps that must be caught, singular and near-singular configurations, extreme
+section and penalty data, a 1,000-revolution run, sliders crossing master
+elements, and runs stopped by signals or by non-convergence.
+
+Every case either matches an independent exact answer (closed-form geometry in
+hyper-dual numbers, as in test_examples.py) or ends with the documented
+diagnostic; no NaN or Inf may reach any output file. docs/hard-cases.md
+explains each case and the numbers measured.
+
+Run from the repository root:  python3 test/app/test_hard.py
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from apptest import ROOT, check, fekap_binary, point_series, read_rows, run_fekap, run_suite  # noqa: E402
+from test_examples import Dual, angle, compare, cos, fourbar_exact, quick_return_exact, sin, sqrt  # noqa: E402
+
+OUT = Path(tempfile.mkdtemp(prefix="fekap-hard-"))
+FOURBAR = "decks/fourbar.deck"
+PREDICTORS = ("previous", "extrapolate", "taylor")
+JUMP = "assembly-mode jump rejected"
+
+
+def run_case(deck: str, *options: str, name: str | None = None, want: int = 0) -> tuple[Path, str]:
+    """Run fekap on deck with options; check the exit code; return (outdir, stderr)."""
+    tag = name or Path(deck).stem + "".join(re.sub(r"[^A-Za-z0-9.]", "", o) for o in options)
+    outdir = OUT / tag
+    result = run_fekap("-q", "-o", str(outdir), *options, deck)
+    check(result.returncode == want, f"fekap {deck} {' '.join(options)} exited {result.returncode}, "
+                                     f"want {want}:\n{result.stderr}")
+    return outdir, result.stderr
+
+
+def listing(outdir: Path) -> str:
+    files = list(outdir.glob("*.lis"))
+    check(len(files) == 1, f"{outdir}: no listing")
+    return files[0].read_text()
+
+
+def work(outdir: Path) -> tuple[int, int]:
+    """Total Newton iterations and step cuts of a run."""
+    steps = read_rows(outdir / "steps.csv")
+    return sum(int(s["iterations"]) for s in steps), sum(int(s["cuts"]) for s in steps)
+
+
+def fourbar_b(t):
+    return fourbar_exact(t)[0]
+
+
+def fourbar_c(t):
+    return fourbar_exact(t)[1]
+
+
+# ---------------------------------------------------------------- large steps
+
+
+def test_fourbar_large_steps_every_predictor():
+    """Example 1 at dt = 0.5 and 1/3 (and the decks at 0.25, 0.5) with every
+    predictor: exact positions, velocities and accelerations at every step."""
+    for dt in ("0.5", repr(1 / 3), "0.25"):
+        for predictor in PREDICTORS:
+            out, _ = run_case(FOURBAR, "--dt", dt, "--predictor", predictor)
+            compare(out, "B", fourbar_b, 1e-9)
+            compare(out, "C", fourbar_c, 1e-9)
+
+
+def test_legitimate_large_steps_not_rejected():
+    """The quarter- and half-turn decks converge on the right branch without
+    any step rejected as a jump (previous and extrapolate predictors)."""
+    for deck in ("decks/fourbar-quarter-turn.deck", "decks/fourbar-half-turn.deck"):
+        for predictor in ("previous", "extrapolate"):
+            out, _ = run_case(deck, "--predictor", predictor)
+            compare(out, "C", fourbar_c, 1e-9)
+            check(JUMP not in listing(out), f"{deck} --predictor {predictor}: a legitimate step was rejected")
+
+
+def test_branch_jumps_caught():
+    """Combinations that landed on the lower branch before the jump check
+    (measured: C = (3, -3.873) at t = 1) now reject the jump, cut the step and
+    stay on the upper branch; the listing says why."""
+    cases = [("previous", "0.05", ()), ("extrapolate", "0.3", ()), ("taylor", "0.5", ()),
+             ("taylor", "0.2", ()), ("taylor", "0.4", ()),
+             ("taylor", "0.25", ("--compute", "positions"))]
+    for predictor, dt, extra in cases:
+        out, _ = run_case(FOURBAR, "--dt", dt, "--predictor", predictor, *extra)
+        compare(out, "C", fourbar_c, 1e-9)
+        text = listing(out)
+        check(JUMP in text, f"--predictor {predictor} --dt {dt}: no jump reported in the listing")
+        _, cuts = work(out)
+        check(cuts >= 1, f"--predictor {predictor} --dt {dt}: the jump was not cut")
+
+
+def test_peaucellier_fold_caught():
+    """Example 4 at dt = 0.25: without the orientation test the rhombus folded
+    (P = A) at t = 0.5 with the previous and extrapolate predictors."""
+    def p_exact(t, mean=math.radians(60), amp=math.radians(30)):
+        phi = Dual(mean + amp * math.cos(2 * math.pi * t), -amp * 2 * math.pi * math.sin(2 * math.pi * t),
+                   -amp * (2 * math.pi) ** 2 * math.cos(2 * math.pi * t))
+        ax, ay = 1.4 + 1.4 * cos(phi), 1.4 * sin(phi)
+        k = 7.56 / (ax * ax + ay * ay)
+        return (k * ax, k * ay)
+    for predictor in PREDICTORS:
+        out, _ = run_case("decks/peaucellier.deck", "--dt", "0.25", "--predictor", predictor)
+        compare(out, "P", p_exact, 1e-9)
+
+
+# ------------------------------------------------------ singular configurations
+
+
+def test_double_crank_exactly_collinear():
+    """Example 3 at dt = 0.05 lands exactly on the collinear configurations
+    (t = 0.25, 0.75). Documented behaviour: the run goes on (exit 0); at those
+    rows the velocity and acceleration fields are empty and the listing notes a
+    singular configuration; positions there are exact only to ~1e-8 (the
+    mechanism's null direction is not fixed to first order); elsewhere 1e-9."""
+    def f_exact(t):
+        phi = angle(t, math.pi / 2, 2 * math.pi)
+        return (4 + cos(phi), sin(phi))
+    for predictor in ("extrapolate", "taylor"):
+        out, _ = run_case("decks/double-crank.deck", "--dt", "0.05", "--predictor", predictor)
+        rows = [r for r in read_rows(out / "points.csv") if r["point"] == "F"]
+        singular = [r for r in rows if abs(float(r["t"]) - 0.25) < 1e-12 or abs(float(r["t"]) - 0.75) < 1e-12]
+        check(len(singular) == 2, "rows at t = 0.25 and 0.75")
+        for r in singular:
+            check(all(r[k] == "" for k in ("vx", "vy", "ax", "ay")), f"t = {r['t']}: rates not left out: {r}")
+            fx, fy = f_exact(float(r["t"]))
+            err = max(abs(float(r["x"]) - fx.f), abs(float(r["y"]) - fy.f))
+            check(err < 5e-8, f"t = {r['t']}: position error {err:.2e} at the singular configuration")
+        text = listing(out)
+        check(text.count("singular configuration") >= 2, "the listing notes both singular configurations")
+        for r in rows:
+            if r in singular:
+                continue
+            t = float(r["t"])
+            fx, fy = f_exact(t)
+            err = max(abs(float(r["x"]) - fx.f), abs(float(r["y"]) - fy.f))
+            check(err < 1e-9, f"t = {t}: position error {err:.2e}")
+            verr = max(abs(float(r["vx"]) - fx.d), abs(float(r["vy"]) - fy.d)) / (2 * math.pi)
+            check(verr < 1e-8, f"t = {t}: velocity error {verr:.2e}")
+    # With the paper's predictor Newton cannot reach the singular point: exit 3, rows kept.
+    out, err = run_case("decks/double-crank.deck", "--dt", "0.05", "--predictor", "previous", want=3)
+    check("step 5" in err and "2.50000E-01" in err, f"the message names the step and time:\n{err}")
+    t = point_series(out, "F")["t"]
+    check(len(t) == 5 and abs(t[-1] - 0.2) < 1e-12, f"rows of steps 0-4 kept, got t = {t}")
+
+
+def test_double_crank_near_collinear():
+    """dt = 0.0499 passes within 0.0005 of the collinear configurations: every
+    row exact (positions 1e-9, velocities 1e-7 of their scale)."""
+    def f_exact(t):
+        phi = angle(t, math.pi / 2, 2 * math.pi)
+        return (4 + cos(phi), sin(phi))
+    for predictor in ("extrapolate", "taylor"):
+        out, _ = run_case("decks/double-crank.deck", "--dt", "0.0499", "--predictor", predictor)
+        p = point_series(out, "F")
+        for i, t in enumerate(p["t"]):
+            fx, fy = f_exact(t)
+            check(max(abs(p["x"][i] - fx.f), abs(p["y"][i] - fy.f)) < 1e-9, f"t = {t}: position")
+            check(max(abs(p["vx"][i] - fx.d), abs(p["vy"][i] - fy.d)) < 1e-7 * 2 * math.pi, f"t = {t}: velocity")
+
+
+def grashof_c(t):
+    """C of the Grashof-limit four-bar (A = 0, D = (2.99, 0), 1, 2, 2), upper branch."""
+    th = angle(t, 0.0, 2 * math.pi)
+    bx, by = cos(th), sin(th)
+    dx, dy = 2.99 - bx, 0 - by
+    dist = sqrt(dx * dx + dy * dy)
+    ex, ey = dx / dist, dy / dist
+    along = dist / 2
+    h = sqrt(4 - along * along)
+    return (bx + along * ex - h * ey, by + along * ey + h * ex)
+
+
+def test_grashof_limit():
+    """Four-bar just inside its Grashof limit: positions to 1e-8 at every step,
+    every predictor, dt = 0.01 to 0.05; rates to 1e-8 of their scale."""
+    for dt in ("0.01", "0.025", "0.05"):
+        for predictor in PREDICTORS:
+            out, _ = run_case("decks/hard/grashof-limit.deck", "--dt", dt, "--predictor", predictor)
+            compare(out, "C", grashof_c, 1e-8)
+
+
+def test_grashof_limit_jumps_caught():
+    """At dt = 0.1 the crank passes the near-toggle (crank angle pi) within one
+    step; before the jump check every predictor landed on the other branch
+    (C off by up to 3.5). Now the jump is rejected and cut. Known limit (see
+    docs/hard-cases.md): with taylor at dt = 0.2 and 0.3 the jump still goes
+    through unseen, so those are not asserted."""
+    for predictor in PREDICTORS:
+        out, _ = run_case("decks/hard/grashof-limit.deck", "--dt", "0.1", "--predictor", predictor)
+        compare(out, "C", grashof_c, 1e-8)
+        check(JUMP in listing(out), f"--predictor {predictor}: no jump reported")
+
+
+def test_peaucellier_near_flat():
+    """Example 4 driven to 21.8 deg (the rhombus flattens at 21.787 deg): P on
+    x = 2.7 and at OA*OP = 7.56 to 1e-8, for dt = 0.01, 0.025, 0.05."""
+    mean, amp = math.radians(55.9), math.radians(34.1)
+
+    def p_exact(t):
+        phi = Dual(mean + amp * math.cos(2 * math.pi * t), -amp * 2 * math.pi * math.sin(2 * math.pi * t),
+                   -amp * (2 * math.pi) ** 2 * math.cos(2 * math.pi * t))
+        ax, ay = 1.4 + 1.4 * cos(phi), 1.4 * sin(phi)
+        k = 7.56 / (ax * ax + ay * ay)
+        return (k * ax, k * ay)
+    for dt in ("0.01", "0.025", "0.05"):
+        out, _ = run_case("decks/hard/peaucellier-flat.deck", "--dt", dt, "--compute", "positions")
+        compare(out, "P", p_exact, 1e-8)
+        x = point_series(out, "P")["x"]
+        check(max(abs(v - 2.7) for v in x) < 1e-8, f"dt = {dt}: P leaves x = 2.7")
+
+
+# ------------------------------------------------------ section and penalty data
+
+
+def test_section_ratios():
+    """Example 1 with EA/EI from 1e-2 to 1e12 (and overall scales of the
+    moduli): positions exact to 1e-8 whatever the section data (measured
+    2e-15). Rates come from solves with a tangent whose condition grows like
+    EA L^2/EI: measured errors (relative to their scale) 1e-9 at EA/EI = 1e6,
+    7e-8 at 1e8, 6e-6 at 1e10, 2e-4 at 1e12; checked to max(1e-8, 1e-14 EA/EI).
+    Documented defect (reported, not fixed here): the pivot-ratio singularity
+    test of solve_rates scales like EI/(EA L^2), so at EA/EI = 1e12 healthy
+    configurations are called singular and their rates left out."""
+    text = (ROOT / FOURBAR).read_text()
+    for a, i, e in (("1", "100", "1"), ("100", "1", "1"), ("1e4", "1e-2", "1"), ("1e5", "1e-3", "1"),
+                    ("1e6", "1e-4", "1"), ("1e7", "1e-5", "1"), ("1e6", "1e-6", "1"),
+                    ("100", "1", "1e-6"), ("100", "1", "1e9")):
+        ratio = float(a) / float(i)
+        deck = OUT / f"fourbar-A{a}-I{i}-E{e}.deck"
+        deck.write_text(text.replace("bar   E=1  G=1  A=100  I=1", f"bar   E={e}  G={e}  A={a}  I={i}"))
+        out, _ = run_case(str(deck), "--compute", "positions", name=deck.stem + "-positions")
+        compare(out, "B", fourbar_b, 1e-8)
+        compare(out, "C", fourbar_c, 1e-8)
+        out, _ = run_case(str(deck))
+        if ratio > 1e11:
+            vx = point_series(out, "C")["vx"]
+            check(any(math.isnan(v) for v in vx), f"EA/EI = {ratio:.0e}: the rates are no longer left out; "
+                                                   "update this test and docs/hard-cases.md")
+            continue
+        compare(out, "C", fourbar_c, max(1e-8, 1e-14 * ratio))
+
+
+def test_penalty_range():
+    """Slider-crank with the slideline penalty from 1e1 to 1e12 times the rod's
+    axial stiffness EA/L = 100/3: exact slider x, vx, ax."""
+    def b_exact(t):
+        th = angle(t, 0.0, 2 * math.pi)
+        s = sin(th)
+        return (cos(th) + sqrt(9 - s * s), Dual(0.0))
+    text = (ROOT / "decks/slider-crank.deck").read_text()
+    for factor in ("1e1", "1e3", "1e6", "1e9", "1e12"):
+        deck = OUT / f"slider-penalty-{factor}.deck"
+        deck.write_text(text.replace("guide -5 0 5 0  pin", f"guide -5 0 5 0  pin  penalty={factor}*100/3"))
+        out, _ = run_case(str(deck))
+        compare(out, "B", b_exact, 1e-8)
+
+
+# ------------------------------------------------------------- long runs, meshes
+
+
+def test_thousand_revolutions():
+    """1,000 revolutions of Example 1, positions only: the link lengths and the
+    closure hold at every written step, and the last revolution repeats the
+    first to 1e-9."""
+    out, _ = run_case("decks/hard/fourbar-1000-turns.deck")
+    rows = read_rows(out / "points.csv")
+    pos: dict[str, dict[int, tuple[float, float]]] = {"B": {}, "C": {}}
+    for r in rows:
+        pos[r["point"]][int(r["step"])] = (float(r["x"]), float(r["y"]))
+    steps = sorted(pos["B"])
+    check(steps[-1] == 40000, f"last step {steps[-1]}")
+    worst_len = 0.0
+    for n in steps:
+        (bx, by), (cx, cy) = pos["B"][n], pos["C"][n]
+        worst_len = max(worst_len, abs(math.hypot(bx, by) - 2), abs(math.hypot(cx - bx, cy - by) - 4),
+                        abs(math.hypot(cx - 4, cy) - 4))
+    check(worst_len < 1e-9, f"link lengths drift by {worst_len:.2e}")
+    worst = 0.0
+    for n in steps:
+        if n < 40000 - 40:
+            continue
+        first = n - 40000 + 40
+        for p in ("B", "C"):
+            (x1, y1), (x0, y0) = pos[p][n], pos[p][first]
+            worst = max(worst, abs(x1 - x0), abs(y1 - y0))
+    check(worst < 1e-9, f"last revolution differs from the first by {worst:.2e}")
+    angles = [r for r in read_rows(out / "links.csv") if r["link"] == "AB" and r["step"] == "40000"]
+    check(abs(float(angles[0]["angle"]) - 2000 * math.pi) < 1e-9 * 2000 * math.pi, "crank angle after 1000 turns")
+
+
+def test_slider_across_master_elements():
+    """The quick-return lever meshed with 4 elements, and a slider on a ground
+    link meshed with 10: the slaves cross element boundaries; exact answers."""
+    out, _ = run_case("decks/hard/quick-return-meshed-lever.deck")
+    compare(out, "P", quick_return_exact, 1e-8)
+
+    def b_exact(t):
+        th = angle(t, 0.0, 2 * math.pi)
+        s = sin(th)
+        return (cos(th) + sqrt(9 - s * s), Dual(0.0))
+    out, _ = run_case("decks/hard/slider-meshed-guide.deck")
+    compare(out, "B", b_exact, 1e-9)
+
+
+# --------------------------------------------------------- failures keep results
+
+
+def check_rows_complete(outdir: Path) -> int:
+    """Every CSV line has the header's number of fields and numbers (or empty
+    rate fields) that parse and are finite; returns the number of data lines."""
+    count = 0
+    for csv_file in outdir.glob("*.csv"):
+        lines = csv_file.read_text().split("\n")
+        check(lines[-1] == "", f"{csv_file.name}: the last line is not complete")
+        header = lines[0].split(",")
+        for line in lines[1:-1]:
+            fields = line.split(",")
+            check(len(fields) == len(header), f"{csv_file.name}: line {line!r} has {len(fields)} fields")
+            for name, field in zip(header, fields):
+                if name in ("point", "link", "node1", "node2") or field == "":
+                    continue
+                value = float(field)
+                check(math.isfinite(value), f"{csv_file.name}: {name} = {field}")
+            count += 1
+    return count
+
+
+def test_signals_keep_rows():
+    """SIGTERM and SIGINT during a long run: the rows written so far are
+    complete lines of valid numbers, and the listing exists."""
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        out = OUT / f"signal-{sig.name}"
+        proc = subprocess.Popen([fekap_binary(), "-q", "-o", str(out), "decks/hard/fourbar-1000-turns.deck",
+                                 "--compute", "positions,velocities,accelerations"],
+                                cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(1.0)
+        check(proc.poll() is None, f"{sig.name}: the run ended before the signal")
+        proc.send_signal(sig)
+        stdout, stderr = proc.communicate(timeout=30)
+        check(proc.returncode != 0, f"{sig.name}: exit {proc.returncode}")
+        check("Fortran runtime error" not in stderr, f"{sig.name}: {stderr}")
+        check((out / "fourbar-1000-turns.lis").is_file(), f"{sig.name}: no listing")
+        rows = check_rows_complete(out)
+        check(rows > 100, f"{sig.name}: only {rows} rows written")
+
+
+def test_nonconvergence_stop():
+    """Two Newton iterations and a huge step: exit 3, the message names step
+    and time, the rows of the completed steps stay."""
+    deck = OUT / "fourbar-iterations2.deck"
+    deck.write_text((ROOT / FOURBAR).read_text().replace("ANALysis", "ANALysis\n  iterations 2"))
+    out, err = run_case(str(deck), "--dt", "0.4", name="iterations2", want=3)
+    check(re.search(r"step \d+ \(t = ", err) is not None and "did not converge" in err, f"message:\n{err}")
+    check("RUN STOPPED" in listing(out), "the listing says the run stopped")
+    check(check_rows_complete(out) >= 1, "the initial step's rows stay")
+
+
+def test_no_nan_or_inf_anywhere():
+    """Every CSV written by this suite holds only complete rows of finite numbers."""
+    dirs = [d for d in OUT.iterdir() if d.is_dir()]
+    check(len(dirs) > 20, f"only {len(dirs)} output directories")
+    for d in dirs:
+        check_rows_complete(d)
+
+
+if __name__ == "__main__":
+    sys.exit(run_suite("hard", [
+        test_fourbar_large_steps_every_predictor, test_legitimate_large_steps_not_rejected,
+        test_branch_jumps_caught, test_peaucellier_fold_caught, test_double_crank_exactly_collinear,
+        test_double_crank_near_collinear, test_grashof_limit, test_grashof_limit_jumps_caught,
+        test_peaucellier_near_flat, test_section_ratios,
+        test_penalty_range, test_thousand_revolutions, test_slider_across_master_elements,
+        test_signals_keep_rows, test_nonconvergence_stop, test_no_nan_or_inf_anywhere]))
