@@ -8,6 +8,10 @@ module fekap_model_results
 
    public :: step_result_type, new_step_result, fill_fields_from_nodes
 
+   !> Length of a step's note for the listing (fixed-length: gfortran 12 has had
+   !> bugs with deferred-length character components of derived types).
+   integer, parameter, public :: note_length = 400
+
    type :: step_result_type
       integer :: step = 0
       real(dp) :: t = 0
@@ -18,7 +22,7 @@ module fekap_model_results
       !> Times the step was cut in halves to converge.
       integer :: cuts = 0
       !> A remark for the listing (a near-singular configuration, rates left out), or empty.
-      character(:), allocatable :: note
+      character(len=note_length) :: note = ''
       logical :: has_velocity = .false.
       logical :: has_acceleration = .false.
       !> (2, number of nodes): x, y of every model node.

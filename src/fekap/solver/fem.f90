@@ -9,7 +9,7 @@ module fekap_solver_fem
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type, model_size, dof_rot, predictor_previous, predictor_taylor, &
       & convergence_paper
-   use fekap_model_results, only: step_result_type
+   use fekap_model_results, only: step_result_type, note_length
    use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
    use fekap_element_beam, only: beam_resultants
@@ -31,12 +31,14 @@ module fekap_solver_fem
    !> A Newton correction longer than this many model sizes is divergence.
    real(dp), parameter :: divergence_length = 1.0e3_dp
    !> Pivot ratios (see band_pivot_ratio) below which the tangent at a
-   !> configuration counts as singular, and, relative to the largest ratio met
-   !> so far in the run, as near-singular (a warning). The ratio itself also
-   !> reflects the elements' bending-to-shear stiffness (4 EI / (kGA L^2),
-   !> 2e-7 for the 474-long lever of Example 5), so only its drop means a
-   !> stationary configuration.
-   real(dp), parameter :: singular_pivot = 1.0e-13_dp, near_singular_drop = 1.0e-3_dp
+   !> configuration counts as singular or as near-singular (a warning),
+   !> relative to the largest ratio met so far in the run: the ratio itself also
+   !> reflects the elements' bending-to-shear stiffness (4 EI / (kGA L^2): 2e-7
+   !> for the 474-long lever of Example 5, 1e-12 at EA/EI = 1e12), so only its
+   !> drop means a stationary configuration. Below singular_floor the factor is
+   !> singular to round-off whatever the reference.
+   real(dp), parameter :: singular_drop = 1.0e-10_dp, near_singular_drop = 1.0e-3_dp, &
+      & singular_floor = 1.0e-16_dp
    !> Configurations kept for the extrapolating predictor (quadratic extrapolation).
    integer, parameter :: history = 3
    !> Assembly-mode (branch) jump check: a step is rejected when some rotation
@@ -82,7 +84,7 @@ module fekap_solver_fem
       !> Largest pivot ratio of a rate tangent so far (the reference for near-singular warnings).
       real(dp) :: reference_pivot = 0
       !> Remark on the accepted configuration for the listing (empty if none).
-      character(:), allocatable :: note
+      character(len=note_length) :: note = ''
       !> Master segment of each slideline: during the step, and at the accepted configuration.
       integer, allocatable :: seg(:), seg_accepted(:)
       !> Linear response of every dof to unit changes of the drives, (ndof,
@@ -218,8 +220,8 @@ contains
          ! The listing says why the step was cut (the first and the last rejection).
          write (note, '(a,i0,a)') 'step cut ', self%last_cuts, ' time(s); first rejection:'
          if (allocated(last_reason)) cut_reason = cut_reason//'; last rejection: '//last_reason
-         if (len(self%note) > 0) then
-            self%note = trim(note)//' '//cut_reason//'; '//self%note
+         if (len_trim(self%note) > 0) then
+            self%note = trim(note)//' '//cut_reason//'; '//trim(self%note)
          else
             self%note = trim(note)//' '//cut_reason
          end if
@@ -586,7 +588,7 @@ contains
          ! Response at the new configuration from the last Newton factor (if
          ! it was factored in this step and is not singular).
          has_response = iterations > 0
-         if (has_response) has_response = self%kff%pivot_ratio() >= singular_pivot
+         if (has_response) has_response = self%kff%pivot_ratio() >= singular_floor
          resp = 0
          if (has_response) then
             do j = 1, mesh%ndriven
@@ -737,7 +739,7 @@ contains
       if (info == 0) ratio = self%kff%pivot_ratio()
       self%counts%min_pivot_ratio = min(self%counts%min_pivot_ratio, ratio)
       self%reference_pivot = max(self%reference_pivot, ratio)
-      if (ratio < singular_pivot) then
+      if (ratio < singular_drop*self%reference_pivot .or. ratio < singular_floor) then
          write (note, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent has no inverse): '// &
             & 'velocities and accelerations are left out of this step'
          self%note = trim(note)

@@ -146,9 +146,9 @@ contains
                end if
             end if
          end if
-         if (allocated(result%note) .and. units%listing /= no_unit) then
-            if (len(result%note) > 0) write (units%listing, '(10x,a)') 'note: step '//trim(int_text(n))//', '// &
-               & result%note
+         if (units%listing /= no_unit) then
+            if (len_trim(result%note) > 0) write (units%listing, '(10x,a)') 'note: step '//trim(int_text(n))//', '// &
+               & trim(result%note)
          end if
          call system_clock(c0)
          seconds(2) = seconds(2) + real(c0 - c1, dp)/clock_rate
