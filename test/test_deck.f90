@@ -612,8 +612,10 @@ contains
       call expect_error(error, with_base('SECTions'//nl//' s EA=-1 kGA=1 EI=1'//nl), 't.deck:11:4:', &
          & 'non-positive section property EA')
       call expect_error(error, with_base('SECTions'//nl//' s E=1 G=1 A=1'//nl), 't.deck:11:2:', 'section s has no EI')
-      call expect_error(error, with_base('SECTions'//nl//' s E=1e200 G=1 A=1e200 I=1'//nl), 't.deck:11:2:', &
-         & 'EA is not a finite number')
+      call expect_error(error, with_base('SECTions'//nl//' s E=1e200 G=1 A=1e200 I=1'//nl), 't.deck:11:4:', &
+         & 'section property E out of range')
+      call expect_error(error, with_base('SECTions'//nl//' s E=1e60 G=1 A=1e60 I=1'//nl), 't.deck:11:2:', &
+         & 'section stiffness out of range')
    end subroutine test_section_property
 
    subroutine test_time_step(error)
@@ -680,7 +682,10 @@ contains
       call expect_error(error, base_head//'DRIVes'//nl//' x B polynomial 3 1'//nl//'END', 't.deck:9:6:', &
          & 'drive does not match the initial configuration of node B')
       call expect_error(error, base_head//'DRIVes'//nl//' y B polynomial 1e300 1e300 1e300'//nl//'ANALysis'//nl// &
-         & ' time 1e10 1e11 1e9'//nl//'END', 't.deck:9:6:', 'value at the start time is not a finite number')
+         & ' time 1e10 1e11 1e9'//nl//'END', 't.deck:9:17:', 'drive-law number too large')
+      call expect_error(error, base_head//'DRIVes'//nl//' y B polynomial 1e15 1e15 1e15 1e15 1e15 1e15 1e15 1e15'// &
+         & nl//'ANALysis'//nl//' time 1e50 1e51 1e49'//nl//'END', 't.deck:9:6:', &
+         & 'value at the start time is not a finite number')
    end subroutine test_drive_initial
 
    subroutine test_link_ends(error)

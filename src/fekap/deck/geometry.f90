@@ -19,6 +19,9 @@ module fekap_deck_geometry
    real(dp), parameter :: zero_length = 1.0e-12_dp
    !> Largest magnitude of a coordinate (keeps lengths and the model size finite).
    real(dp), parameter, public :: max_coordinate = 1.0e100_dp
+   !> Range of section properties and of the stiffnesses EA, kGA, EI derived
+   !> from them: beyond it the solver's arithmetic would overflow or underflow.
+   real(dp), parameter :: min_property = 1.0e-100_dp, max_property = 1.0e100_dp
    !> Most elements per link.
    integer, parameter :: max_elements = 100000
 
@@ -79,6 +82,12 @@ contains
                good = .false.
                cycle
             end if
+            if (v < min_property .or. v > max_property) then
+               call ctx%error(iline, k, 'section property '//field(:eq - 1)//' out of range', &
+                  & label='between 1e-100 and 1e100')
+               good = .false.
+               cycle
+            end if
             given(key) = .true.
             value(key) = v
             ikey(key) = k
@@ -93,6 +102,12 @@ contains
             call derive(list(n)%ea, 6, [1, 3], 'EA', 'E= and A=')
             call derive(list(n)%kga, 7, [5, 2, 3], 'kGA', 'k=, G= and A= (k defaults to 5/6)')
             call derive(list(n)%ei, 8, [1, 4], 'EI', 'E= and I=')
+            if (any([list(n)%ea, list(n)%kga, list(n)%ei] > max_property) .or. &
+               & any([list(n)%ea, list(n)%kga, list(n)%ei] < min_property .and. &
+               & [list(n)%ea, list(n)%kga, list(n)%ei] > 0)) then
+               call ctx%error(iline, 1, 'section stiffness out of range', &
+                  & label='EA, kGA and EI must lie between 1e-100 and 1e100')
+            end if
          end if
          prev = find_section_in(list(:n - 1), list(n)%name)
          if (prev > 0) then

@@ -26,6 +26,9 @@ module fekap_deck_motion
    real(dp), parameter :: slave_tol = 1.0e-6_dp
    !> Largest magnitude of a table entry (keeps the spline's arithmetic finite).
    real(dp), parameter :: table_max = 1.0e100_dp
+   !> Largest magnitude of a rate, harmonic or polynomial coefficient: larger
+   !> drives overflow the residual long before they mean anything.
+   real(dp), parameter :: law_max = 1.0e15_dp
 
 contains
 
@@ -124,6 +127,10 @@ contains
       do k = 1, nc
          call ctx%real_field(iline, first + k, c(k), fine)
          ok = ok .and. fine
+         if (fine .and. .not. is_word_of(word, 'table', 4) .and. abs(c(k)) > law_max) then
+            call ctx%error(iline, first + k, 'drive-law number too large', label='at most 1e15 in magnitude')
+            ok = .false.
+         end if
       end do
       if (is_word_of(word, 'rate', 4)) then
          if (.not. ctx%require(iline, head//'rate OMEGA [V0]', 'a rate law')) ok = .false.

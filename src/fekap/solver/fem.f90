@@ -844,16 +844,23 @@ contains
       end associate
    end subroutine fill_fields
 
-   !> Euclidean norm of a residual over the free dofs.
+   !> Euclidean norm of a residual over the free dofs, scaled by its largest
+   !> entry so that the squares cannot overflow.
    pure real(dp) function free_norm(self, r) result(norm)
       type(fem_stepper_type), intent(in) :: self
       real(dp), intent(in) :: r(:)
+      real(dp) :: biggest
       integer :: k
-      norm = 0
+      biggest = 0
       do k = 1, self%mesh%nfree
-         norm = norm + r(self%mesh%eq_dof(k))**2
+         biggest = max(biggest, abs(r(self%mesh%eq_dof(k))))
       end do
-      norm = sqrt(norm)
+      norm = 0
+      if (.not. biggest > 0) return
+      do k = 1, self%mesh%nfree
+         norm = norm + (r(self%mesh%eq_dof(k))/biggest)**2
+      end do
+      norm = biggest*sqrt(norm)
    end function free_norm
 
 end module fekap_solver_fem
