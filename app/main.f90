@@ -10,6 +10,7 @@ program fekap_main
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
       & new_cartesian_stepper
+   use fekap_solver_interrupt, only: catch_interrupts
    use fekap_solver_run, only: run_units_type, run_analysis, step_count, no_unit
    use fekap_output_csv, only: write_mesh_csv
    use fekap_output_listing, only: write_listing_model, write_listing_plan, plan_text
@@ -61,6 +62,7 @@ program fekap_main
    end if
    if (.not. cli%quiet) write (output_unit, '(a)') 'fekap: '//cli%deck//': '//plan_text(model, step_count(model))
 
+   call catch_interrupts()
    call run_analysis(stepper, model, units, error)
    if (allocated(error)) then
       error%message = cli%deck//': '//error%message

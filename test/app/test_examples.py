@@ -12,6 +12,7 @@ Run from the repository root:  python3 test/app/test_examples.py
 from __future__ import annotations
 
 import math
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -207,6 +208,47 @@ def test_quick_return():
               abs(cy - 100 * math.sqrt(10) - 100 * math.sin(th)) < 1e-9 * 474, "crank pin off its circle")
 
 
+def test_quick_return_pin_on_lever():
+    """The crank pin C stays on the slotted lever O4-B: its distance from the
+    line O4-B is below 1e-9 of the lever length at every step."""
+    deck = OUT / "quick-return-track.deck"
+    deck.write_text((ROOT / "decks/quick-return.deck").read_text().replace("track P C", "track B C P"))
+    out = run_deck(str(deck))
+    b, c = point_series(out, "B"), point_series(out, "C")
+    lever = 150 * math.sqrt(10)
+    gap = max(abs(cx * by - cy * bx) / math.hypot(bx, by)
+              for bx, by, cx, cy in zip(b["x"], b["y"], c["x"], c["y"]))
+    check(gap < 1e-9 * lever, f"crank pin off the lever by {gap:.2e}")
+    length = max(abs(math.hypot(bx, by) - lever) for bx, by in zip(b["x"], b["y"]))
+    check(length < 1e-9 * lever, f"lever length changes by {length:.2e}")
+
+
+def test_prismatic_block():
+    """A slider block B-B2 in a prismatic joint on the x axis (the slider-crank
+    with a block instead of a point): the block keeps its angle, so B2 moves
+    exactly as B shifted by the block's length; with a pin-in-slot joint the
+    block could spin and the tangent would be singular."""
+    text = (ROOT / "decks/slider-crank.deck").read_text()
+    text = re.sub(r"^(\s*B\s+4\s+0\s*)$", r"\1\n  B2  4.5  0", text, count=1, flags=re.M)
+    text = re.sub(r"(LINKs\n(?:.*\n)*?)(SUPPorts|SLIDelines)", r"\1  BB2  B  B2  bar\n\2", text, count=1)
+    text = text.replace("guide -5 0 5 0  pin", "guide -5 0 5 0  prismatic BB2")
+    text = text.replace("track B", "track B B2")
+    deck = OUT / "slider-block.deck"
+    deck.write_text(text)
+    out = run_deck(str(deck))
+    b, b2 = point_series(out, "B"), point_series(out, "B2")
+    for key, shift in (("x", 0.5), ("y", 0.0), ("vx", 0.0), ("vy", 0.0), ("ax", 0.0), ("ay", 0.0)):
+        worst = max(abs(u + shift - v) for u, v in zip(b[key], b2[key]))
+        check(worst < 1e-9 * max(1.0, max(abs(u) for u in b[key])), f"B2.{key} - B.{key}: {worst:.2e}")
+    angles = [float(r["angle"]) for r in read_rows(out / "links.csv") if r["link"] == "BB2"]
+    check(max(abs(a) for a in angles) < 1e-9, "the block turns")
+    def b_exact(t):
+        th = angle(t, 0.0, 2 * math.pi)
+        s = sin(th)
+        return (cos(th) + sqrt(9 - s * s), Dual(0.0))
+    compare(out, "B", b_exact, 1e-9)
+
+
 def test_slider_crank():
     def b_exact(t):
         th = angle(t, 0.0, 2 * math.pi)
@@ -308,6 +350,7 @@ def test_plots_on_real_output():
 if __name__ == "__main__":
     sys.exit(run_suite("examples", [
         test_fourbar, test_fourbar_large_steps, test_fourbar_appendage, test_double_crank,
-        test_peaucellier, test_quick_return, test_slider_crank, test_cantilever_rollup,
+        test_peaucellier, test_quick_return, test_quick_return_pin_on_lever, test_prismatic_block,
+        test_slider_crank, test_cantilever_rollup,
         test_methods_agree, test_redundant_cartesian, test_exit_codes_and_messages,
         test_failure_keeps_results, test_plots_on_real_output]))

@@ -27,7 +27,10 @@ module fekap_solver_fem
    integer, parameter :: max_cuts = 8
    !> Element strain above which a converged configuration is not a mechanism
    !> configuration but a self-stressed equilibrium.
-   real(dp), parameter :: admissible_strain = 1.0e-8_dp
+   !> It follows the Newton tolerance (a loose paper-style test leaves strains
+   !> near the tolerance) but never reaches the strains of a self-stressed
+   !> state, which are of order 0.1.
+   real(dp), parameter :: min_admissible_strain = 1.0e-8_dp, max_admissible_strain = 1.0e-3_dp
    !> A Newton correction longer than this many model sizes is divergence.
    real(dp), parameter :: divergence_length = 1.0e3_dp
    !> Pivot ratios (see band_pivot_ratio) below which the tangent at a
@@ -81,6 +84,9 @@ module fekap_solver_fem
       real(dp), allocatable :: r(:), rhs(:, :), qt(:), work(:)
       !> Step cuts in the last advance, for the listing.
       integer :: last_cuts = 0
+      !> Element strain (and gap per model size) above which a converged
+      !> configuration is rejected: min(1e-3, max(1e-8, 100 tol)).
+      real(dp) :: admissible_strain = min_admissible_strain
       !> Largest pivot ratio of a rate tangent so far (the reference for near-singular warnings).
       real(dp) :: reference_pivot = 0
       !> Remark on the accepted configuration for the listing (empty if none).
@@ -127,6 +133,7 @@ contains
       self%conv%mode = model%analysis%convergence
       self%conv%tol = model%analysis%tol
       self%conv%length = model%analysis%length_tol*self%size
+      self%admissible_strain = min(max_admissible_strain, max(min_admissible_strain, 100*model%analysis%tol))
       ! Residual floor: a strain of 1e-13 in the stiffest element.
       force_scale = 0
       do e = 1, size(self%mesh%elements)
@@ -316,7 +323,7 @@ contains
          end do relocations
          if (.not. self%loaded) then
             call max_strain(mesh, qt, strain, element)
-            if (strain > admissible_strain) then
+            if (strain > self%admissible_strain) then
                write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, &
                   & ': Newton converged to a self-stressed configuration (strain ', strain, ' in link '
                call analysis_error(error, trim(msg)//' '//self%model%links(mesh%elink(element))%name// &
@@ -536,7 +543,7 @@ contains
       do i = 1, size(self%mesh%slides)
          call slide_position(self%mesh, self%mesh%slides(i), self%seg(i), q, xs, x1, x2, dofs)
          call slide_geometry(xs, x1, x2, g, alpha, s1)
-         if (abs(g) > admissible_strain*self%size) then
+         if (abs(g) > self%admissible_strain*self%size) then
             write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, ': Newton converged with a gap of ', g, ' at slideline '
             call analysis_error(error, trim(msg)//' '//self%model%slidelines(i)%name//', not a mechanism configuration')
             self%factor_current = .false.

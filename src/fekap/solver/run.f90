@@ -4,6 +4,7 @@
 module fekap_solver_run
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error, fatal_error
+   use fekap_solver_interrupt, only: interrupt_signal
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes
    use fekap_solver_stepper, only: stepper_type
@@ -152,6 +153,16 @@ contains
          end if
          call system_clock(c0)
          seconds(2) = seconds(2) + real(c0 - c1, dp)/clock_rate
+         if (interrupt_signal() /= 0 .and. n < nsteps) then
+            write (where_, '(a,i0,a,i0,a,es12.5,a)') 'interrupted by signal ', interrupt_signal(), ' after step ', n, &
+               & ' (t = ', result%t, ')'
+            call fatal_error(error, trim(where_)//'; the rows of the completed steps are kept')
+            if (units%listing /= no_unit) then
+               call write_listing_stop(units%listing, error%message)
+               flush (units%listing)
+            end if
+            exit
+         end if
       end do
       call system_clock(c1)
       seconds(3) = real(c1 - c_start, dp)/clock_rate
