@@ -9,7 +9,7 @@
 !> reference for the cost of the band solver, not a production path.
 module fekap_assembly_band
    use fekap_kinds, only: dp
-   use fekap_assembly_lapack, only: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dpbcon, dgbcon, dgetrf, dgetrs, dgecon
+   use fekap_assembly_lapack, only: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs
    implicit none
    private
 
@@ -30,8 +30,6 @@ module fekap_assembly_band
       logical :: dense = .false.
       !> Dense LU factor (dense mode only).
       real(dp), allocatable :: fd(:, :)
-      !> 1-norm of the factored matrix, for the condition estimate.
-      real(dp) :: anorm = 0
       !> Diagonal of the factored matrix, to measure its pivots against.
       real(dp), allocatable :: diag(:)
    contains
@@ -39,8 +37,6 @@ module fekap_assembly_band
       procedure :: add => band_add
       procedure :: factor => band_factor
       procedure :: solve => band_solve
-      procedure :: rcond => band_rcond
-      procedure :: multiply => band_multiply
       procedure :: pivot_ratio => band_pivot_ratio
    end type band_matrix_type
 
@@ -87,7 +83,6 @@ contains
       integer :: i, j, kd, ld
       kd = self%kd
       ld = size(self%f, 1)
-      self%anorm = one_norm(self)
       self%diag = self%a(kd + 1, :)
       if (self%dense) then
          call dense_factor(self, info)
@@ -146,25 +141,6 @@ contains
       end if
    end subroutine band_solve
 
-   !> Reciprocal condition number (1-norm) estimated from the current factor.
-   real(dp) function band_rcond(self) result(rcond)
-      class(band_matrix_type), intent(in) :: self
-      real(dp), allocatable :: work(:)
-      integer, allocatable :: iwork(:)
-      integer :: info
-      rcond = 1
-      if (self%n == 0) return
-      allocate (work(4*self%n), iwork(self%n))
-      if (self%dense) then
-         call dgecon('1', self%n, self%fd, self%n, self%anorm, rcond, work, iwork, info)
-      else if (self%is_lu) then
-         call dgbcon('1', self%n, self%kd, self%kd, self%f, size(self%f, 1), self%ipiv, self%anorm, &
-            & rcond, work, iwork, info)
-      else
-         call dpbcon('U', self%n, self%kd, self%f, size(self%f, 1), self%anorm, rcond, work, iwork, info)
-      end if
-   end function band_rcond
-
    !> Smallest pivot of the factor relative to the matrix's own diagonal entry:
    !> min_j U(j,j)^2 / A(j,j) for Cholesky, min_j |U(j,j)| / |A(j,j)| for LU.
    !> Invariant under a diagonal scaling of the unknowns, so stiffness ratios
@@ -189,38 +165,5 @@ contains
          end if
       end do
    end function band_pivot_ratio
-
-   !> y = A x with the assembled (unfactored) matrix.
-   pure subroutine band_multiply(self, x, y)
-      class(band_matrix_type), intent(in) :: self
-      real(dp), intent(in) :: x(:)
-      real(dp), intent(out) :: y(:)
-      integer :: i, j
-      y = 0
-      do j = 1, self%n
-         do i = max(1, j - self%kd), j - 1
-            y(i) = y(i) + self%a(self%kd + 1 + i - j, j)*x(j)
-            y(j) = y(j) + self%a(self%kd + 1 + i - j, j)*x(i)
-         end do
-         y(j) = y(j) + self%a(self%kd + 1, j)*x(j)
-      end do
-   end subroutine band_multiply
-
-   !> 1-norm (largest column sum) of the symmetric matrix.
-   pure real(dp) function one_norm(self) result(anorm)
-      type(band_matrix_type), intent(in) :: self
-      real(dp) :: colsum(self%n)
-      integer :: i, j
-      colsum = 0
-      do j = 1, self%n
-         do i = max(1, j - self%kd), j - 1
-            colsum(j) = colsum(j) + abs(self%a(self%kd + 1 + i - j, j))
-            colsum(i) = colsum(i) + abs(self%a(self%kd + 1 + i - j, j))
-         end do
-         colsum(j) = colsum(j) + abs(self%a(self%kd + 1, j))
-      end do
-      anorm = 0
-      if (self%n > 0) anorm = maxval(colsum)
-   end function one_norm
 
 end module fekap_assembly_band

@@ -1,10 +1,13 @@
-!> Explicit interfaces to the LAPACK routines FEKAP calls.
+!> Explicit interfaces to the LAPACK routines FEKAP calls, and thin
+!> assumed-shape wrappers of the dense ones that derive the leading dimensions
+!> from the arrays.
 module fekap_assembly_lapack
    use fekap_kinds, only: dp
    implicit none
    private
 
-   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dpbcon, dgbcon, dgetrf, dgetrs, dgecon
+   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dgeqp3
+   public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
 
    interface
       !> Cholesky factorisation of a symmetric positive definite band matrix.
@@ -46,30 +49,7 @@ module fekap_assembly_lapack
          integer, intent(out) :: info
       end subroutine dgbtrs
 
-      !> Reciprocal condition number (1-norm) from the factor of dpbtrf.
-      subroutine dpbcon(uplo, n, kd, ab, ldab, anorm, rcond, work, iwork, info)
-         import :: dp
-         character, intent(in) :: uplo
-         integer, intent(in) :: n, kd, ldab
-         real(dp), intent(in) :: ab(ldab, *), anorm
-         real(dp), intent(out) :: rcond
-         real(dp), intent(inout) :: work(*)
-         integer, intent(inout) :: iwork(*)
-         integer, intent(out) :: info
-      end subroutine dpbcon
 
-      !> Reciprocal condition number from the factor of dgbtrf.
-      subroutine dgbcon(norm, n, kl, ku, ab, ldab, ipiv, anorm, rcond, work, iwork, info)
-         import :: dp
-         character, intent(in) :: norm
-         integer, intent(in) :: n, kl, ku, ldab
-         real(dp), intent(in) :: ab(ldab, *), anorm
-         integer, intent(in) :: ipiv(*)
-         real(dp), intent(out) :: rcond
-         real(dp), intent(inout) :: work(*)
-         integer, intent(inout) :: iwork(*)
-         integer, intent(out) :: info
-      end subroutine dgbcon
 
       !> LU factorisation with partial pivoting of a general (dense) matrix.
       pure subroutine dgetrf(m, n, a, lda, ipiv, info)
@@ -91,17 +71,59 @@ module fekap_assembly_lapack
          integer, intent(out) :: info
       end subroutine dgetrs
 
-      !> Reciprocal condition number from the factor of dgetrf.
-      subroutine dgecon(norm, n, a, lda, anorm, rcond, work, iwork, info)
+
+      !> QR factorisation with column pivoting (rank-revealing).
+      subroutine dgeqp3(m, n, a, lda, jpvt, tau, work, lwork, info)
          import :: dp
-         character, intent(in) :: norm
-         integer, intent(in) :: n, lda
-         real(dp), intent(in) :: a(lda, *), anorm
-         real(dp), intent(out) :: rcond
+         integer, intent(in) :: m, n, lda, lwork
+         real(dp), intent(inout) :: a(lda, *)
+         integer, intent(inout) :: jpvt(*)
+         real(dp), intent(out) :: tau(*)
          real(dp), intent(inout) :: work(*)
-         integer, intent(inout) :: iwork(*)
          integer, intent(out) :: info
-      end subroutine dgecon
+      end subroutine dgeqp3
    end interface
+
+contains
+
+   !> LU factorisation with partial pivoting of the square matrix a (dgetrf).
+   !> info > 0: U(info, info) is exactly zero.
+   subroutine dense_lu_factor(a, ipiv, info)
+      !> The matrix on entry, its L and U factors on return.
+      real(dp), contiguous, intent(inout) :: a(:, :)
+      !> Row interchanges.
+      integer, contiguous, intent(out) :: ipiv(:)
+      integer, intent(out) :: info
+      call dgetrf(size(a, 1), size(a, 2), a, max(1, size(a, 1)), ipiv, info)
+   end subroutine dense_lu_factor
+
+   !> Solve a x = b with the factors from dense_lu_factor (dgetrs); b becomes x.
+   subroutine dense_lu_solve(a, ipiv, b, info)
+      real(dp), contiguous, intent(in) :: a(:, :)
+      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp), contiguous, intent(inout) :: b(:)
+      integer, intent(out) :: info
+      call dgetrs('N', size(a, 1), 1, a, max(1, size(a, 1)), ipiv, b, max(1, size(b)), info)
+   end subroutine dense_lu_solve
+
+   !> QR factorisation with column pivoting of a (dgeqp3): a P = Q R.
+   !> On return the upper triangle of a holds R and jpvt the column order.
+   subroutine dense_pivoted_qr(a, jpvt, info)
+      real(dp), contiguous, intent(inout) :: a(:, :)
+      !> Column k of a P is column jpvt(k) of the original a.
+      integer, contiguous, intent(out) :: jpvt(:)
+      integer, intent(out) :: info
+      real(dp), allocatable :: tau(:), work(:)
+      real(dp) :: query(1)
+      integer :: m, n
+      m = size(a, 1)
+      n = size(a, 2)
+      jpvt = 0
+      allocate (tau(max(1, min(m, n))))
+      call dgeqp3(m, n, a, max(1, m), jpvt, tau, query, -1, info)
+      if (info /= 0) return
+      allocate (work(max(1, int(query(1)))))
+      call dgeqp3(m, n, a, max(1, m), jpvt, tau, work, size(work), info)
+   end subroutine dense_pivoted_qr
 
 end module fekap_assembly_lapack

@@ -21,7 +21,7 @@ module fekap_classical_cartesian
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type, is_converged
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
-   use fekap_classical_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
+   use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
    use fekap_classical_stepping, only: history_type, new_history, drive_value, new_step_convergence, &
       & no_convergence_text, real_text
    implicit none
