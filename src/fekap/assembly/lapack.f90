@@ -49,8 +49,6 @@ module fekap_assembly_lapack
          integer, intent(out) :: info
       end subroutine dgbtrs
 
-
-
       !> LU factorisation with partial pivoting of a general (dense) matrix.
       pure subroutine dgetrf(m, n, a, lda, ipiv, info)
          import :: dp
@@ -70,7 +68,6 @@ module fekap_assembly_lapack
          real(dp), intent(inout) :: b(ldb, *)
          integer, intent(out) :: info
       end subroutine dgetrs
-
 
       !> QR factorisation with column pivoting (rank-revealing).
       subroutine dgeqp3(m, n, a, lda, jpvt, tau, work, lwork, info)
