@@ -393,10 +393,13 @@ contains
 
       allocate (self%eq(self%ndof), source=0)
       allocate (self%eq_dof(nf))
+      ! Reverse: the free dof ordered k-th gets equation nf + 1 - k.
+      do k = 1, nf
+         level(order(k)) = nf + 1 - k
+      end do
       do i = 1, self%ndof
          if (free_index(i) == 0) cycle
-         ! Reverse: the dof ordered k-th gets equation nf + 1 - k.
-         self%eq(i) = nf + 1 - findloc(order, free_index(i), dim=1)
+         self%eq(i) = level(free_index(i))
          self%eq_dof(self%eq(i)) = i
       end do
 
@@ -483,27 +486,43 @@ contains
    pure subroutine coupling_groups(self, group_start, group_dof)
       type(mesh_type), intent(in) :: self
       integer, allocatable, intent(out) :: group_start(:), group_dof(:)
-      integer :: e, i, ng
-      integer, allocatable :: pts(:)
-      ng = size(self%edof, 2) + size(self%slides)
-      allocate (group_start(ng + 1), group_dof(0))
+      integer :: e, i, k, ng, nel, total
+      nel = size(self%edof, 2)
+      ng = nel + size(self%slides)
+      ! Sizes first, then fill: no array grows inside the loops.
+      total = 6*nel
+      do i = 1, size(self%slides)
+         associate (sl => self%slides(i))
+            total = total + 2 + merge(1, 0, sl%slave_rot > 0)
+            if (.not. sl%ground) total = total + 2*(size(sl%seg, 2) + 1)
+         end associate
+      end do
+      allocate (group_start(ng + 1), group_dof(total))
       group_start(1) = 1
-      do e = 1, size(self%edof, 2)
-         group_dof = [group_dof, self%edof(:, e)]
-         group_start(e + 1) = size(group_dof) + 1
+      k = 0
+      do e = 1, nel
+         group_dof(k + 1:k + 6) = self%edof(:, e)
+         k = k + 6
+         group_start(e + 1) = k + 1
       end do
       do i = 1, size(self%slides)
          associate (sl => self%slides(i))
-            group_dof = [group_dof, self%tdof(:, sl%slave)]
-            if (sl%slave_rot > 0) group_dof = [group_dof, sl%slave_rot]
+            group_dof(k + 1:k + 2) = self%tdof(:, sl%slave)
+            k = k + 2
+            if (sl%slave_rot > 0) then
+               group_dof(k + 1) = sl%slave_rot
+               k = k + 1
+            end if
             if (.not. sl%ground) then
-               pts = [sl%seg(1, :), sl%seg(2, size(sl%seg, 2))]
-               do e = 1, size(pts)
-                  group_dof = [group_dof, self%tdof(:, pts(e))]
+               do e = 1, size(sl%seg, 2)
+                  group_dof(k + 1:k + 2) = self%tdof(:, sl%seg(1, e))
+                  k = k + 2
                end do
+               group_dof(k + 1:k + 2) = self%tdof(:, sl%seg(2, size(sl%seg, 2)))
+               k = k + 2
             end if
          end associate
-         group_start(size(self%edof, 2) + i + 1) = size(group_dof) + 1
+         group_start(nel + i + 1) = k + 1
       end do
    end subroutine coupling_groups
 

@@ -7,6 +7,7 @@ module fekap_deck_context
    use fekap_model, only: source_loc_type
    use fekap_deck_card, only: card_of, card_none, card_name
    use fekap_strings, only: lower
+   use fekap_deck_name_index, only: name_index_type
    use fekap_deck_diagnostic, only: diagnostics_type, mark_type
    use fekap_deck_expression, only: evaluate_expression, evaluate_integer
    use fekap_deck_source, only: source_type
@@ -19,6 +20,8 @@ module fekap_deck_context
    type :: context_type
       type(source_type) :: source
       type(diagnostics_type) :: diagnostics
+      !> Indexes of the model's node and link names, built as they are read.
+      type(name_index_type) :: nodes, links
    contains
       !> Report an error at field `itok` of line `iline` (past the end: at the end of the line).
       procedure :: error => context_error

@@ -7,6 +7,7 @@ module fekap_deck_geometry
       & find_node, find_link, model_size, dof_x, dof_y, dof_rot
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, same_name
+   use fekap_deck_name_index, only: new_name_index
    use fekap_deck_context, only: context_type
    use fekap_deck_expression, only: safe_multiply
    implicit none
@@ -177,6 +178,7 @@ contains
       integer :: n, i, iline, j
       logical :: okx, oky
       allocate (list(size(lines)))
+      call new_name_index(ctx%nodes, size(lines))
       n = 0
       do i = 1, size(lines)
          iline = lines(i)
@@ -197,14 +199,12 @@ contains
                list(n)%x(j) = 0
             end if
          end do
-         do j = 1, n - 1
-            if (same_name(list(j)%name, list(n)%name)) then
-               call ctx%error_at(list(n)%loc, "duplicate node name '"//list(n)%name//"'", &
-                  & label='each node needs its own name', note_loc=list(j)%loc, note='first defined here')
-               n = n - 1
-               exit
-            end if
-         end do
+         call ctx%nodes%insert(list(n)%name, n, j)
+         if (j > 0) then
+            call ctx%error_at(list(n)%loc, "duplicate node name '"//list(n)%name//"'", &
+               & label='each node needs its own name', note_loc=list(j)%loc, note='first defined here')
+            n = n - 1
+         end if
       end do
       model%nodes = list(:n)
    end subroutine read_nodes
@@ -220,6 +220,7 @@ contains
       logical :: ok, keep, fine
       real(dp) :: length, size_
       allocate (list(size(lines)))
+      call new_name_index(ctx%links, size(lines))
       size_ = model_size(model)
       n = 0
       do i = 1, size(lines)
@@ -266,14 +267,14 @@ contains
                   & label='move one of the nodes (see NODEs)')
             end if
          end if
-         do j = 1, n - 1
-            if (same_name(list(j)%name, list(n)%name)) then
+         if (keep) then
+            call ctx%links%insert(list(n)%name, n, j)
+            if (j > 0) then
                call ctx%error_at(list(n)%loc, "duplicate link name '"//list(n)%name//"'", &
                   & label='each link needs its own name', note_loc=list(j)%loc, note='first defined here')
                keep = .false.
-               exit
             end if
-         end do
+         end if
          if (.not. keep) n = n - 1
       end do
       model%links = list(:n)
@@ -434,7 +435,7 @@ contains
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(in) :: model
       integer, intent(in) :: iline, itok
-      node = find_node(model, ctx%field(iline, itok))
+      node = ctx%nodes%find(ctx%field(iline, itok))
       if (node == 0) call ctx%error(iline, itok, "undefined node '"//ctx%field(iline, itok)//"'", &
          & label='define it in NODEs')
    end function lookup_node
@@ -444,7 +445,7 @@ contains
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(in) :: model
       integer, intent(in) :: iline, itok
-      link = find_link(model, ctx%field(iline, itok))
+      link = ctx%links%find(ctx%field(iline, itok))
       if (link == 0) call ctx%error(iline, itok, "undefined link '"//ctx%field(iline, itok)//"'", &
          & label='define it in LINKs')
    end function lookup_link
