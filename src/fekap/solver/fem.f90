@@ -99,6 +99,11 @@ module fekap_solver_fem
       !> whether the first is known.
       real(dp), allocatable :: jump_response(:, :), jump_response_new(:, :)
       logical :: has_jump_response = .false.
+      !> Length of the shortest link, the unit of translation drives in the jump check.
+      real(dp) :: shortest_link = 1
+      !> (4, npairs): link ends hinged to each other (link, end, link, end), for the
+      !> jump check's collinear crossings.
+      integer, allocatable :: hinge_pairs(:, :)
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
@@ -134,6 +139,12 @@ contains
       self%conv%tol = model%analysis%tol
       self%conv%length = model%analysis%length_tol*self%size
       self%admissible_strain = min(max_admissible_strain, max(min_admissible_strain, 100*model%analysis%tol))
+      self%shortest_link = huge(1.0_dp)
+      do i = 1, size(model%links)
+         self%shortest_link = min(self%shortest_link, norm2(model%nodes(model%links(i)%node(2))%x - &
+            & model%nodes(model%links(i)%node(1))%x))
+      end do
+      call find_hinge_pairs(self)
       ! Residual floor: a strain of 1e-13 in the stiffest element.
       force_scale = 0
       do e = 1, size(self%mesh%elements)
@@ -250,8 +261,7 @@ contains
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof)
          self%seg = self%seg_accepted
-         call predict(self, t, qt, error)
-         if (allocated(error)) return
+         call predict(self, t, qt)
          ! Scale of the residual: what the drive (and load) increment alone
          ! produces from the last configuration, to first order -K_fd dq_d +
          ! dlambda f, with the free-driven block of the last tangent (at the
@@ -319,7 +329,6 @@ contains
             call relocate(self, t, qt, moved, error)
             if (allocated(error)) return
             if (.not. moved) exit relocations
-            self%factor_current = .false.
          end do relocations
          if (.not. self%loaded) then
             call max_strain(mesh, qt, strain, element)
@@ -328,7 +337,6 @@ contains
                   & ': Newton converged to a self-stressed configuration (strain ', strain, ' in link '
                call analysis_error(error, trim(msg)//' '//self%model%links(mesh%elink(element))%name// &
                   & '), not a mechanism configuration')
-               self%factor_current = .false.
                return
             end if
             call check_gaps(self, t, qt, error)
@@ -342,7 +350,7 @@ contains
 
    !> Norm of -K_fd (q_d(t) - q_d) + (t - t_q) f_ext over the free dofs.
    subroutine drive_increment_residual(self, t, scale)
-      type(fem_stepper_type), intent(inout) :: self
+      type(fem_stepper_type), intent(in) :: self
       real(dp), intent(in) :: t
       real(dp), intent(out) :: scale
       real(dp) :: f, df, ddf, dqd(self%mesh%ndriven)
@@ -366,11 +374,10 @@ contains
    !> tangent predictor, the linear response of the last configuration to the
    !> drive increment: rotating a driven link end alone would strain its
    !> element so much that Newton may leave the assembly branch.
-   subroutine predict(self, t, qt, error)
+   subroutine predict(self, t, qt)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       real(dp), intent(out) :: qt(:)
-      type(error_type), allocatable, intent(out) :: error
       real(dp) :: h
       integer :: i
       h = t - self%t
@@ -383,14 +390,14 @@ contains
          else if (self%nhist > 1) then
             call extrapolate(self%hist(:, 1:self%nhist), self%thist(1:self%nhist), t, qt)
          else
-            call tangent_predictor(self, t, qt, error)
+            call tangent_predictor(self, t, qt)
          end if
       case default
          if (self%nhist > 1) then
             call extrapolate(self%hist(:, 1:self%nhist), self%thist(1:self%nhist), t, qt)
             call guard_extrapolation(self, t, qt)
          else
-            call tangent_predictor(self, t, qt, error)
+            call tangent_predictor(self, t, qt)
          end if
       end select
       do i = 1, self%mesh%ndof
@@ -420,11 +427,10 @@ contains
 
    !> qt = q + dq with K_ff dq_f = -K_fd dq_d + (t - t_q) f_ext: the tangent at
    !> the accepted configuration applied to the drive and load increments.
-   subroutine tangent_predictor(self, t, qt, error)
+   subroutine tangent_predictor(self, t, qt)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       real(dp), intent(out) :: qt(:)
-      type(error_type), allocatable, intent(out) :: error
       integer :: info
       qt = self%q
       call set_driven(self, t, qt)
@@ -546,7 +552,6 @@ contains
          if (abs(g) > self%admissible_strain*self%size) then
             write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, ': Newton converged with a gap of ', g, ' at slideline '
             call analysis_error(error, trim(msg)//' '//self%model%slidelines(i)%name//', not a mechanism configuration')
-            self%factor_current = .false.
             return
          end if
       end do
@@ -570,17 +575,12 @@ contains
       real(dp), intent(in) :: t, qt(:)
       integer, intent(in) :: iterations
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: f, df, ddf, f0, floor, shortest, bound, ratio, worst, dd(self%mesh%ndriven)
-      integer :: i, j, l, worst_dof, flip_link(2), flip_node
+      real(dp) :: f, df, ddf, f0, floor, bound, ratio, worst, dd(self%mesh%ndriven)
+      integer :: i, j, worst_dof, flip_link(2), flip_node
       logical :: has_response
       character(len=200) :: msg
       associate (mesh => self%mesh, eqd => self%mesh%eq_dof, dq_new => self%work, dq_old => self%r, &
          & resp => self%jump_response_new)
-         shortest = huge(1.0_dp)
-         do l = 1, size(self%model%links)
-            shortest = min(shortest, norm2(self%model%nodes(self%model%links(l)%node(2))%x - &
-               & self%model%nodes(self%model%links(l)%node(1))%x))
-         end do
          floor = 0
          do j = 1, mesh%ndriven
             call self%model%drives(j)%law%eval(t, f, df, ddf)
@@ -589,7 +589,7 @@ contains
             if (mesh%dof_kind(mesh%driven_dof(j)) == dof_rot) then
                floor = max(floor, abs(dd(j)))
             else
-               floor = max(floor, abs(dd(j))/shortest)
+               floor = max(floor, abs(dd(j))/self%shortest_link)
             end if
          end do
          ! Response at the new configuration from the last Newton factor (if
@@ -629,7 +629,6 @@ contains
                & qt(worst_dof) - self%q(worst_dof), ' rad over the step, ', worst, &
                & ' times what the drive increment explains) at'
             call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, worst_dof))
-            self%factor_current = .false.
             return
          end if
          if (flip_link(1) > 0) then
@@ -637,7 +636,6 @@ contains
             call analysis_error(error, trim(msg)//' '//self%model%links(flip_link(1))%name//' and '// &
                & self%model%links(flip_link(2))%name//' at node '//self%model%nodes(flip_node)%name// &
                & ' passed through collinear against the drive increment''s sense)')
-            self%factor_current = .false.
             return
          end if
          self%jump_response = resp
@@ -656,42 +654,91 @@ contains
       type(fem_stepper_type), intent(in) :: self
       real(dp), intent(in) :: qt(:), dq_old(:), dq_new(:)
       integer, intent(out) :: flip_link(2), flip_node
-      integer :: l1, l2, e1, e2, r1, r2
+      integer :: k, l1, l2, e1, e2, r1, r2
       real(dp) :: psi0, psi1, lo, hi, sense, pi
       pi = acos(-1.0_dp)
       flip_link = 0
       flip_node = 0
       associate (mesh => self%mesh, links => self%model%links)
-         do l1 = 1, size(links)
-            do l2 = l1 + 1, size(links)
-               do e1 = 1, 2
-                  do e2 = 1, 2
-                     if (links(l1)%node(e1) /= links(l2)%node(e2)) cycle
-                     r1 = mesh%link_rot(e1, l1)
-                     r2 = mesh%link_rot(e2, l2)
-                     if (r1 == r2) cycle
-                     psi0 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + self%q(r1) - self%q(r2)
-                     psi1 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + qt(r1) - qt(r2)
-                     lo = min(psi0, psi1)/pi
-                     hi = max(psi0, psi1)/pi
-                     ! A multiple of pi strictly inside (lo, hi): the links passed through collinear.
-                     if (floor(hi - hinge_margin) < ceiling(lo + hinge_margin)) cycle
-                     sense = sign(1.0_dp, psi1 - psi0)
-                     ! The response at the new configuration must carry psi through in the crossing
-                     ! sense (a response of zero there is the closest approach of a near-toggle, not a
-                     ! crossing); at the last one it must not oppose it (unknown on the first step).
-                     if (sense*(dq_old(r1) - dq_old(r2)) < 0 .or. &
-                        & sense*(dq_new(r1) - dq_new(r2)) <= hinge_response*abs(psi1 - psi0)) then
-                        flip_link = [l1, l2]
-                        flip_node = links(l1)%node(e1)
-                        return
-                     end if
-                  end do
-               end do
-            end do
+         do k = 1, size(self%hinge_pairs, 2)
+            l1 = self%hinge_pairs(1, k)
+            e1 = self%hinge_pairs(2, k)
+            l2 = self%hinge_pairs(3, k)
+            e2 = self%hinge_pairs(4, k)
+            r1 = mesh%link_rot(e1, l1)
+            r2 = mesh%link_rot(e2, l2)
+            psi0 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + self%q(r1) - self%q(r2)
+            psi1 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + qt(r1) - qt(r2)
+            lo = min(psi0, psi1)/pi
+            hi = max(psi0, psi1)/pi
+            ! A multiple of pi strictly inside (lo, hi): the links passed through collinear.
+            if (floor(hi - hinge_margin) < ceiling(lo + hinge_margin)) cycle
+            sense = sign(1.0_dp, psi1 - psi0)
+            ! The response at the new configuration must carry psi through in the crossing
+            ! sense (a response of zero there is the closest approach of a near-toggle, not a
+            ! crossing); at the last one it must not oppose it (unknown on the first step).
+            if (sense*(dq_old(r1) - dq_old(r2)) < 0 .or. &
+               & sense*(dq_new(r1) - dq_new(r2)) <= hinge_response*abs(psi1 - psi0)) then
+               flip_link = [l1, l2]
+               flip_node = links(l1)%node(e1)
+               return
+            end if
          end do
       end associate
    end subroutine hinge_flip
+
+   !> The pairs of link ends that meet at a node with rotations of their own
+   !> (hinged, not welded), found once through the ends at each node.
+   subroutine find_hinge_pairs(self)
+      type(fem_stepper_type), intent(inout) :: self
+      integer, allocatable :: count(:), first(:), ends(:, :)
+      integer :: nnode, l, e, node, i, j, npair
+      nnode = size(self%model%nodes)
+      allocate (count(nnode), source=0)
+      do l = 1, size(self%model%links)
+         count(self%model%links(l)%node) = count(self%model%links(l)%node) + 1
+      end do
+      allocate (first(nnode + 1))
+      first(1) = 1
+      do node = 1, nnode
+         first(node + 1) = first(node) + count(node)
+      end do
+      ! ends(:, first(node):first(node+1)-1): (link, end) of every link end at node.
+      allocate (ends(2, first(nnode + 1) - 1))
+      count = 0
+      do l = 1, size(self%model%links)
+         do e = 1, 2
+            node = self%model%links(l)%node(e)
+            ends(:, first(node) + count(node)) = [l, e]
+            count(node) = count(node) + 1
+         end do
+      end do
+      npair = 0
+      do node = 1, nnode
+         do i = first(node), first(node + 1) - 1
+            do j = i + 1, first(node + 1) - 1
+               if (.not. welded(i, j)) npair = npair + 1
+            end do
+         end do
+      end do
+      allocate (self%hinge_pairs(4, npair))
+      npair = 0
+      do node = 1, nnode
+         do i = first(node), first(node + 1) - 1
+            do j = i + 1, first(node + 1) - 1
+               if (welded(i, j)) cycle
+               npair = npair + 1
+               self%hinge_pairs(:, npair) = [ends(:, i), ends(:, j)]
+            end do
+         end do
+      end do
+   contains
+      !> Whether the link ends i and j of `ends` share their rotation.
+      logical function welded(i_, j_)
+         integer, intent(in) :: i_, j_
+         welded = self%mesh%link_rot(ends(2, i_), ends(1, i_)) == self%mesh%link_rot(ends(2, j_), ends(1, j_))
+      end function welded
+   end subroutine find_hinge_pairs
 
    !> Make q at time t the accepted configuration and push it on the history.
    subroutine accept(self, t, q)
