@@ -11,7 +11,7 @@ program fekap_main
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
       & new_cartesian_stepper
    use fekap_solver_interrupt, only: catch_interrupts
-   use fekap_solver_run, only: run_units_type, run_analysis, step_count, no_unit
+   use fekap_solver_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
    use fekap_output_csv, only: write_mesh_csv
    use fekap_output_listing, only: write_listing_model, write_listing_plan, plan_text
    use fekap_app_cli, only: cli_type, parse_command_line, apply_overrides, usage_text, fekap_version
@@ -129,15 +129,15 @@ contains
       stem = deck(index(deck, '/', back=.true.) + 1:)
       if (index(stem, '.', back=.true.) > 1) stem = stem(:index(stem, '.', back=.true.) - 1)
       if (model%output%csv) then
-         call open_file(outdir//'/points.csv', units%points, error)
-         if (.not. allocated(error)) call open_file(outdir//'/links.csv', units%links, error)
-         if (.not. allocated(error)) call open_file(outdir//'/steps.csv', units%steps, error)
-         if (.not. allocated(error)) call open_file(outdir//'/mesh.csv', mesh_unit, error)
+         call open_replace(outdir//'/points.csv', units%points, error)
+         if (.not. allocated(error)) call open_replace(outdir//'/links.csv', units%links, error)
+         if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error)
+         if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error)
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)
          close (mesh_unit)
       end if
-      if (model%output%listing) call open_file(outdir//'/'//stem//'.lis', units%listing, error)
+      if (model%output%listing) call open_replace(outdir//'/'//stem//'.lis', units%listing, error)
       if (allocated(error)) return
       if (model%output%vtk) then
          call execute_command_line('mkdir -p "'//outdir//'/vtk"', exitstat=stat)
@@ -151,18 +151,6 @@ contains
       end if
    end subroutine open_outputs
 
-   !> Open a file for writing, replacing it.
-   subroutine open_file(path, unit, error)
-      character(*), intent(in) :: path
-      integer, intent(out) :: unit
-      type(error_type), allocatable, intent(out) :: error
-      integer :: ios
-      open (newunit=unit, file=path, status='replace', action='write', iostat=ios)
-      if (ios /= 0) then
-         unit = no_unit
-         call fatal_error(error, path//': cannot write this file')
-      end if
-   end subroutine open_file
 
    !> Print the error and exit with the code of its kind.
    subroutine finish(error)

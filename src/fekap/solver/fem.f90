@@ -180,8 +180,7 @@ contains
       else
          call accept(self, self%t, self%q)
       end if
-      call solve_rates(self, error)
-      if (allocated(error)) return
+      call solve_rates(self)
       call fill_result(self, result)
    end subroutine fem_start
 
@@ -226,14 +225,12 @@ contains
          result%residual = residual
          if (self%t < t) then
             ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
-            if (self%model%analysis%predictor == predictor_taylor) call solve_rates(self, error)
-            if (allocated(error)) return
+            if (self%model%analysis%predictor == predictor_taylor) call solve_rates(self)
             h = min(2*h, h_full)
          end if
       end do
       result%cuts = self%last_cuts
-      call solve_rates(self, error)
-      if (allocated(error)) return
+      call solve_rates(self)
       if (allocated(cut_reason)) then
          ! The listing says why the step was cut (the first and the last rejection).
          write (note, '(a,i0,a)') 'step cut ', self%last_cuts, ' time(s); first rejection:'
@@ -781,9 +778,8 @@ contains
    !> the tangent at the accepted configuration (the material tangent there,
    !> since the geometric part vanishes with the stresses; the load factor is
    !> lambda = t, so lambda' = 1, lambda'' = 0).
-   subroutine solve_rates(self, error)
+   subroutine solve_rates(self)
       type(fem_stepper_type), intent(inout) :: self
-      type(error_type), allocatable, intent(out) :: error
       real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven), ratio, clock
       integer :: i, k, info
       character(len=160) :: note

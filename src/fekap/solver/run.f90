@@ -16,7 +16,7 @@ module fekap_solver_run
    implicit none
    private
 
-   public :: run_units_type, run_analysis, step_count, step_time
+   public :: run_units_type, run_analysis, step_count, step_time, open_replace
 
    !> A unit that is not written (newunit numbers are negative, so not -1).
    integer, parameter, public :: no_unit = -huge(1)
@@ -211,14 +211,17 @@ contains
       name = 'vtk/'//stem//'_'//trim(digits)//'.vtu'
    end function vtu_name
 
-   !> Open a file for writing, replacing it.
+   !> Open a file for writing, replacing it (no_unit and an error if it cannot be written).
    subroutine open_replace(path, unit, error)
       character(*), intent(in) :: path
       integer, intent(out) :: unit
       type(error_type), allocatable, intent(out) :: error
       integer :: ios
       open (newunit=unit, file=path, status='replace', action='write', iostat=ios)
-      if (ios /= 0) call fatal_error(error, path//': cannot write this file')
+      if (ios /= 0) then
+         unit = no_unit
+         call fatal_error(error, path//': cannot write this file')
+      end if
    end subroutine open_replace
 
    pure function int_text(n) result(text)
