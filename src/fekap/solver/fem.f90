@@ -54,6 +54,28 @@ module fekap_solver_fem
    !> Least share of a collinear crossing that the response at the new
    !> configuration must explain in the crossing sense.
    real(dp), parameter :: hinge_response = 1.0e-3_dp
+   !> Step-doubling verification (see verify_step): a step in which a hinged
+   !> pair crosses collinear turning by more than verify_turn radians is solved
+   !> again as two half steps (themselves verified, at most max_verify_depth
+   !> halvings deep) and rejected when the results differ by more than
+   !> verify_agreement model sizes (or the admissible strain, if larger).
+   real(dp), parameter :: verify_turn = 0.1_dp, verify_agreement = 1.0e-6_dp
+   integer, parameter :: max_verify_depth = 10
+
+   !> The accepted state of a stepper that a step changes: what step-doubling
+   !> verification restores to solve the same step again in two halves.
+   type :: saved_state_type
+      real(dp), allocatable :: q(:), v(:), a(:), hist(:, :), thist(:), jump_response(:, :)
+      integer, allocatable :: seg_accepted(:)
+      real(dp) :: t = 0, reference_pivot = 0
+      integer :: nhist = 0
+      logical :: has_velocity = .false., has_acceleration = .false., has_jump_response = .false.
+      character(len=note_length) :: note = ''
+      !> The step that follows: the hinged pair that crossed collinear
+      !> (link, link, node) and its largest turn, for the messages.
+      integer :: crossing(3) = 0
+      real(dp) :: turn = 0
+   end type saved_state_type
 
    type, extends(stepper_type) :: fem_stepper_type
       type(model_type) :: model
@@ -104,6 +126,14 @@ module fekap_solver_fem
       !> (4, npairs): link ends hinged to each other (link, end, link, end), for the
       !> jump check's collinear crossings.
       integer, allocatable :: hinge_pairs(:, :)
+      !> Whether the step just accepted awaits step-doubling verification, and
+      !> the number of halvings of the step being solved (0: a step of the caller's).
+      logical :: verify_pending = .false.
+      integer :: verify_depth = 0
+      !> Whether a verification could not be completed (see advance_to).
+      logical :: verify_failed = .false.
+      !> The accepted state before the step at each verification depth.
+      type(saved_state_type) :: before(0:max_verify_depth)
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
@@ -185,50 +215,17 @@ contains
    end subroutine fem_start
 
    !> Advance to time t, cutting the step in halves when Newton fails or
-   !> converges to an inadmissible configuration.
+   !> converges to an inadmissible configuration, and verifying suspect steps
+   !> (see advance_to); then the rates and the listing note.
    subroutine fem_advance(self, t, result, error)
       class(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      type(error_type), allocatable :: step_error
-      real(dp) :: h, h_full, t_try, residual
-      integer :: iterations
       character(len=200) :: note
       character(:), allocatable :: cut_reason, last_reason
-      h_full = t - self%t
-      h = h_full
-      self%last_cuts = 0
-      result%iterations = 0
-      do while (self%t < t)
-         t_try = min(self%t + h, t)
-         if (t - t_try < 1.0e-12_dp*abs(h_full)) t_try = t
-         call solve_step(self, t_try, iterations, residual, step_error)
-         result%iterations = result%iterations + iterations
-         if (allocated(step_error)) then
-            self%last_cuts = self%last_cuts + 1
-            if (self%last_cuts > max_cuts) then
-               write (note, '(a,i0,a)') ' (after ', max_cuts, &
-                  & ' step cuts; try a smaller time step or another predictor)'
-               call analysis_error(error, step_error%message//trim(note))
-               return
-            end if
-            if (allocated(cut_reason)) then
-               last_reason = step_error%message
-            else
-               cut_reason = step_error%message
-            end if
-            deallocate (step_error)
-            h = h/2
-            cycle
-         end if
-         result%residual = residual
-         if (self%t < t) then
-            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
-            if (self%model%analysis%predictor == predictor_taylor) call solve_rates(self)
-            h = min(2*h, h_full)
-         end if
-      end do
+      call advance_to(self, t, 0, result%iterations, result%residual, self%last_cuts, cut_reason, last_reason, error)
+      if (allocated(error)) return
       result%cuts = self%last_cuts
       call solve_rates(self)
       if (allocated(cut_reason)) then
@@ -243,6 +240,89 @@ contains
       end if
       call fill_result(self, result)
    end subroutine fem_advance
+
+   !> Advance the accepted state to time t: try the whole interval, halve the
+   !> step after a failure (at most max_cuts times), double it again after a
+   !> success. A step that branch_jump finds suspect is verified by two half
+   !> steps (verify_step, which calls this again one level deeper); a step
+   !> they contradict counts as cut and is replaced by them. The first and last
+   !> reasons for a cut are kept for the listing.
+   recursive subroutine advance_to(self, t, depth, iterations, residual, cuts, cut_reason, last_reason, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      !> Verification depth: 0 for a step of the run, k for a step halved k times.
+      integer, intent(in) :: depth
+      integer, intent(out) :: iterations, cuts
+      !> Residual of the last accepted step.
+      real(dp), intent(inout) :: residual
+      character(:), allocatable, intent(inout) :: cut_reason, last_reason
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: step_error
+      character(:), allocatable :: rejection
+      real(dp) :: h, h_full, t_try, step_residual
+      integer :: it
+      character(len=80) :: note
+      h_full = t - self%t
+      h = h_full
+      cuts = 0
+      iterations = 0
+      do while (self%t < t)
+         t_try = min(self%t + h, t)
+         if (t - t_try < 1.0e-12_dp*abs(h_full)) t_try = t
+         self%verify_depth = depth
+         call solve_step(self, t_try, it, step_residual, step_error)
+         iterations = iterations + it
+         if (self%verify_pending) then
+            ! The branch-jump check asked for the step to be confirmed by two half steps.
+            self%verify_pending = .false.
+            if (.not. allocated(step_error)) then
+               call verify_step(self, t_try, depth, it, step_residual, rejection, step_error)
+               iterations = iterations + it
+            end if
+         end if
+         if (allocated(rejection)) then
+            ! Contradicted by its half steps, which replaced it: a cut step.
+            cuts = cuts + 1
+            call keep_reason(rejection)
+            deallocate (rejection)
+         end if
+         if (allocated(step_error)) then
+            ! A verification that could not be completed ends every level above
+            ! it at once (cutting there would repeat it); the run's step is cut.
+            if (self%verify_failed .and. depth > 0) then
+               call move_alloc(step_error, error)
+               return
+            end if
+            self%verify_failed = .false.
+            cuts = cuts + 1
+            if (cuts > max_cuts) then
+               write (note, '(a,i0,a)') ' (after ', max_cuts, ' step cuts; try a smaller time step or another predictor)'
+               call analysis_error(error, step_error%message//trim(note))
+               return
+            end if
+            call keep_reason(step_error%message)
+            deallocate (step_error)
+            h = h/2
+            cycle
+         end if
+         residual = step_residual
+         if (self%t < t) then
+            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
+            if (self%model%analysis%predictor == predictor_taylor) call solve_rates(self)
+            h = min(2*h, h_full)
+         end if
+      end do
+   contains
+      !> Keep the first and the last reason for a cut.
+      subroutine keep_reason(reason)
+         character(*), intent(in) :: reason
+         if (allocated(cut_reason)) then
+            last_reason = reason
+         else
+            cut_reason = reason
+         end if
+      end subroutine keep_reason
+   end subroutine advance_to
 
    !> Predict and solve P(q) = 0 at time t; accept the configuration if it is
    !> admissible. Leaves the accepted state untouched on failure.
@@ -572,8 +652,8 @@ contains
       real(dp), intent(in) :: t, qt(:)
       integer, intent(in) :: iterations
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: f, df, ddf, f0, floor, bound, ratio, worst, dd(self%mesh%ndriven)
-      integer :: i, j, worst_dof, flip_link(2), flip_node
+      real(dp) :: f, df, ddf, f0, floor, bound, ratio, worst, turn, dd(self%mesh%ndriven)
+      integer :: i, j, worst_dof, flip_link(2), flip_node, crossing(3)
       logical :: has_response
       character(len=200) :: msg
       associate (mesh => self%mesh, eqd => self%mesh%eq_dof, dq_new => self%work, dq_old => self%r, &
@@ -620,7 +700,7 @@ contains
                worst_dof = i
             end if
          end do
-         call hinge_flip(self, qt, dq_old, dq_new, flip_link, flip_node)
+         call hinge_flip(self, qt, dq_old, dq_new, flip_link, flip_node, turn, crossing)
          if (worst > jump_ratio) then
             write (msg, '(a,es12.5,a,f9.4,a,es9.2,a)') 't = ', t, ': assembly-mode jump rejected (rotation ', &
                & qt(worst_dof) - self%q(worst_dof), ' rad over the step, ', worst, &
@@ -635,10 +715,148 @@ contains
                & ' passed through collinear against the drive increment''s sense)')
             return
          end if
+         ! Endpoint data cannot tell a step that crosses collinear from one that
+         ! jumps over a near-toggle onto the mirror branch (by symmetry, the
+         ! responses at both ends may agree with a crossing): unless the crossing
+         ! pair turns by less than verify_turn, have it confirmed by two half steps.
+         if (turn > verify_turn) then
+            if (self%verify_depth >= max_verify_depth) then
+               write (msg, '(a,es12.5,a,f7.4,a,i0,a)') 't = ', t, ': assembly-mode jump rejected (links '// &
+                  & self%model%links(crossing(1))%name//' and '//self%model%links(crossing(2))%name// &
+                  & ' crossed collinear turning ', turn, ' rad in a step halved ', max_verify_depth, ' times)'
+               call analysis_error(error, trim(msg))
+               self%verify_failed = .true.
+               return
+            end if
+            call save_state(self, self%before(self%verify_depth))
+            self%before(self%verify_depth)%crossing = crossing
+            self%before(self%verify_depth)%turn = turn
+            self%verify_pending = .true.
+         end if
          self%jump_response = resp
          self%has_jump_response = has_response
       end associate
    end subroutine branch_jump
+
+   !> Step-doubling verification of a step to time t that branch_jump found
+   !> suspect (a hinged pair crossed collinear turning by more than
+   !> verify_turn): the step is accepted, the state before it is in
+   !> self%before(depth). The same interval is solved again from that state as
+   !> two half steps (advance_to one level deeper: cut if they fail, verified
+   !> if suspect) and the results are compared. The state after the half
+   !> steps stays: on agreement it is the same configuration to the tolerance;
+   !> otherwise the step was a jump and `rejection` says so. If the half steps
+   !> cannot be solved, the state before the step is restored and the step is
+   !> rejected (error). A jump over a near-toggle turns the pair that flips by
+   !> its distances from collinear at both ends, so it stays suspect however
+   !> often it is halved, while a real crossing turns less with every halving.
+   recursive subroutine verify_step(self, t, depth, iterations, residual, rejection, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      !> Verification depth of the step (0: a step of the run).
+      integer, intent(in) :: depth
+      !> Newton iterations of the half steps (and of their verification).
+      integer, intent(out) :: iterations
+      !> Residual of the last half step.
+      real(dp), intent(inout) :: residual
+      !> Why the step was replaced by its half steps (not allocated if it was confirmed).
+      character(:), allocatable, intent(out) :: rejection
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: half_error
+      character(:), allocatable :: first_reason, last_reason, pair
+      real(dp), allocatable :: q_whole(:)
+      real(dp) :: t_end(2), distance, d
+      integer :: i, half, it, cuts, worst_dof
+      character(len=200) :: msg
+      q_whole = self%q
+      call restore_state(self, self%before(depth))
+      associate (c => self%before(depth)%crossing)
+         pair = 'links '//self%model%links(c(1))%name//' and '//self%model%links(c(2))%name//' at node '// &
+            & self%model%nodes(c(3))%name
+      end associate
+      t_end = [self%t + (t - self%t)/2, t]
+      iterations = 0
+      do half = 1, 2
+         call advance_to(self, t_end(half), depth + 1, it, residual, cuts, first_reason, last_reason, half_error)
+         iterations = iterations + it
+         if (allocated(half_error)) exit
+         ! The midpoint's rates feed the Taylor predictor, as at a cut step's intermediate points.
+         if (half == 1 .and. self%model%analysis%predictor == predictor_taylor) call solve_rates(self)
+      end do
+      if (allocated(half_error)) then
+         call restore_state(self, self%before(depth))
+         self%verify_failed = .true.
+         if (depth > 0) then
+            call move_alloc(half_error, error)
+         else
+            write (msg, '(a,es12.5,a,f7.4,a)') 't = ', t, ': possible assembly-mode jump rejected ('//pair// &
+               & ' crossed collinear turning ', self%before(depth)%turn, ' rad; two half steps could not confirm it: '
+            call analysis_error(error, trim(msg)//' '//half_error%message//')')
+         end if
+         return
+      end if
+      ! Distance in model sizes (rotations times the model size).
+      distance = 0
+      worst_dof = 1
+      do i = 1, self%mesh%ndof
+         d = abs(q_whole(i) - self%q(i))*self%dof_length(i)/self%size
+         if (d > distance) then
+            distance = d
+            worst_dof = i
+         end if
+      end do
+      if (distance > max(verify_agreement, self%admissible_strain)) then
+         write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, ': assembly-mode jump rejected (the step ends ', distance, &
+            & ' model sizes from where two half steps end, at'
+         rejection = trim(msg)//' '//describe_dof(self%mesh, self%model, worst_dof)//'; '//pair// &
+            & ' crossed collinear); the half steps replace it'
+      end if
+   end subroutine verify_step
+
+   !> Copy the accepted state of the stepper into state.
+   subroutine save_state(self, state)
+      type(fem_stepper_type), intent(in) :: self
+      type(saved_state_type), intent(inout) :: state
+      state%q = self%q
+      state%v = self%v
+      state%a = self%a
+      state%hist = self%hist
+      state%thist = self%thist
+      state%jump_response = self%jump_response
+      state%seg_accepted = self%seg_accepted
+      state%t = self%t
+      state%reference_pivot = self%reference_pivot
+      state%nhist = self%nhist
+      state%has_velocity = self%has_velocity
+      state%has_acceleration = self%has_acceleration
+      state%has_jump_response = self%has_jump_response
+      state%note = self%note
+   end subroutine save_state
+
+   !> Make state the accepted state again; the tangent (and its free-driven
+   !> block, which scales the convergence test) is refactored there.
+   subroutine restore_state(self, state)
+      type(fem_stepper_type), intent(inout) :: self
+      type(saved_state_type), intent(in) :: state
+      integer :: info
+      self%q = state%q
+      self%v = state%v
+      self%a = state%a
+      self%hist = state%hist
+      self%thist = state%thist
+      self%jump_response = state%jump_response
+      self%seg_accepted = state%seg_accepted
+      self%seg = state%seg_accepted
+      self%t = state%t
+      self%reference_pivot = state%reference_pivot
+      self%nhist = state%nhist
+      self%has_velocity = state%has_velocity
+      self%has_acceleration = state%has_acceleration
+      self%has_jump_response = state%has_jump_response
+      self%note = state%note
+      self%factor_current = .false.
+      call refactor_at_accepted(self, info)
+   end subroutine restore_state
 
    !> Orientation part of the branch-jump check. Two links hinged at a node
    !> have a relative angle psi; in a continuous motion psi crosses k pi (the
@@ -647,15 +865,22 @@ contains
    !> fold) crosses against the linear response at the start or at the end of
    !> the step. Returns the first such pair of links (flip_link(1) = 0 if
    !> none) and their node. A zero response (not known) does not object.
-   subroutine hinge_flip(self, qt, dq_old, dq_new, flip_link, flip_node)
+   !> Also returns the largest turn |psi_1 - psi_0| of a pair that crossed
+   !> collinear in the sense of the responses (0 if none did), and that pair
+   !> (link, link, node).
+   subroutine hinge_flip(self, qt, dq_old, dq_new, flip_link, flip_node, turn, crossing)
       type(fem_stepper_type), intent(in) :: self
       real(dp), intent(in) :: qt(:), dq_old(:), dq_new(:)
       integer, intent(out) :: flip_link(2), flip_node
+      real(dp), intent(out) :: turn
+      integer, intent(out) :: crossing(3)
       integer :: k, l1, l2, e1, e2, r1, r2
       real(dp) :: psi0, psi1, lo, hi, sense, pi
       pi = acos(-1.0_dp)
       flip_link = 0
       flip_node = 0
+      turn = 0
+      crossing = 0
       associate (mesh => self%mesh, links => self%model%links)
          do k = 1, size(self%hinge_pairs, 2)
             l1 = self%hinge_pairs(1, k)
@@ -679,6 +904,10 @@ contains
                flip_link = [l1, l2]
                flip_node = links(l1)%node(e1)
                return
+            end if
+            if (abs(psi1 - psi0) > turn) then
+               turn = abs(psi1 - psi0)
+               crossing = [l1, l2, links(l1)%node(e1)]
             end if
          end do
       end associate
