@@ -337,9 +337,11 @@ contains
       call branch_state(self, self%q, iterations == 0, new)
       self%reference = max(self%reference, new%measure)
       call self%system%drive_increments(self%history%t(1), t, dd, rotation)
+      ! The drive increment: radians, or lengths of the shortest link.
       floor = 0
-      if (size(dd) > 0) floor = max(maxval(abs(dd), mask=rotation, dim=1), &
-         & maxval(abs(dd), mask=.not. rotation, dim=1)/self%shortest_link, 0.0_dp)
+      do b = 1, size(dd)
+         floor = max(floor, abs(dd(b))/merge(1.0_dp, self%shortest_link, rotation(b)))
+      end do
       do b = 1, size(dq_old)
          dq_old(b) = dot_product(self%branch%response(3*b, :), dd)
          dq_new(b) = dot_product(new%response(3*b, :), dd)
