@@ -361,19 +361,19 @@ yields a configuration on the wrong branch (here at t = 0.5), not a failure to
 converge. The paper's own Cartesian code may have differed in other details
 (reference points, predictor, iteration cap), which the paper does not give.
 
-**Assembly branches with the default predictor.** FEKAP's classical methods
-with the default (extrapolating) predictor land on the **other assembly
-branch** at dt = 0.25 and at dt = 0.5: C = (3, -3.873) at t = 1 instead of
-(3, 3.873) (table "Where every run ends"; in both cases the last step is the
-first one off the branch). Extrapolating through configurations a quarter or
-half turn apart gives a predictor nearer the mirror-image configuration, and
-nothing in a constraint-equation method tells the two branches apart: both
-satisfy every constraint. These runs exit 0. The FEM with the same predictor
-stays on the upper branch (it falls back to the last configuration when the
-extrapolation strains the links more, and cuts the step when Newton fails).
-With the paper's predictor every method stays on the upper branch, and at
-dt = 0.025 every run does, whatever the settings. For turns this coarse use
-the `previous` predictor or a smaller step.
+**Assembly branches with the default predictor.** Before their assembly-mode
+check (issue #7) FEKAP's classical methods with the default (extrapolating)
+predictor landed on the **other assembly branch** at dt = 0.25 and at
+dt = 0.5: C = (3, -3.873) at t = 1 instead of (3, 3.873), exit 0.
+Extrapolating through configurations a quarter or half turn apart gives a
+predictor nearer the mirror-image configuration, and both branches satisfy
+every constraint. Now both methods check every converged step (the sign of
+the Jacobian's determinant, and each angle's change against its linear
+response to the drive increment; docs/hard-cases.md, section 1b) and cut a
+rejected step in halves, so every run in the table "Where every run ends"
+stays on the upper branch; the cut steps cost iterations (the counts of
+Tables 2 and 3 with the defaults include those of their sub-steps, marked
+"(k cuts)"). With the paper's predictor no step of these runs is rejected.
 """
 
 

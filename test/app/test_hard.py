@@ -121,6 +121,66 @@ def test_peaucellier_fold_caught():
         compare(out, "P", p_exact, 1e-9)
 
 
+def test_classical_large_steps_every_predictor():
+    """The constraint-equation methods on Example 1 at dt = 0.5, 1/3 and 0.25
+    with every predictor: B and C exact (x, v, a) at every step. Before their
+    jump check, extrapolate (all three steps) and taylor (1/3, 0.25) ended on
+    the lower branch, C = (3, -3.873) at t = 1; taylor at 0.5 passed through
+    it at t = 0.5 (an angle jumped by 2 pi there)."""
+    for method in ("angles", "cartesian"):
+        for dt in ("0.5", repr(1 / 3), "0.25"):
+            for predictor in PREDICTORS:
+                out, _ = run_case(FOURBAR, "--method", method, "--dt", dt, "--predictor", predictor)
+                compare(out, "B", fourbar_b, 1e-9)
+                compare(out, "C", fourbar_c, 1e-9)
+
+
+def test_classical_branch_jumps_caught():
+    """The runs of the classical methods that jumped silently now say so: the
+    listing names the rejected jump and the step was cut; the quarter- and
+    half-turn decks with extrapolate jumped too. With previous no step of
+    these runs is rejected."""
+    cases = [(FOURBAR, ("--dt", dt, "--predictor", p)) for p in ("extrapolate", "taylor")
+             for dt in ("0.5", repr(1 / 3), "0.25")]
+    cases += [(d, ("--predictor", "extrapolate")) for d in ("decks/fourbar-quarter-turn.deck",
+                                                          "decks/fourbar-half-turn.deck")]
+    for method in ("angles", "cartesian"):
+        for deck, options in cases:
+            out, _ = run_case(deck, "--method", method, *options)
+            compare(out, "C", fourbar_c, 1e-9)
+            check(JUMP in listing(out), f"{method} {deck} {options}: no jump reported in the listing")
+            _, cuts = work(out)
+            check(cuts >= 1, f"{method} {deck} {options}: the jump was not cut")
+        for dt in ("0.5", repr(1 / 3), "0.25"):
+            out, _ = run_case(FOURBAR, "--method", method, "--dt", dt, "--predictor", "previous")
+            check(JUMP not in listing(out), f"{method} --dt {dt} previous: a legitimate step was rejected")
+
+
+def test_classical_redundant_double_crank():
+    """Example 3 with `redundant remove` (Cartesian): the kept equations allow
+    another motion past the collinear configuration. Before, `previous` went on
+    silently with F off by up to 2 from t = 0.26; now the configuration that
+    violates the removed equations is rejected, and after the cuts the run
+    stops (exit 3) with the rows before it exact. extrapolate passes (exact)."""
+    deck = OUT / "double-crank-redundant.deck"
+    deck.write_text((ROOT / "decks/double-crank.deck").read_text().replace("ANALysis", "ANALysis\n  redundant remove", 1))
+
+    def f_exact(t):
+        phi = angle(t, math.pi / 2, 2 * math.pi)
+        return (4 + cos(phi), sin(phi))
+    out, err = run_case(str(deck), "--method", "cartesian", "--predictor", "previous", name="dc-red-prev", want=3)
+    check("violates the removed (redundant) equations" in err and "step cuts" in err, f"message:\n{err}")
+    p = point_series(out, "F")
+    for i, t in enumerate(p["t"]):
+        fx, fy = f_exact(t)
+        check(max(abs(p["x"][i] - fx.f), abs(p["y"][i] - fy.f)) < 1e-9, f"t = {t}: F off the motion")
+    # 0.0499 passes 0.0005 from collinear: accelerations there are good to 1e-8 of their scale.
+    for dt, tol in (("0.02", 1e-9), ("0.0499", 1e-7)):
+        out, _ = run_case(str(deck), "--method", "cartesian", "--predictor", "extrapolate", "--dt", dt,
+                          name=f"dc-red-extra-{dt}")
+        compare(out, "F", f_exact, tol)
+
+
 # ------------------------------------------------------ singular configurations
 
 
@@ -403,7 +463,8 @@ def test_no_nan_or_inf_anywhere():
 if __name__ == "__main__":
     sys.exit(run_suite("hard", [
         test_fourbar_large_steps_every_predictor, test_legitimate_large_steps_not_rejected,
-        test_branch_jumps_caught, test_peaucellier_fold_caught, test_double_crank_exactly_collinear,
+        test_branch_jumps_caught, test_classical_large_steps_every_predictor, test_classical_branch_jumps_caught,
+        test_classical_redundant_double_crank, test_peaucellier_fold_caught, test_double_crank_exactly_collinear,
         test_double_crank_near_collinear, test_grashof_limit, test_grashof_limit_jumps_caught,
         test_peaucellier_near_flat, test_section_ratios,
         test_penalty_range, test_thousand_revolutions, test_slider_across_master_elements,

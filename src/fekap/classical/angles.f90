@@ -9,13 +9,15 @@
 module fekap_classical_angles
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error, analysis_error
-   use fekap_model, only: model_type, model_size, analysis_type, dof_x, dof_y, dof_rot, convergence_paper
+   use fekap_model, only: model_type, model_size, analysis_type, dof_x, dof_y, dof_rot, convergence_paper, &
+      & predictor_taylor
    use fekap_model_drive_law, only: law_type
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type, is_converged
    use fekap_classical_stepping, only: history_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text
+      & no_convergence_text, real_text, step_cuts_type, branch_state_type, branch_jump_text, magnitude_ratio, &
+      & divergence_length, int_text
    implicit none
    private
 
@@ -44,6 +46,14 @@ module fekap_classical_angles
       real(dp) :: d(2) = 0, dd(2) = 0, ddd(2) = 0
       type(history_type) :: history
       integer :: step = 0
+      !> Names of the crank, coupler and rocker, for messages.
+      character(len=64) :: link_name(3) = ''
+      !> Model size, the unit of divergence.
+      real(dp) :: size = 1
+      !> Jump check: the state of the accepted configuration and the largest
+      !> conditioning measure met so far.
+      type(branch_state_type) :: branch
+      real(dp) :: reference = 0
    contains
       procedure :: start => angles_start
       procedure :: advance => angles_advance
@@ -167,6 +177,10 @@ contains
             self%offset(k) = atan2(v(2), v(1)) - atan2(internal(2, k), internal(1, k))
          end associate
       end do
+      self%size = model_size(model)
+      do k = 1, 3
+         self%link_name(k) = model%links(self%link(k))%name
+      end do
       self%law = model%drives(idrive)%law
       self%theta1_initial = atan2(internal(2, 1), internal(1, 1))
       self%d = [atan2(internal(2, 2), internal(1, 2)), atan2(internal(2, 3), internal(1, 3))]
@@ -209,40 +223,81 @@ contains
       call drive_value(self%law, self%theta1_initial, self%analysis%t_start, self%analysis%t_start, &
          & self%theta1(1), self%theta1(2), self%theta1(3))
       call self%history%push(self%d, self%analysis%t_start)
+      call branch_state(self, self%d, self%branch)
+      self%reference = self%branch%measure
       call finish_step(self, self%analysis%t_start, 0, result, error)
    end subroutine angles_start
 
-   !> Newton's method (11)-(13) on the loop closure (1)-(2) at time t, from
-   !> the predictor; then velocities and accelerations.
+   !> Advance to time t: Newton's method on the loop closure at t, cutting
+   !> the step in halves (at most max_cuts times) when Newton fails or the
+   !> converged configuration is on another assembly branch; then velocities
+   !> and accelerations.
    subroutine angles_advance(self, t, result, error)
       class(angles_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: p(2), k(2, 2), delta(2), r, r0, scale, correction
-      integer :: iter
-      logical :: done
+      type(step_cuts_type) :: cuts
+      type(error_type), allocatable :: step_error
+      real(dp) :: t_try
+      integer :: iterations, total
 
       self%step = self%step + 1
       self%counts%steps = self%counts%steps + 1
+      call cuts%begin(self%history%t(1), t)
+      total = 0
+      do while (self%history%t(1) < t)
+         t_try = cuts%next(self%history%t(1))
+         call try_step(self, t_try, iterations, step_error)
+         total = total + iterations
+         if (allocated(step_error)) then
+            call cuts%reject(step_error, error)
+            if (allocated(error)) return
+            deallocate (step_error)
+            cycle
+         end if
+         if (t_try < t) then
+            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
+            if (self%analysis%predictor == predictor_taylor) call solve_rates(self, step_error)
+            call cuts%grow()
+         end if
+      end do
+      call finish_step(self, t, total, result, error)
+      result%cuts = cuts%cuts
+      result%note = cuts%note()
+   end subroutine angles_advance
+
+   !> Newton's method (11)-(13) on the loop closure (1)-(2) at time t from the
+   !> predictor, and the branch-jump check; the configuration is accepted
+   !> (pushed on the history) only if both succeed.
+   subroutine try_step(self, t, iterations, error)
+      type(angles_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      integer, intent(out) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      type(branch_state_type) :: new
+      real(dp) :: p(2), k(2, 2), delta(2), r, r0, scale, correction, f0, df, ddf, increment, worst
+      integer :: where_
+      character(:), allocatable :: jump
+
       call drive_value(self%law, self%theta1_initial, self%analysis%t_start, t, &
          & self%theta1(1), self%theta1(2), self%theta1(3))
       ! The scale of the default test: the residual of the drive increment alone.
       call closure(self, self%history%q(:, 1), p)
       scale = norm2(p)
       call self%history%predict(self%analysis%predictor, t, self%d)
-      iter = 0
+      iterations = 0
       r0 = 0
       do
          call closure(self, self%d, p)
          self%counts%residual_assemblies = self%counts%residual_assemblies + 1
          r = norm2(p)
-         if (iter == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iter == 0 .and. r <= self%conv%floor)) then
+         if (iterations == 0) r0 = r
+         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%floor)) then
             if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
          end if
-         if (iter >= self%analysis%max_iter) then
-            call analysis_error(error, no_convergence_text(self%step, t, iter, r))
+         if (iterations >= self%analysis%max_iter) then
+            call analysis_error(error, no_convergence_text(self%step, t, iterations, r))
             return
          end if
          call tangent(self, self%d, k)
@@ -250,29 +305,63 @@ contains
          call solve2(k, -p, delta, error)
          self%counts%lu_factorisations = self%counts%lu_factorisations + 1
          if (allocated(error)) then
-            error%message = 'step '//step_text(self%step)//' at t = '//real_text(t)//': '//error%message
+            error%message = 'step '//int_text(self%step)//' at t = '//real_text(t)//': '//error%message
             return
          end if
-         iter = iter + 1
+         iterations = iterations + 1
          self%counts%iterations = self%counts%iterations + 1
          self%d = self%d + delta
+         correction = maxval(abs(delta)*self%length(2:3))
+         if (correction > divergence_length*self%size) then
+            call analysis_error(error, 'step '//int_text(self%step)//' at t = '//real_text(t)// &
+               & ': Newton diverged at iteration '//int_text(iterations))
+            return
+         end if
          if (self%conv%mode /= convergence_paper) then
-            correction = maxval(abs(delta)*self%length(2:3))
-            done = is_converged(self%conv, r, r0, scale, correction)
-            if (done) exit
+            if (is_converged(self%conv, r, r0, scale, correction)) exit
          end if
       end do
-      call self%history%push(self%d, t)
-      call finish_step(self, t, iter, result, error)
-   end subroutine angles_advance
 
-   pure function step_text(step) result(text)
-      integer, intent(in) :: step
-      character(:), allocatable :: text
-      character(len=12) :: buf
-      write (buf, '(i0)') step
-      text = trim(buf)
-   end function step_text
+      ! Branch-jump check: the coupler and rocker angles against their linear
+      ! response to the crank increment, and the sign of det K.
+      call drive_value(self%law, self%theta1_initial, self%analysis%t_start, self%history%t(1), f0, df, ddf)
+      increment = self%theta1(1) - f0
+      call branch_state(self, self%d, new)
+      call magnitude_ratio(self%d - self%history%q(:, 1), increment*self%branch%response(:, 1), &
+         & increment*new%response(:, 1), abs(increment), worst, where_)
+      self%reference = max(self%reference, new%measure)
+      where_ = max(1, where_)
+      jump = branch_jump_text(t, self%branch, new, self%reference, worst, self%d(where_) - self%history%q(where_, 1), &
+         & 'the angle of link '//trim(self%link_name(where_ + 1)))
+      if (len(jump) > 0) then
+         call analysis_error(error, 'step '//int_text(self%step)//' at '//jump)
+         return
+      end if
+      self%branch = new
+      call self%history%push(self%d, t)
+   end subroutine try_step
+
+   !> The jump check's view of the configuration d at the current crank angle:
+   !> the sign of det K, |det K| / (|k1| |k2|) = |sin(theta3 - theta2)|, and the
+   !> response of theta2, theta3 to a unit crank rotation, K r = -l1 n1.
+   subroutine branch_state(self, d, state)
+      type(angles_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: d(2)
+      type(branch_state_type), intent(out) :: state
+      type(error_type), allocatable :: singular
+      real(dp) :: k(2, 2), det, e(2, 3), n(2, 3)
+      call tangent(self, d, k)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      det = k(1, 1)*k(2, 2) - k(1, 2)*k(2, 1)
+      state%known = .true.
+      state%sign = nint(sign(1.0_dp, det))
+      if (det == 0) state%sign = 0
+      state%measure = abs(det)/(norm2(k(:, 1))*norm2(k(:, 2)))
+      allocate (state%response(2, 1))
+      call directions(self, d, e, n)
+      ! A singular K has no response: zero, which lets the drive increment bound the change.
+      call solve2(k, -self%length(1)*n(:, 1), state%response(:, 1), singular)
+   end subroutine branch_state
 
    !> Rates at the accepted configuration (when asked for) and the step's result.
    subroutine finish_step(self, t, iterations, result, error)
@@ -281,7 +370,7 @@ contains
       integer, intent(in) :: iterations
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: k(2, 2), rhs(2), p(2), e(2, 3), n(2, 3), w(3), a(3)
+      real(dp) :: p(2), e(2, 3), n(2, 3), w(3), a(3)
       integer :: j
 
       if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
@@ -290,38 +379,18 @@ contains
       result%step = self%step
       result%t = t
       result%iterations = iterations
+      result%note = ''
       call closure(self, self%d, p)
       result%residual = norm2(p)
-      self%dd = 0
-      self%ddd = 0
-      w = 0
-      a = 0
       result%has_velocity = self%analysis%velocities
       result%has_acceleration = self%analysis%velocities .and. self%analysis%accelerations
+      call solve_rates(self, error)
+      if (allocated(error)) return
+      w = 0
+      a = 0
+      if (result%has_velocity) w = [self%theta1(2), self%dd]
+      if (result%has_acceleration) a = [self%theta1(3), self%ddd]
       call directions(self, self%d, e, n)
-      if (result%has_velocity) then
-         call tangent(self, self%d, k)
-         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         ! Velocities (8)-(10): K d' = P_a with P_a = -l1 theta1' n1.
-         rhs = -self%length(1)*self%theta1(2)*n(:, 1)
-         call solve2(k, rhs, self%dd, error)
-         self%counts%lu_factorisations = self%counts%lu_factorisations + 1
-         self%counts%velocity_solves = self%counts%velocity_solves + 1
-         if (allocated(error)) return
-         w = [self%theta1(2), self%dd]
-         if (result%has_acceleration) then
-            ! Accelerations: the time derivative of l1 w1 n1 + l2 w2 n2 - l3 w3 n3 = 0 gives
-            ! K d'' = -l1 theta1'' n1 + l1 theta1'**2 e1 + l2 theta2'**2 e2 - l3 theta3'**2 e3
-            ! (the paper's (11)-(12), whose right-hand side is misprinted).
-            rhs = -self%length(1)*self%theta1(3)*n(:, 1) + self%length(1)*w(1)**2*e(:, 1) &
-               & + self%length(2)*w(2)**2*e(:, 2) - self%length(3)*w(3)**2*e(:, 3)
-            call solve2(k, rhs, self%ddd, error)
-            self%counts%acceleration_solves = self%counts%acceleration_solves + 1
-            if (allocated(error)) return
-            a = [self%theta1(3), self%ddd]
-         end if
-         if (result%has_acceleration) call self%history%set_rates(self%dd, self%ddd)
-      end if
 
       ! Nodes: A and D fixed, B = A + l1 e1, C = B + l2 e2, and their rates.
       result%pos(:, self%node(1)) = self%pivot_a
@@ -340,6 +409,37 @@ contains
          result%alpha(self%link(j)) = a(j)
       end do
    end subroutine finish_step
+
+   !> Velocities and accelerations of the accepted configuration, as the
+   !> analysis asks for them (zero otherwise); both known feed the Taylor predictor.
+   subroutine solve_rates(self, error)
+      type(angles_stepper_type), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: k(2, 2), rhs(2), e(2, 3), n(2, 3), w(3)
+      self%dd = 0
+      self%ddd = 0
+      if (.not. self%analysis%velocities) return
+      call directions(self, self%d, e, n)
+      call tangent(self, self%d, k)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      ! Velocities (8)-(10): K d' = P_a with P_a = -l1 theta1' n1.
+      rhs = -self%length(1)*self%theta1(2)*n(:, 1)
+      call solve2(k, rhs, self%dd, error)
+      self%counts%lu_factorisations = self%counts%lu_factorisations + 1
+      self%counts%velocity_solves = self%counts%velocity_solves + 1
+      if (allocated(error)) return
+      if (.not. self%analysis%accelerations) return
+      w = [self%theta1(2), self%dd]
+      ! Accelerations: the time derivative of l1 w1 n1 + l2 w2 n2 - l3 w3 n3 = 0 gives
+      ! K d'' = -l1 theta1'' n1 + l1 theta1'**2 e1 + l2 theta2'**2 e2 - l3 theta3'**2 e3
+      ! (the paper's (11)-(12), whose right-hand side is misprinted).
+      rhs = -self%length(1)*self%theta1(3)*n(:, 1) + self%length(1)*w(1)**2*e(:, 1) &
+         & + self%length(2)*w(2)**2*e(:, 2) - self%length(3)*w(3)**2*e(:, 3)
+      call solve2(k, rhs, self%ddd, error)
+      self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+      if (allocated(error)) return
+      call self%history%set_rates(self%dd, self%ddd)
+   end subroutine solve_rates
 
    !> Unit directions e = (cos, sin) and normals n = (-sin, cos) of theta1, theta2, theta3.
    pure subroutine directions(self, d, e, n)

@@ -15,15 +15,16 @@
 !> conditioned as the mechanism moves.
 module fekap_classical_cartesian
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, input_error, analysis_error
-   use fekap_model, only: model_type, model_size, analysis_type, convergence_paper
+   use fekap_error, only: error_type, input_error, analysis_error, error_analysis
+   use fekap_model, only: model_type, model_size, analysis_type, convergence_paper, predictor_taylor
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type, is_converged
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
    use fekap_classical_stepping, only: history_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text
+      & no_convergence_text, real_text, step_cuts_type, branch_state_type, branch_jump_text, magnitude_ratio, &
+      & lu_determinant, divergence_length, int_text
    implicit none
    private
 
@@ -31,6 +32,9 @@ module fekap_classical_cartesian
 
    !> Relative threshold of the numerical rank of Phi_q.
    real(dp), parameter :: rank_tol = 1.0e-10_dp
+   !> Residual of the removed (redundant) equations, per model size, above
+   !> which a converged configuration is not one of the mechanism.
+   real(dp), parameter :: redundant_tol = 1.0e-6_dp
    !> Relative pivot below which an LU factor counts as singular.
    real(dp), parameter :: pivot_tol = 1.0e-13_dp
 
@@ -49,8 +53,25 @@ module fekap_classical_cartesian
       !> Work arrays: all residuals, the full Jacobian, the square Jacobian and a right-hand side.
       real(dp), allocatable :: phi(:), jac_all(:, :), jac(:, :), rhs(:)
       integer, allocatable :: ipiv(:)
+      !> log10 of the product of the row norms of the factored Jacobian, its
+      !> angle columns scaled by the model size (for the conditioning measure).
+      real(dp) :: log_rows = 0
+      !> 1 for the translation coordinates, the model size for the angles.
+      real(dp), allocatable :: column_scale(:)
       type(history_type) :: history
       integer :: step = 0
+      !> Model size and the shortest link (the unit of translation drives in the jump check).
+      real(dp) :: size = 1, shortest_link = 1
+      !> Whether the equations solved can change from step to step (redundant
+      !> ones removed, slidelines on master chains): then the determinant of the
+      !> last configuration is recomputed with the equations of the step.
+      logical :: changing_equations = .false.
+      !> Name of a link of each body, for messages.
+      character(len=64), allocatable :: body_name(:)
+      !> Jump check: the state of the accepted configuration and the largest
+      !> conditioning measure met so far.
+      type(branch_state_type) :: branch
+      real(dp) :: reference = 0
    contains
       procedure :: start => cartesian_start
       procedure :: advance => cartesian_advance
@@ -65,7 +86,7 @@ contains
       type(cartesian_stepper_type), intent(out) :: self
       type(model_type), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
-      integer :: n, m
+      integer :: n, m, l
 
       call new_constraint_system(self%system, model, error)
       if (allocated(error)) return
@@ -80,7 +101,21 @@ contains
       allocate (self%ipiv(n))
       self%q = self%system%bodies%q0
       call new_history(self%history, n)
+      self%size = model_size(model)
+      self%shortest_link = huge(1.0_dp)
+      allocate (self%body_name(n/3))
+      do l = size(model%links), 1, -1
+         associate (x => model%nodes(model%links(l)%node(2))%x - model%nodes(model%links(l)%node(1))%x)
+            if (norm2(x) > 0) self%shortest_link = min(self%shortest_link, norm2(x))
+         end associate
+         self%body_name(self%system%bodies%link_body(l)) = model%links(l)%name
+      end do
+      if (self%shortest_link == huge(1.0_dp)) self%shortest_link = self%size
+      allocate (self%column_scale(n), source=1.0_dp)
+      self%column_scale(3:n:3) = self%size
       call select_equations(self, self%q, .true., error)
+      if (allocated(error)) return
+      self%changing_equations = self%redundant .or. self%system%has_chains()
    end subroutine new_cartesian_stepper
 
    !> Choose the n equations to solve from the rank-revealing QR of Phi_q^T at q.
@@ -203,26 +238,77 @@ contains
          return
       end if
       call self%history%push(self%q, t)
+      call branch_state(self, self%q, .true., self%branch)
+      self%reference = self%branch%measure
       call finish_step(self, t, iterations, result, error)
    end subroutine cartesian_start
 
-   !> Newton's method on the constraint equations at time t from the
-   !> predictor, then velocities and accelerations.
+   !> Advance to time t: Newton's method on the constraint equations at t,
+   !> cutting the step in halves (at most max_cuts times) when Newton fails or
+   !> the converged configuration is on another assembly branch; then
+   !> velocities and accelerations.
    subroutine cartesian_advance(self, t, result, error)
       class(cartesian_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: scale
-      integer :: iterations
+      type(step_cuts_type) :: cuts
+      type(error_type), allocatable :: step_error
+      real(dp) :: t_try
+      integer :: iterations, total
 
       self%step = self%step + 1
       self%counts%steps = self%counts%steps + 1
+      call cuts%begin(self%history%t(1), t)
+      total = 0
+      do while (self%history%t(1) < t)
+         t_try = cuts%next(self%history%t(1))
+         call try_step(self, t_try, iterations, step_error)
+         total = total + iterations
+         if (allocated(step_error)) then
+            if (step_error%kind /= error_analysis) then
+               call move_alloc(step_error, error)
+               return
+            end if
+            call cuts%reject(step_error, error)
+            if (allocated(error)) return
+            deallocate (step_error)
+            cycle
+         end if
+         if (t_try < t) then
+            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
+            if (self%analysis%predictor == predictor_taylor) call solve_rates(self, t_try, step_error)
+            call cuts%grow()
+         end if
+      end do
+      call finish_step(self, t, total, result, error)
+      result%cuts = cuts%cuts
+      result%note = cuts%note()
+   end subroutine cartesian_advance
+
+   !> Newton's method at time t from the predictor, and the branch-jump
+   !> check; the configuration is accepted (pushed on the history) only if both
+   !> succeed.
+   subroutine try_step(self, t, iterations, error)
+      type(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      integer, intent(out) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      type(branch_state_type) :: new
+      real(dp) :: scale, worst, floor
+      real(dp) :: dd(size(self%system%laws)), dq_old(self%system%n/3), dq_new(self%system%n/3)
+      logical :: rotation(size(self%system%laws))
+      integer :: where_, b
+      character(:), allocatable :: jump
+
+      iterations = 0
       if (self%redundant) then
          call select_equations(self, self%history%q(:, 1), .false., error)
          if (allocated(error)) return
       end if
       call self%system%select_segments(self%history%q(:, 1))
+      ! With other equations the determinant of the last configuration is another one.
+      if (self%changing_equations) call branch_state(self, self%history%q(:, 1), .true., self%branch)
       ! The scale of the default test: the residual of the drive increment alone.
       self%q = self%history%q(:, 1)
       call set_driven_angles(self, t)
@@ -233,9 +319,84 @@ contains
       call set_driven_angles(self, t)
       call solve_positions(self, t, scale, iterations, error)
       if (allocated(error)) return
+      ! Without its redundant equations the system may converge to a
+      ! configuration of a mechanism with a joint missing: every equation must hold.
+      if (self%redundant) then
+         call self%system%residual(self%q, t, self%phi)
+         if (maxval(abs(self%phi)) > redundant_tol*self%size) then
+            call analysis_error(error, 'step '//int_text(self%step)//' at t = '//real_text(t)// &
+               & ': Newton converged to a configuration that violates the removed (redundant) equations (residual '// &
+               & real_text(maxval(abs(self%phi)))//'), not a configuration of the mechanism')
+            return
+         end if
+      end if
+
+      ! Branch-jump check: every body angle against its linear response to the
+      ! drive increment at both ends, and the sign of det Phi_q (from the last
+      ! Newton factor, at the converged configuration within tolerance).
+      call branch_state(self, self%q, iterations == 0, new)
+      self%reference = max(self%reference, new%measure)
+      call self%system%drive_increments(self%history%t(1), t, dd, rotation)
+      ! The drive increment: radians, or lengths of the shortest link.
+      floor = 0
+      do b = 1, size(dd)
+         floor = max(floor, abs(dd(b))/merge(1.0_dp, self%shortest_link, rotation(b)))
+      end do
+      do b = 1, size(dq_old)
+         dq_old(b) = dot_product(self%branch%response(3*b, :), dd)
+         dq_new(b) = dot_product(new%response(3*b, :), dd)
+      end do
+      call magnitude_ratio(self%q(3:self%system%n:3) - self%history%q(3:self%system%n:3, 1), dq_old, dq_new, floor, &
+         & worst, where_)
+      where_ = max(1, where_)
+      jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
+         & self%q(3*where_) - self%history%q(3*where_, 1), 'the angle of link '//trim(self%body_name(where_)))
+      if (len(jump) > 0) then
+         call analysis_error(error, 'step '//int_text(self%step)//' at '//jump)
+         return
+      end if
+      self%branch = new
       call self%history%push(self%q, t)
-      call finish_step(self, t, iterations, result, error)
-   end subroutine cartesian_advance
+   end subroutine try_step
+
+   !> The jump check's view of configuration q with the equations of the
+   !> step: the sign of det Phi_q, the conditioning measure |det| over the
+   !> product of the row norms (angle columns scaled by the model size, so that
+   !> it is free of units), and the response to unit drive changes,
+   !> Phi_q r_j = e_j (e_j selects the equation of drive j). With refactor,
+   !> Phi_q is factored at q; otherwise the last Newton factor is used.
+   subroutine branch_state(self, q, refactor, state)
+      type(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: q(:)
+      logical, intent(in) :: refactor
+      type(branch_state_type), intent(out) :: state
+      type(error_type), allocatable :: singular
+      real(dp) :: log_det
+      integer :: j, k, info
+      allocate (state%response(self%system%n, size(self%system%laws)), source=0.0_dp)
+      if (refactor) then
+         call self%system%jacobian(q, self%jac_all)
+         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+         self%rhs = 0
+         call factor_and_solve(self, self%analysis%t_start, singular)
+         if (allocated(singular)) then
+            state%known = .true.
+            return
+         end if
+      end if
+      state%known = .true.
+      call lu_determinant(self%jac, self%ipiv, state%sign, log_det)
+      if (state%sign == 0) return
+      state%measure = 10.0_dp**min(0.0_dp, log_det + (self%system%n/3)*log10(self%size) - self%log_rows)
+      do k = 1, size(self%active)
+         j = self%system%eq(self%active(k))%drive
+         if (j == 0) cycle
+         self%rhs = 0
+         self%rhs(k) = 1
+         call dense_lu_solve(self%jac, self%ipiv, self%rhs, info)
+         state%response(:, j) = self%rhs
+      end do
+   end subroutine branch_state
 
    !> Angles of bodies driven directly by a rotation drive take their value at t.
    subroutine set_driven_angles(self, t)
@@ -286,11 +447,16 @@ contains
          iterations = iterations + 1
          self%counts%iterations = self%counts%iterations + 1
          self%q = self%q + self%rhs
+         correction = 0
+         do k = 1, self%system%n/3
+            correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
+         end do
+         if (correction > divergence_length*self%size) then
+            call analysis_error(error, 'step '//int_text(self%step)//' at t = '//real_text(t)// &
+               & ': Newton diverged at iteration '//int_text(iterations))
+            return
+         end if
          if (self%conv%mode /= convergence_paper) then
-            correction = 0
-            do k = 1, self%system%n/3
-               correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
-            end do
             if (is_converged(self%conv, r, r0, scale, correction)) exit
          end if
       end do
@@ -318,6 +484,10 @@ contains
          self%jac(k, :) = self%jac_all(self%active(k), :)
       end do
       big = maxval(abs(self%jac))
+      self%log_rows = 0
+      do k = 1, size(self%jac, 1)
+         self%log_rows = self%log_rows + log10(max(tiny(1.0_dp), norm2(self%jac(k, :)*self%column_scale)))
+      end do
       call dense_lu_factor(self%jac, self%ipiv, info)
       self%counts%lu_factorisations = self%counts%lu_factorisations + 1
       if (info == 0) then
@@ -349,7 +519,6 @@ contains
       integer, intent(in) :: iterations
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: gamma(self%system%m)
       integer :: k, b, l
 
       if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
@@ -358,32 +527,14 @@ contains
       result%step = self%step
       result%t = t
       result%iterations = iterations
+      result%note = ''
       call self%system%residual(self%q, t, self%phi)
       self%counts%residual_assemblies = self%counts%residual_assemblies + 1
       result%residual = norm2(self%phi)
       result%has_velocity = self%analysis%velocities
       result%has_acceleration = self%analysis%velocities .and. self%analysis%accelerations
-      self%qd = 0
-      self%qdd = 0
-      if (result%has_velocity) then
-         ! Velocities (23): Phi_q q' = -Phi_t.
-         call self%system%jacobian(self%q, self%jac_all)
-         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         call self%system%velocity_rhs(t, self%phi)
-         self%rhs = self%phi(self%active)
-         call factor_and_solve(self, t, error)
-         if (allocated(error)) return
-         self%counts%velocity_solves = self%counts%velocity_solves + 1
-         self%qd = self%rhs
-         if (result%has_acceleration) then
-            ! Accelerations (25): Phi_q q'' = gamma, with the factors of the velocity solve.
-            call self%system%acceleration_rhs(self%q, self%qd, t, gamma)
-            self%qdd = gamma(self%active)
-            call dense_lu_solve(self%jac, self%ipiv, self%qdd, k)
-            self%counts%acceleration_solves = self%counts%acceleration_solves + 1
-            call self%history%set_rates(self%qd, self%qdd)
-         end if
-      end if
+      call solve_rates(self, t, error)
+      if (allocated(error)) return
 
       associate (bodies => self%system%bodies)
          do k = 1, self%nnode
@@ -405,5 +556,35 @@ contains
          end do
       end associate
    end subroutine finish_step
+
+   !> Velocities and accelerations of the accepted configuration at time t,
+   !> as the analysis asks for them (zero otherwise); both known feed the
+   !> Taylor predictor.
+   subroutine solve_rates(self, t, error)
+      type(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: gamma(self%system%m)
+      integer :: info
+      self%qd = 0
+      self%qdd = 0
+      if (.not. self%analysis%velocities) return
+      ! Velocities (23): Phi_q q' = -Phi_t.
+      call self%system%jacobian(self%q, self%jac_all)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      call self%system%velocity_rhs(t, self%phi)
+      self%rhs = self%phi(self%active)
+      call factor_and_solve(self, t, error)
+      if (allocated(error)) return
+      self%counts%velocity_solves = self%counts%velocity_solves + 1
+      self%qd = self%rhs
+      if (.not. self%analysis%accelerations) return
+      ! Accelerations (25): Phi_q q'' = gamma, with the factors of the velocity solve.
+      call self%system%acceleration_rhs(self%q, self%qd, t, gamma)
+      self%qdd = gamma(self%active)
+      call dense_lu_solve(self%jac, self%ipiv, self%qdd, info)
+      self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+      call self%history%set_rates(self%qd, self%qdd)
+   end subroutine solve_rates
 
 end module fekap_classical_cartesian

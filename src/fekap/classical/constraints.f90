@@ -87,6 +87,10 @@ module fekap_classical_constraints
       procedure :: acceleration_rhs => system_acceleration_rhs
       !> Put every slideline with a master chain on the segment its slave is on.
       procedure :: select_segments => system_select_segments
+      !> Whether some slideline has a master chain (its equation changes with the segment).
+      procedure :: has_chains => system_has_chains
+      !> Changes of the driven quantities between two times.
+      procedure :: drive_increments => system_drive_increments
    end type constraint_system_type
 
 contains
@@ -340,6 +344,38 @@ contains
          end associate
       end do
    end subroutine system_select_segments
+
+   pure logical function system_has_chains(self) result(chains)
+      class(constraint_system_type), intent(in) :: self
+      integer :: i
+      chains = .false.
+      do i = 1, size(self%slides)
+         if (size(self%slides(i)%segments) > 1) chains = .true.
+      end do
+   end function system_has_chains
+
+   !> d(t1) - d(t0) of every drive, and whether it drives a rotation (else a coordinate).
+   pure subroutine system_drive_increments(self, t0, t1, increment, rotation)
+      class(constraint_system_type), intent(in) :: self
+      real(dp), intent(in) :: t0, t1
+      !> (ndrive) the increments.
+      real(dp), intent(out) :: increment(:)
+      !> (ndrive) whether each drive is a rotation drive.
+      logical, intent(out) :: rotation(:)
+      integer :: k
+      real(dp) :: f0, f1, df, ddf
+      increment = 0
+      rotation = .false.
+      do k = 1, self%m
+         associate (e => self%eq(k))
+            if (e%drive == 0) cycle
+            call drive_value(self%laws(e%drive), self%initial(e%drive), self%t_start, t0, f0, df, ddf)
+            call drive_value(self%laws(e%drive), self%initial(e%drive), self%t_start, t1, f1, df, ddf)
+            increment(e%drive) = f1 - f0
+            rotation(e%drive) = e%kind == eq_angle
+         end associate
+      end do
+   end subroutine system_drive_increments
 
    !> Position of the point with local coordinates s on body b (b = 0: s is global).
    pure function point(q, b, s) result(r)

@@ -1,9 +1,11 @@
 !> What both constraint-equation methods share around their Newton solves:
 !> the history of converged configurations behind the predictors, the values
 !> of drives relative to the initial configuration, the convergence settings
-!> taken from the analysis, and the texts of their messages.
+!> taken from the analysis, the step cutting and the assembly-mode (branch)
+!> jump check, and the texts of their messages.
 module fekap_classical_stepping
    use fekap_kinds, only: dp
+   use fekap_error, only: error_type, analysis_error
    use fekap_model, only: analysis_type, predictor_previous, predictor_extrapolate, predictor_taylor
    use fekap_model_drive_law, only: law_type
    use fekap_solver_convergence, only: convergence_type, extrapolate
@@ -11,6 +13,56 @@ module fekap_classical_stepping
    private
 
    public :: history_type, new_history, drive_value, new_step_convergence, real_text, no_convergence_text
+   public :: step_cuts_type, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, int_text
+
+   !> Step cuts (halvings) allowed within one step before it is given up (as in the FEM).
+   integer, parameter, public :: max_cuts = 8
+   !> A step is rejected as an assembly-mode jump when an angle coordinate
+   !> changes by more than this many times what the linear response to the
+   !> drive increment (at either end of the step), or the increment itself, explains.
+   real(dp), parameter, public :: jump_ratio = 2.0_dp
+   !> A change of sign of the Jacobian's determinant over a step is a
+   !> legitimate passage through a singular configuration only if one end of
+   !> the step is this close to singular: its conditioning measure (see
+   !> branch_state_type) below this share of the largest one met in the run
+   !> (the cuts close in on a singular configuration the step passed over).
+   real(dp), parameter, public :: singular_share = 5.0e-2_dp
+   !> A Newton correction longer than this many model sizes is divergence.
+   real(dp), parameter, public :: divergence_length = 1.0e3_dp
+
+   !> The halvings of one step: the sub-step length, its growth back after a
+   !> success, and the first and last reasons for a rejection (for the listing).
+   type :: step_cuts_type
+      !> The end of the step, the full step and the current sub-step length.
+      real(dp) :: t_end = 0, h_full = 0, h = 0
+      !> Cuts so far in this step.
+      integer :: cuts = 0
+      character(:), allocatable :: first, last
+   contains
+      !> Start a step from t_from to t_end.
+      procedure :: begin => cuts_begin
+      !> The time of the next try from the accepted time t_from.
+      procedure :: next => cuts_next
+      !> A try failed: halve the sub-step, or give up after max_cuts.
+      procedure :: reject => cuts_reject
+      !> A try succeeded at an intermediate time: let the sub-step grow back.
+      procedure :: grow => cuts_grow
+      !> The listing note of a cut step ('' if not cut).
+      procedure :: note => cuts_note
+   end type step_cuts_type
+
+   !> What the jump check knows about an accepted configuration.
+   type :: branch_state_type
+      !> Whether the rest is known.
+      logical :: known = .false.
+      !> Sign of the determinant of the square Jacobian (+1, -1; 0 if singular).
+      integer :: sign = 0
+      !> Conditioning measure: |det| over the product of the Jacobian's row (or
+      !> column) norms, in [0, 1]; zero at a singular configuration.
+      real(dp) :: measure = 0
+      !> (ncoord, ndrive): linear response of the coordinates to unit changes of the drives.
+      real(dp), allocatable :: response(:, :)
+   end type branch_state_type
 
    !> The last (up to three) converged configurations, newest first, and the
    !> rates of the newest one when they were computed.
@@ -132,6 +184,15 @@ contains
       text = text//' did not converge in '//trim(buf)//' iterations (residual '//real_text(residual)//')'
    end function no_convergence_text
 
+   !> An integer as text.
+   pure function int_text(n) result(text)
+      integer, intent(in) :: n
+      character(:), allocatable :: text
+      character(len=16) :: buf
+      write (buf, '(i0)') n
+      text = trim(buf)
+   end function int_text
+
    !> A short text for a real: fixed notation without trailing zeros for
    !> moderate magnitudes, otherwise scientific with four digits.
    pure function real_text(x) result(text)
@@ -159,5 +220,141 @@ contains
          text = trim(adjustl(buf))
       end if
    end function real_text
+
+   !> Start cutting a step from t_from to t_end.
+   pure subroutine cuts_begin(self, t_from, t_end)
+      class(step_cuts_type), intent(inout) :: self
+      real(dp), intent(in) :: t_from, t_end
+      self%cuts = 0
+      if (allocated(self%first)) deallocate (self%first)
+      if (allocated(self%last)) deallocate (self%last)
+      self%t_end = t_end
+      self%h_full = t_end - t_from
+      self%h = self%h_full
+   end subroutine cuts_begin
+
+   !> The time of the next try from the accepted time t_from (the end of the
+   !> step when within rounding of it).
+   pure real(dp) function cuts_next(self, t_from) result(t_try)
+      class(step_cuts_type), intent(in) :: self
+      real(dp), intent(in) :: t_from
+      t_try = min(t_from + self%h, self%t_end)
+      if (self%t_end - t_try < 1.0e-12_dp*abs(self%h_full)) t_try = self%t_end
+   end function cuts_next
+
+   !> A try failed with `reason`: halve the sub-step; after max_cuts cuts,
+   !> the reason with what to try becomes the step's analysis error.
+   pure subroutine cuts_reject(self, reason, error)
+      class(step_cuts_type), intent(inout) :: self
+      type(error_type), intent(in) :: reason
+      type(error_type), allocatable, intent(out) :: error
+      character(len=16) :: buf
+      self%cuts = self%cuts + 1
+      if (self%cuts > max_cuts) then
+         write (buf, '(i0)') max_cuts
+         call analysis_error(error, reason%message//' (after '//trim(buf)// &
+            & ' step cuts; try a smaller time step or another predictor)')
+         return
+      end if
+      if (allocated(self%first)) then
+         self%last = reason%message
+      else
+         self%first = reason%message
+      end if
+      self%h = self%h/2
+   end subroutine cuts_reject
+
+   pure subroutine cuts_grow(self)
+      class(step_cuts_type), intent(inout) :: self
+      self%h = min(2*self%h, self%h_full)
+   end subroutine cuts_grow
+
+   !> 'step cut k time(s); first rejection: ...; last rejection: ...' as in the FEM.
+   pure function cuts_note(self) result(text)
+      class(step_cuts_type), intent(in) :: self
+      character(:), allocatable :: text
+      character(len=16) :: buf
+      text = ''
+      if (.not. allocated(self%first)) return
+      write (buf, '(i0)') self%cuts
+      text = 'step cut '//trim(buf)//' time(s); first rejection: '//self%first
+      if (allocated(self%last)) text = text//'; last rejection: '//self%last
+   end function cuts_note
+
+   !> Magnitude part of the jump check: the largest ratio of |change| of an
+   !> angle coordinate over the step to max(|dq_old|, |dq_new|, floor), the
+   !> linear responses to the drive increment at the two ends and the drive
+   !> increment itself; and the coordinate where it occurs (0 if none moved).
+   pure subroutine magnitude_ratio(change, dq_old, dq_new, floor, worst, where_)
+      !> Changes of the angle coordinates and their linear responses.
+      real(dp), intent(in) :: change(:), dq_old(:), dq_new(:)
+      !> The drive increment (radians, or lengths of the shortest link).
+      real(dp), intent(in) :: floor
+      real(dp), intent(out) :: worst
+      integer, intent(out) :: where_
+      real(dp) :: bound, ratio
+      integer :: i
+      worst = 0
+      where_ = 0
+      do i = 1, size(change)
+         bound = max(floor, abs(dq_old(i)), abs(dq_new(i)))
+         if (bound > 0) then
+            ratio = abs(change(i))/bound
+         else
+            ratio = merge(0.0_dp, huge(1.0_dp), abs(change(i)) <= 0)
+         end if
+         if (ratio > worst) then
+            worst = ratio
+            where_ = i
+         end if
+      end do
+   end subroutine magnitude_ratio
+
+   !> The branch-jump decision between the accepted state `old` and the
+   !> converged `new` one; text is '' when the step is accepted, otherwise the
+   !> reason. worst is the magnitude ratio, change the change of the
+   !> coordinate `what` where it occurs; reference the largest conditioning
+   !> measure met in the run.
+   pure function branch_jump_text(t, old, new, reference, worst, change, what) result(text)
+      real(dp), intent(in) :: t
+      type(branch_state_type), intent(in) :: old, new
+      real(dp), intent(in) :: reference, worst, change
+      character(*), intent(in) :: what
+      character(:), allocatable :: text
+      character(len=120) :: msg
+      text = ''
+      if (worst > jump_ratio) then
+         write (msg, '(a,es9.2,a)') ' rad over the step, ', min(worst, huge(1.0_dp)), &
+            & ' times what the drive increment explains) at '
+         text = 't = '//real_text(t)//': assembly-mode jump rejected (rotation '//real_text(change)//trim(msg)//' '//what
+      else if (old%known .and. new%known) then
+         if (old%sign*new%sign < 0 .and. min(old%measure, new%measure) >= singular_share*reference) then
+            text = 't = '//real_text(t)//': assembly-mode jump rejected (the determinant of the Jacobian '// &
+               & 'changed sign over the step, away from any singular configuration)'
+         end if
+      end if
+   end function branch_jump_text
+
+   !> Sign of the determinant of a matrix from its LU factors (dgetrf) and
+   !> log10 of |det| (-huge for a zero pivot).
+   pure subroutine lu_determinant(lu, ipiv, sign_, log_abs)
+      real(dp), intent(in) :: lu(:, :)
+      integer, intent(in) :: ipiv(:)
+      integer, intent(out) :: sign_
+      real(dp), intent(out) :: log_abs
+      integer :: k
+      sign_ = 1
+      log_abs = 0
+      do k = 1, size(lu, 1)
+         if (ipiv(k) /= k) sign_ = -sign_
+         if (lu(k, k) < 0) sign_ = -sign_
+         if (lu(k, k) == 0) then
+            sign_ = 0
+            log_abs = -huge(1.0_dp)
+            return
+         end if
+         log_abs = log_abs + log10(abs(lu(k, k)))
+      end do
+   end subroutine lu_determinant
 
 end module fekap_classical_stepping
