@@ -4,6 +4,7 @@ program tester
    use test_drive_law, only: collect_drive_law
    use test_element_beam, only: collect_element_beam
    use test_solver_fem, only: collect_solver_fem
+   use test_solver_convergence, only: collect_solver_convergence
    use test_contact_slideline, only: collect_contact_slideline
    use test_classical_angles, only: collect_classical_angles
    use test_classical_constraints, only: collect_classical_constraints
@@ -32,6 +33,7 @@ program tester
 
    call run('drive_law', collect_drive_law)
    call run('element_beam', collect_element_beam)
+   call run('solver_convergence', collect_solver_convergence)
    call run('solver_fem', collect_solver_fem)
    call run('contact_slideline', collect_contact_slideline)
    call run('classical_angles', collect_classical_angles)

@@ -42,15 +42,16 @@ contains
 
    !> Residual as assemble_residual, and the tangent dR/dq: free-free part into
    !> the band matrix (equation order), free-driven part into kfd(eq, drive).
-   !> `geometric = .false.` assembles the beams' material tangent only (46).
-   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd, geometric)
+   !> `geometric_above` leaves out the beams' geometric stiffness where they are
+   !> strained less (see beam_residual; huge: the material tangent only, (46)).
+   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd, geometric_above)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:), lambda
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
       type(band_matrix_type), intent(inout) :: kff
       real(dp), intent(out) :: kfd(:, :)
-      logical, intent(in), optional :: geometric
+      real(dp), intent(in), optional :: geometric_above
       real(dp) :: pe(6), ke(6, 6), xe(6)
       integer :: e, i
       r = -lambda*mesh%f_ext
@@ -60,7 +61,7 @@ contains
          do i = 1, 6
             xe(i) = q(mesh%edof(i, e))
          end do
-         call beam_residual(mesh%elements(e), xe, pe, ke, geometric)
+         call beam_residual(mesh%elements(e), xe, pe, ke, geometric_above)
          do i = 1, 6
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do

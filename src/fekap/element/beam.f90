@@ -93,24 +93,26 @@ contains
    end subroutine point_state
 
    !> Internal force p (38) and, if asked, the tangent k = km + kg (43)-(44);
-   !> `geometric = .false.` leaves out kg (the material tangent of (46)).
+   !> kg is left out at Gauss points whose largest strain (|Gamma1|, |Gamma2|,
+   !> |kappa| L) is at most `geometric_above` (default 0: kg everywhere; huge:
+   !> the material tangent of (46)).
    !> With w = (x1', x2', phi) = Bw xe at a Gauss point, the columns of Bw are
    !> ax (d x1'), ay (d x2') and ph (d phi), so that
    !>   km = EA b1 b1^T + kGA b2 b2^T + EI bk bk^T,  b_m = Bw^T grad Gamma_m,
    !>   kg = Bw^T (P H1 + V H2) Bw = g13 (ax ph^T + ph ax^T) + g23 (ay ph^T + ph ay^T) + g33 ph ph^T
    !> with g13 = -s P - c V, g23 = c P - s V, g33 = -(1 + Gamma1) P - Gamma2 V (the paper's G).
-   pure subroutine beam_residual(self, xe, p, k, geometric)
+   pure subroutine beam_residual(self, xe, p, k, geometric_above)
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6)
       real(dp), intent(out) :: p(6)
       real(dp), intent(out), optional :: k(6, 6)
-      logical, intent(in), optional :: geometric
+      real(dp), intent(in), optional :: geometric_above
       real(dp) :: b1(6), b2(6), bk(6), ax(6), ay(6), ph(6), sig(3), a(2)
       real(dp) :: xi, w, wl, n1, n2, phi, c, s, g1, g2, g13, g23, g33, rl
       integer :: ig, i, j
-      logical :: with_kg
-      with_kg = .true.
-      if (present(geometric)) with_kg = geometric
+      real(dp) :: kg_strain
+      kg_strain = 0
+      if (present(geometric_above)) kg_strain = geometric_above
       rl = 1/self%length
       a = (xe(4:5) - xe(1:2))*rl
       ax = [-rl, 0.0_dp, 0.0_dp, rl, 0.0_dp, 0.0_dp]
@@ -137,7 +139,7 @@ contains
          g13 = 0
          g23 = 0
          g33 = 0
-         if (with_kg) then
+         if (max(abs(g1), abs(g2), abs(xe(6) - xe(3))) > kg_strain) then
             g13 = -s*sig(1) - c*sig(2)
             g23 = c*sig(1) - s*sig(2)
             g33 = -(1 + g1)*sig(1) - g2*sig(2)

@@ -1,0 +1,102 @@
+!> Tests of fekap_solver_convergence: the predictors' extrapolations are exact
+!> for polynomials of their degree, and the convergence test's two modes.
+module test_solver_convergence
+   use fekap_kinds, only: dp
+   use fekap_testing, only: unittest_type, new_unittest, check, error_type
+   use fekap_model, only: convergence_paper
+   use fekap_solver_convergence, only: convergence_type, is_converged, extrapolate, hermite_extrapolate
+   implicit none
+   private
+   public :: collect_solver_convergence
+
+contains
+
+   subroutine collect_solver_convergence(tests)
+      type(unittest_type), allocatable, intent(out) :: tests(:)
+      tests = [ &
+         & new_unittest('is_converged', test_is_converged), &
+         & new_unittest('extrapolate', test_extrapolate), &
+         & new_unittest('hermite_extrapolate', test_hermite_extrapolate) &
+         & ]
+   end subroutine collect_solver_convergence
+
+   !> A polynomial of degree `degree` with unequal coefficients, and its derivative.
+   pure real(dp) function poly(t, degree)
+      real(dp), intent(in) :: t
+      integer, intent(in) :: degree
+      integer :: k
+      poly = 0
+      do k = degree, 0, -1
+         poly = poly*t + (1.5_dp - 0.3_dp*k)
+      end do
+   end function poly
+
+   pure real(dp) function dpoly(t, degree)
+      real(dp), intent(in) :: t
+      integer, intent(in) :: degree
+      integer :: k
+      dpoly = 0
+      do k = degree, 1, -1
+         dpoly = dpoly*t + k*(1.5_dp - 0.3_dp*k)
+      end do
+   end function dpoly
+
+   subroutine test_is_converged(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(convergence_type) :: conv
+      conv%tol = 1.0e-10_dp
+      conv%length = 1.0e-12_dp
+      conv%floor = 1.0e-20_dp
+      ! Default: the residual against the scale and the correction against the length.
+      call check(error, is_converged(conv, 1.0e-11_dp, 1.0_dp, 1.0_dp, 1.0e-13_dp), 'both small')
+      if (allocated(error)) return
+      call check(error, .not. is_converged(conv, 1.0e-11_dp, 1.0_dp, 1.0_dp, 1.0e-11_dp), 'correction too long')
+      if (allocated(error)) return
+      call check(error, .not. is_converged(conv, 1.0e-9_dp, 1.0_dp, 1.0_dp, 1.0e-13_dp), 'residual too large')
+      if (allocated(error)) return
+      call check(error, is_converged(conv, 1.0e-21_dp, 1.0_dp, 0.0_dp, 1.0e-13_dp), 'below the floor')
+      if (allocated(error)) return
+      ! The paper's test: the residual ratio alone.
+      conv%mode = convergence_paper
+      call check(error, is_converged(conv, 1.0e-11_dp, 1.0_dp, 0.0_dp, 1.0_dp), 'paper: ratio small')
+      if (allocated(error)) return
+      call check(error, .not. is_converged(conv, 1.0e-9_dp, 1.0_dp, 0.0_dp, 0.0_dp), 'paper: ratio large')
+   end subroutine test_is_converged
+
+   !> Lagrange extrapolation through n points reproduces a polynomial of degree n - 1.
+   subroutine test_extrapolate(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: tk(3), q(1, 3), qpred(1)
+      integer :: n, k
+      tk = [0.3_dp, 0.2_dp, 0.05_dp]
+      do n = 1, 3
+         do k = 1, n
+            q(1, k) = poly(tk(k), n - 1)
+         end do
+         call extrapolate(q(:, 1:n), tk(1:n), 0.45_dp, qpred)
+         call check(error, qpred(1), poly(0.45_dp, n - 1), 'exact for degree n - 1', rel=1.0e-13_dp)
+         if (allocated(error)) return
+      end do
+   end subroutine test_extrapolate
+
+   !> Hermite extrapolation from n positions and velocities reproduces a
+   !> polynomial of degree 2n - 1 (unequal steps), and misses one of degree 2n.
+   subroutine test_hermite_extrapolate(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: tk(3), q(2, 3), v(2, 3), qpred(2)
+      integer :: n, k
+      tk = [0.3_dp, 0.2_dp, 0.05_dp]
+      do n = 2, 3
+         do k = 1, n
+            q(:, k) = [poly(tk(k), 2*n - 1), poly(tk(k), 2*n)]
+            v(:, k) = [dpoly(tk(k), 2*n - 1), dpoly(tk(k), 2*n)]
+         end do
+         call hermite_extrapolate(q(:, 1:n), v(:, 1:n), tk(1:n), 0.45_dp, qpred)
+         call check(error, qpred(1), poly(0.45_dp, 2*n - 1), 'exact for degree 2n - 1', rel=1.0e-12_dp)
+         if (allocated(error)) return
+         call check(error, abs(qpred(2) - poly(0.45_dp, 2*n)) > 1.0e-6_dp, 'not exact for degree 2n')
+         if (allocated(error)) return
+      end do
+   end subroutine test_hermite_extrapolate
+
+end module test_solver_convergence
