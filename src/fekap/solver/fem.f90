@@ -52,6 +52,9 @@ module fekap_solver_fem
    !> The estimated stop asks the next correction to be this share of the length
    !> tolerance (what a verifying iteration would have left).
    real(dp), parameter :: estimate_margin = 0.1_dp
+   !> A residual below the floor that falls by less than this factor in an
+   !> iteration has stalled at round-off.
+   real(dp), parameter :: stall_ratio = 0.5_dp
    !> Configurations kept for the extrapolating predictor (quadratic
    !> extrapolation of positions, or quintic Hermite with velocities).
    integer, parameter :: history = 3
@@ -176,7 +179,7 @@ contains
       type(fem_stepper_type), intent(out) :: self
       type(model_type), intent(in) :: model
       integer :: i, e
-      real(dp) :: f, df, ddf, force_scale
+      real(dp) :: f, df, ddf, force_scale, shortest
       self%model = model
       call new_mesh(self%mesh, model)
       associate (n => self%mesh%ndof, nf => self%mesh%nfree, nd => self%mesh%ndriven)
@@ -206,15 +209,21 @@ contains
             & model%nodes(model%links(i)%node(1))%x))
       end do
       call find_hinge_pairs(self)
-      ! Residual floor: a strain of 1e-13 in the stiffest element.
+      ! Residual floor: a strain of 1e-13 in the stiffest element, or the
+      ! round-off of a strain computed from coordinates of the model's size
+      ! (eps size / L: 4e-12 in the 10,000-cell scissor lift) if larger.
+      ! The Euclidean norm of round-off grows like the square root of the
+      ! number of unknowns.
       force_scale = 0
+      shortest = huge(1.0_dp)
       do e = 1, size(self%mesh%elements)
          associate (el => self%mesh%elements(e))
             force_scale = max(force_scale, el%c(1), el%c(2), el%c(3)/el%length**2)
+            shortest = min(shortest, el%length)
          end associate
       end do
-      ! The Euclidean norm of round-off grows like the square root of the number of unknowns.
-      self%conv%floor = 1.0e-13_dp*force_scale*sqrt(real(max(1, self%mesh%nfree), dp))
+      self%conv%floor = max(1.0e-13_dp, epsilon(1.0_dp)*self%size/shortest)*force_scale* &
+         & sqrt(real(max(1, self%mesh%nfree), dp))
    end subroutine new_fem_stepper
 
    !> The initial configuration (solved for the initial load, if loaded), and
@@ -377,7 +386,7 @@ contains
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r0, scale, correction, previous, strain, clock, kg_above
+      real(dp) :: r0, scale, correction, previous, strain, clock, kg_above, previous_residual, stalled_correction
       integer :: i, k, info, element, pass
       logical :: moved
       character(len=300) :: msg
@@ -396,6 +405,8 @@ contains
          iterations = 0
          r0 = 0
          previous = 0
+         previous_residual = huge(1.0_dp)
+         stalled_correction = 0
          ! Newton's tangent leaves out the geometric stiffness where the iterate
          ! is strained less than geometric_strain. At a mechanism configuration
          ! the stresses vanish, so near it the material tangent is the exact
@@ -467,8 +478,18 @@ contains
                if (self%conv%mode /= convergence_paper) then
                   if (is_converged(self%conv, residual, r0, scale, correction)) exit
                   if (converged_by_estimate(self, residual, r0, scale, correction, previous)) exit
+                  ! Round-off: a residual at its floor that no longer falls gives
+                  ! corrections that are noise (the tangent's sensitivity times
+                  ! the round-off), so the length test cannot be met; the last
+                  ! correction is the accuracy left, reported in the listing.
+                  if (iterations >= 3 .and. residual <= self%conv%floor .and. &
+                     & residual > stall_ratio*previous_residual) then
+                     stalled_correction = correction
+                     exit
+                  end if
                end if
                previous = correction
+               previous_residual = residual
             end do
             call relocate(self, t, qt, moved, error)
             if (allocated(error)) return
@@ -489,6 +510,12 @@ contains
             if (allocated(error)) return
          end if
          call accept(self, t, qt)
+         if (stalled_correction > 0) then
+            write (msg, '(a,es12.5,a,es9.2,a,es9.2,a)') 't = ', t, ': Newton stopped at the round-off floor of the '// &
+               & 'residual (', residual, '); the last correction, ', stalled_correction, &
+               & ', bounds the error of this configuration'
+            self%note = trim(msg)
+         end if
          if (.not. self%loaded .and. self%has_jump_response .and. &
             & self%response_pivot >= near_singular_drop*self%largest_response_pivot) then
             ! The velocity for the predictor's history: the linear response of
