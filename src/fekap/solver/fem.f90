@@ -506,8 +506,19 @@ contains
             end if
             call check_gaps(self, t, qt, error)
             if (allocated(error)) return
-            call branch_jump(self, t, qt, iterations, error)
+            ! The material tangent at the new configuration: the branch-jump
+            ! check's response (and from it the predictor's velocity) and, once
+            ! accepted, the rates' tangent. The last Newton factor, one
+            ! correction away, would give velocities off by that correction.
+            clock = clock_seconds()
+            call assemble_tangent(mesh, qt, t, self%seg, self%r, self%kff, self%kfd, huge(1.0_dp))
+            self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
+            self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+            self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
+            call factor(self, info)
+            call branch_jump(self, t, qt, info == 0, error)
             if (allocated(error)) return
+            self%factor_current = info == 0
          end if
          call accept(self, t, qt)
          if (stalled_correction > 0) then
@@ -823,18 +834,20 @@ contains
    !> poor predictor can cross over. What the drive increment dd of the step
    !> explains is its linear response, dq = R dd with R = -K_ff^-1 K_fd the
    !> response to unit drive changes, at either end of the step: R at the new
-   !> configuration comes from the last Newton factor (one back substitution
-   !> per drive), R at the last one is kept from the last step. Two tests:
+   !> configuration comes from the factor of its material tangent (one back
+   !> substitution per drive; the same factor then serves the rates), R at the
+   !> last one is kept from the last step. Two tests:
    !> * magnitude: every rotation unknown changes by |d| <= jump_ratio * B with
    !>   B = max(|dq_n|, |dq|, drive increment) (rotation drives in radians,
    !>   translation drives in lengths of the shortest link);
    !> * orientation (hinge_flip): two hinged links that pass through
    !>   collinear within the step must do so in the sense of the response.
    !> Rotations and responses to the drive increment are scale-free.
-   subroutine branch_jump(self, t, qt, iterations, error)
+   subroutine branch_jump(self, t, qt, factored, error)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t, qt(:)
-      integer, intent(in) :: iterations
+      !> Whether kff holds the factor of the material tangent at qt.
+      logical, intent(in) :: factored
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: f, df, ddf, f0, floor, bound, ratio, worst, turn, dd(self%mesh%ndriven)
       integer :: i, j, worst_dof, flip_link(2), flip_node, crossing(3)
@@ -853,9 +866,8 @@ contains
                floor = max(floor, abs(dd(j))/self%shortest_link)
             end if
          end do
-         ! Response at the new configuration from the last Newton factor (if
-         ! it was factored in this step and is not singular).
-         has_response = iterations > 0
+         ! Response at the new configuration (unless its tangent is singular).
+         has_response = factored
          if (has_response) has_response = self%kff%pivot_ratio() >= singular_floor
          resp = 0
          if (has_response) call drive_response(self, resp)
