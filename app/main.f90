@@ -129,10 +129,10 @@ contains
       stem = deck(index(deck, '/', back=.true.) + 1:)
       if (index(stem, '.', back=.true.) > 1) stem = stem(:index(stem, '.', back=.true.) - 1)
       if (model%output%csv) then
-         call open_replace(outdir//'/points.csv', units%points, error)
-         if (.not. allocated(error)) call open_replace(outdir//'/links.csv', units%links, error)
-         if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error)
-         if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error)
+         call open_replace(outdir//'/points.csv', units%points, error, stream=.true.)
+         if (.not. allocated(error)) call open_replace(outdir//'/links.csv', units%links, error, stream=.true.)
+         if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error, stream=.true.)
+         if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)
          close (mesh_unit)

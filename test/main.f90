@@ -12,6 +12,7 @@ program tester
    use test_deck_expression, only: collect_deck_expression
    use test_deck, only: collect_deck
    use test_output_vtk, only: collect_output_vtk
+   use test_output_format, only: collect_output_format
    implicit none
 
    abstract interface
@@ -42,6 +43,7 @@ program tester
    call run('deck_expression', collect_deck_expression)
    call run('deck', collect_deck)
    call run('output_vtk', collect_output_vtk)
+   call run('output_format', collect_output_format)
 
    if (failed > 0) error stop 1
 

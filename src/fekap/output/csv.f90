@@ -1,10 +1,13 @@
 !> CSV tables of a run: points.csv, links.csv, steps.csv and mesh.csv.
-!> Writers take an open unit and never open files themselves. Reals are
-!> written with 17 significant digits, enough to round-trip.
+!> Writers take a unit open for unformatted stream access (lines are written
+!> as bytes with their newline: no format to interpret per row) and never
+!> open files themselves. Reals are written with 17 significant digits,
+!> enough to round-trip.
 module fekap_output_csv
    use fekap_kinds, only: dp
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type
+   use fekap_output_format, only: real_text, integer_text, append_real, append_integer
    implicit none
    private
 
@@ -24,7 +27,7 @@ contains
       header = 'step,t,point,x,y'
       if (velocities) header = header//',vx,vy'
       if (velocities .and. accelerations) header = header//',ax,ay'
-      write (unit, '(a)') header
+      call emit(unit, header)
    end subroutine write_points_header
 
    !> One row per tracked point.
@@ -65,7 +68,7 @@ contains
       header = 'step,t,link,angle'
       if (velocities) header = header//',omega'
       if (velocities .and. accelerations) header = header//',alpha'
-      write (unit, '(a)') header
+      call emit(unit, header)
    end subroutine write_links_header
 
    !> One row per reported link.
@@ -99,17 +102,14 @@ contains
 
    subroutine write_steps_header(unit)
       integer, intent(in) :: unit
-      write (unit, '(a)') 'step,t,iterations,residual,cuts'
+      call emit(unit, 'step,t,iterations,residual,cuts')
    end subroutine write_steps_header
 
    subroutine write_steps_row(unit, result)
       integer, intent(in) :: unit
       type(step_result_type), intent(in) :: result
-      character(len=real_width) :: t, r
-      write (t, '(es25.16e3)') result%t
-      write (r, '(es25.16e3)') result%residual
-      write (unit, '(i0,",",a,",",i0,",",a,",",i0)') result%step, trim(adjustl(t)), result%iterations, &
-         & trim(adjustl(r)), result%cuts
+      call emit(unit, integer_text(result%step)//','//real_text(result%t)//','// &
+         & integer_text(result%iterations)//','//real_text(result%residual)//','//integer_text(result%cuts))
    end subroutine write_steps_row
 
    !> `link,node1,node2`: the end points of every link, for drawing the mechanism.
@@ -117,10 +117,10 @@ contains
       integer, intent(in) :: unit
       type(model_type), intent(in) :: model
       integer :: l
-      write (unit, '(a)') 'link,node1,node2'
+      call emit(unit, 'link,node1,node2')
       do l = 1, size(model%links)
-         write (unit, '(a)') model%links(l)%name//','//model%nodes(model%links(l)%node(1))%name//','// &
-            & model%nodes(model%links(l)%node(2))%name
+         call emit(unit, model%links(l)%name//','//model%nodes(model%links(l)%node(1))%name//','// &
+            & model%nodes(model%links(l)%node(2))%name)
       end do
    end subroutine write_mesh_csv
 
@@ -132,30 +132,30 @@ contains
       integer, intent(in), optional :: blanks
       character(len=40 + len(name) + real_width*size(values)) :: line
       integer :: i, n
-      write (line, '(i0)') step
-      n = len_trim(line)
-      call append_real(values(1))
+      n = 0
+      call append_integer(line, n, step)
+      line(n + 1:n + 1) = ','
+      n = n + 1
+      call append_real(line, n, values(1))
       line(n + 1:n + 1 + len(name)) = ','//name
       n = n + 1 + len(name)
       do i = 2, size(values)
-         call append_real(values(i))
+         line(n + 1:n + 1) = ','
+         n = n + 1
+         call append_real(line, n, values(i))
       end do
       if (present(blanks)) then
          line(n + 1:n + blanks) = repeat(',', blanks)
          n = n + blanks
       end if
-      write (unit, '(a)') line(1:n)
-   contains
-      subroutine append_real(x)
-         real(dp), intent(in) :: x
-         character(len=real_width) :: field
-         integer :: k
-         write (field, '(es25.16e3)') x
-         k = verify(field, ' ')
-         line(n + 1:n + 1) = ','
-         line(n + 2:n + 1 + real_width - k + 1) = field(k:)
-         n = n + 1 + real_width - k + 1
-      end subroutine append_real
+      call emit(unit, line(1:n))
    end subroutine write_row
+
+   !> One line of text and its newline.
+   subroutine emit(unit, text)
+      integer, intent(in) :: unit
+      character(*), intent(in) :: text
+      write (unit) text, new_line('a')
+   end subroutine emit
 
 end module fekap_output_csv

@@ -6,6 +6,7 @@ module fekap_output_listing
       & predictor_previous, predictor_extrapolate, convergence_paper, joint_prismatic
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: work_counts_type
+   use fekap_output_format, only: append_es, append_i
    implicit none
    private
 
@@ -180,8 +181,16 @@ contains
    subroutine write_listing_step(unit, result)
       integer, intent(in) :: unit
       type(step_result_type), intent(in) :: result
-      write (unit, '(i8,es20.11,i12,es16.6,i6)') result%step, result%t, result%iterations, result%residual, &
-         & result%cuts
+      character(len=62) :: line
+      integer :: n
+      ! As the format (i8,es20.11,i12,es16.6,i6), without its cost.
+      n = 0
+      call append_i(line, n, result%step, 8)
+      call append_es(line, n, result%t, 20, 11, 0)
+      call append_i(line, n, result%iterations, 12)
+      call append_es(line, n, result%residual, 16, 6, 0)
+      call append_i(line, n, result%cuts, 6)
+      write (unit, '(a)') line(1:n)
    end subroutine write_listing_step
 
    !> Closing summary: counts of the work done and time per phase.

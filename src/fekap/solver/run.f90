@@ -211,13 +211,24 @@ contains
       name = 'vtk/'//stem//'_'//trim(digits)//'.vtu'
    end function vtu_name
 
-   !> Open a file for writing, replacing it (no_unit and an error if it cannot be written).
-   subroutine open_replace(path, unit, error)
+   !> Open a file for writing, replacing it (no_unit and an error if it cannot
+   !> be written); formatted, or with `stream` for unformatted stream access
+   !> (the CSV writers write their lines as bytes).
+   subroutine open_replace(path, unit, error, stream)
       character(*), intent(in) :: path
       integer, intent(out) :: unit
       type(error_type), allocatable, intent(out) :: error
+      logical, intent(in), optional :: stream
       integer :: ios
-      open (newunit=unit, file=path, status='replace', action='write', iostat=ios)
+      logical :: as_stream
+      as_stream = .false.
+      if (present(stream)) as_stream = stream
+      if (as_stream) then
+         open (newunit=unit, file=path, status='replace', action='write', access='stream', &
+            & form='unformatted', iostat=ios)
+      else
+         open (newunit=unit, file=path, status='replace', action='write', iostat=ios)
+      end if
       if (ios /= 0) then
          unit = no_unit
          call fatal_error(error, path//': cannot write this file')
