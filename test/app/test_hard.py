@@ -429,8 +429,10 @@ def test_signals_keep_rows():
     written so far are complete lines of valid numbers."""
     for sig in (signal.SIGTERM, signal.SIGINT):
         out = OUT / f"signal-{sig.name}"
+        # dt = 0.001: a million steps, many seconds even in a fast build, so the
+        # signal always comes during the run.
         proc = subprocess.Popen([fekap_binary(), "-q", "-o", str(out), "decks/hard/fourbar-1000-turns.deck",
-                                 "--compute", "positions,velocities,accelerations"],
+                                 "--compute", "positions,velocities,accelerations", "--dt", "0.001"],
                                 cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         time.sleep(1.0)
         check(proc.poll() is None, f"{sig.name}: the run ended before the signal")

@@ -52,9 +52,9 @@ module fekap_solver_fem
    !> The estimated stop asks the next correction to be this share of the length
    !> tolerance (what a verifying iteration would have left).
    real(dp), parameter :: estimate_margin = 0.1_dp
-   !> A residual below the floor that falls by less than this factor in an
-   !> iteration has stalled at round-off.
-   real(dp), parameter :: stall_ratio = 0.5_dp
+   !> Iterations in a row with the residual below its floor after which
+   !> Newton has stalled at round-off.
+   integer, parameter :: stall_iterations = 3
    !> Configurations kept for the extrapolating predictor (quadratic
    !> extrapolation of positions, or quintic Hermite with velocities).
    integer, parameter :: history = 3
@@ -386,8 +386,8 @@ contains
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r0, scale, correction, previous, strain, clock, kg_above, previous_residual, stalled_correction
-      integer :: i, k, info, element, pass
+      real(dp) :: r0, scale, correction, previous, strain, clock, kg_above, stalled_correction
+      integer :: i, k, info, element, pass, at_floor
       logical :: moved
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof)
@@ -405,7 +405,7 @@ contains
          iterations = 0
          r0 = 0
          previous = 0
-         previous_residual = huge(1.0_dp)
+         at_floor = 0
          stalled_correction = 0
          ! Newton's tangent leaves out the geometric stiffness where the iterate
          ! is strained less than geometric_strain. At a mechanism configuration
@@ -478,18 +478,22 @@ contains
                if (self%conv%mode /= convergence_paper) then
                   if (is_converged(self%conv, residual, r0, scale, correction)) exit
                   if (converged_by_estimate(self, residual, r0, scale, correction, previous)) exit
-                  ! Round-off: a residual at its floor that no longer falls gives
-                  ! corrections that are noise (the tangent's sensitivity times
-                  ! the round-off), so the length test cannot be met; the last
-                  ! correction is the accuracy left, reported in the listing.
-                  if (iterations >= 3 .and. residual <= self%conv%floor .and. &
-                     & residual > stall_ratio*previous_residual) then
+                  ! Round-off: a residual at its floor for stall_iterations
+                  ! iterations gives corrections that are noise (the tangent's
+                  ! sensitivity times the round-off), so the length test cannot
+                  ! be met; the last correction is the accuracy left, reported
+                  ! in the listing.
+                  if (residual <= self%conv%floor) then
+                     at_floor = at_floor + 1
+                  else
+                     at_floor = 0
+                  end if
+                  if (at_floor >= stall_iterations) then
                      stalled_correction = correction
                      exit
                   end if
                end if
                previous = correction
-               previous_residual = residual
             end do
             call relocate(self, t, qt, moved, error)
             if (allocated(error)) return
