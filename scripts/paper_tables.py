@@ -309,40 +309,54 @@ one to every FEKAP column.
 listed steps. FEKAP with the paper's settings (the same Simo-Reissner element,
 one per link, reduced integration, the paper's section data, predictor =
 the last configuration with only the driven rotation advanced, the paper's
-test) needs 6 in the first four steps and 5 after, 5.15 on average over the
-turn (6 again in the last two steps). The difference of at most one iteration
-is within what the reconstructed geometry and the counting convention can
-explain. FEKAP's defaults (extrapolating predictor; a residual test against
-the residual of the drive increment alone **and** a test on the length of the
-last correction, 1e-12 x model size) need 4.45 per step over the 40 steps
-(178 solves in 41 configurations, 4.34 per configuration in the listing): the
-better predictor saves about two iterations, the length test spends one of
-them again, because it needs the correction computed *after* the residual is
-small. The default test is also what makes the answer accurate to round-off
-(see docs/performance.md): the paper's test stops on the residual ratio alone
-and leaves position errors of the order of its tolerance (about 3e-9 at 1e-8).
+test) needs 5 per step, 5.35 on average over the turn: the exception is
+t = 0.125 (19), where the crank and the coupler pass through collinear and the
+branch-jump check has the step confirmed by solving it again in halves
+(docs/hard-cases.md, rule 3). The difference of one iteration elsewhere is
+within what the reconstructed geometry and the counting convention can
+explain. FEKAP's defaults need 2.12 per step over the 40 steps (85 solves in
+41 configurations; 2 on 36 steps). Three things bring it there (measured
+before, 4.45): Newton's tangent leaves out the geometric stiffness of the
+iterate's small spurious strains, so convergence is quadratic from the first
+iteration (4.45 -> 3.2); the predictor is the Hermite extrapolation through
+the last three configurations and their velocities (the linear response the
+branch check computes anyway), accurate to 1e-5 of the model size mid-turn;
+and the iteration stops on the quadratic-convergence estimate of the next
+correction instead of computing it (docs/theory.md, section 3). The default
+test is also what makes the answer accurate to round-off (see
+docs/performance.md): the paper's test stops on the residual ratio alone and
+leaves position errors of the order of its tolerance (about 3e-9 at 1e-8).
 
 **Classical methods, dt = 0.025.** FEKAP's orientation-angle and Cartesian
 methods need 3-4 iterations per step with the paper's settings (3.5 on
 average), about one fewer than the paper's 5 (angles) and 4-5 (Cartesian).
 Both impose the driven crank angle in the predictor (the paper's (8)), so each
 step starts with the driving constraint satisfied and only the dependent
-coordinates are iterated. All three methods converge quadratically; FEKAP's
-FEM needs 1.5-2 more solves than its classical methods, the paper's "one
-additional step" plus the counting.
+coordinates are iterated. All three methods converge quadratically. With the
+paper's settings FEKAP's FEM needs about 1.5 more solves than its classical
+methods, the paper's "one additional step" plus the counting; with the
+defaults it needs fewer (2.12 against 3.5), since the classical methods keep
+the Lagrange predictor and the verifying iteration.
 
-**dt = 0.25 (Table 2).** With the paper's settings FEKAP's FEM needs 11, 9, 8
-and 11 iterations (paper: 11, 11, 12, 18) and its classical methods 6, 5, 5, 5
-(paper: angles 6, 7, 6, 7; Cartesian 6, 6, 6, 11). The paper's large counts at
-t = 1 (Cartesian 11, FEM 18) are not reproduced. With the defaults the FEM needs
-15, 11, 10, 12: at a quarter turn per step an extrapolation through the last
-configurations is a poor guess, and FEKAP then falls back to the last
-configuration, but the default test still demands the final small correction.
+**dt = 0.25 (Table 2).** With the paper's settings FEKAP's classical methods
+need 6, 5, 5, 5 iterations (paper: angles 6, 7, 6, 7; Cartesian 6, 6, 6, 11).
+FEKAP's FEM needs 77, 9, 50 and 9 (paper: 11, 11, 12, 18): at t = 0.25 and
+0.75 the step makes a hinged pair of links pass through collinear while
+turning it by more than 0.1 rad, and FEKAP does not accept such a step before
+the same interval, solved again in halves (and the halves in halves, down to
+turns below 0.1 rad), ends at the same configuration. Endpoint data cannot
+tell a legitimate crossing from a jump over a near-toggle to the mirror
+branch, which is what this check catches (docs/hard-cases.md, rule 3). The
+steps without a crossing take 9 iterations (earlier, before the check: 11, 9,
+8, 11). With the defaults the FEM needs 51, 10, 29, 5 for the same reason.
+The paper's large counts at t = 1 (Cartesian 11, FEM 18) are not reproduced.
 
-**dt = 0.5 (Table 3).** With the paper's settings FEKAP's FEM needs 12 and 14
-(paper: 11 and 13) and its classical methods 4 and 4 (paper: angles 8 and 9).
-With the defaults the FEM's first half turn does not converge as one step: it
-is cut once and takes 34 solves over its sub-steps; the second needs 16.
+**dt = 0.5 (Table 3).** With the paper's settings FEKAP's classical methods
+need 4 and 4 (paper: angles 8 and 9) and its FEM 98 and 72 (paper: 11 and 13;
+FEKAP before the crossing check: 12 and 14), the halving confirmation of both
+half turns. With the defaults the FEM's first half turn is also cut once (a
+rejected configuration) and takes 69 solves over its sub-steps; the second
+48.
 
 **The paper's "Not Converged" (Cartesian, dt = 0.5) is not reproduced.**
 FEKAP's Cartesian method converges at both steps of dt = 0.5, in 4 iterations

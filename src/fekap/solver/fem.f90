@@ -519,6 +519,8 @@ contains
             self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
             self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
             self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
+            ! The residual reported for the step is the one at the accepted configuration.
+            residual = free_norm(self, self%r)
             call factor(self, info)
             call branch_jump(self, t, qt, info == 0, error)
             if (allocated(error)) return
