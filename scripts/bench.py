@@ -9,7 +9,8 @@ release binary first).
    without (`files listing`); Newton iterations per step and the split of the
    analysis time into assembly, factorisation, solves and the rest, and the
    output time, all from the listing's SUMMARY. Each case is run --repeat
-   times; the median is reported.
+   times, the cases taking turns (a slow spell of a shared machine then falls
+   on all of them); the median is reported.
 
      per configuration "analysis" = listing's "time in analysis" / configurations
      per configuration "total"    = listing's "total time" (analysis + output) / configurations
@@ -61,36 +62,53 @@ SCISSOR_ITERATIONS = "100"
 AIM_DT = 0.025
 
 
-def fourbar_case(binary: str, work: Path, dt: float, compute: str, files: str, repeat: int) -> dict:
-    """Median figures of `repeat` runs of Example 1 with these settings."""
+def fourbar_deck(work: Path, dt: float, compute: str, files: str) -> Path:
+    """Example 1 with these settings, two tracked points."""
     deck = work / f"fourbar-{compute}-{files}.deck"
     text = (fb.ROOT / "decks" / "fourbar.deck").read_text()
     deck.write_text(fb.with_settings(text, {"time": f"0 1 {dt!r}", "compute": COMPUTE[compute]},
                                      {"track": "B C", "files": FILES[files]}))
-    runs = []
+    return deck
+
+
+def fourbar_run(binary: str, work: Path, deck: Path, k: int) -> dict:
+    """The figures of one run of a deck of fourbar_deck."""
+    result = fb.run_deck(binary, deck, work / f"out-{deck.stem}-{k}")
+    if result["rc"] != 0 or "summary" not in result:
+        raise SystemExit(f"fekap failed on {deck} (exit {result['rc']}):\n{result['stderr']}")
+    s = result["summary"]
+    n = s["configurations solved"]
+    shutil.rmtree(result["outdir"], ignore_errors=True)
+    return {
+        "configs": n,
+        "analysis_us": 1e6 * s["time in analysis (s)"] / n,
+        "total_us": 1e6 * s["total time (s)"] / n,
+        "output_us": 1e6 * s["time in output (s)"] / n,
+        "assembly_us": 1e6 * s["of which assembly (s)"] / n,
+        "factorisation_us": 1e6 * s["of which factorisation (s)"] / n,
+        "solves_us": 1e6 * s["of which solves (s)"] / n,
+        "wall_us": 1e6 * result["wall"] / n,
+        "iterations_per_step": s["Newton iterations"] / max(1, n - 1),
+    }
+
+
+def fourbar_cases(binary: str, work: Path, dt: float, repeat: int) -> dict:
+    """Median figures of `repeat` runs of every case. The cases take turns
+    (one run of each, `repeat` rounds), so that a slow spell of a shared
+    machine falls on all of them alike rather than on one case."""
+    decks = {(c, f): fourbar_deck(work, dt, c, f) for f in FILES for c in COMPUTE}
+    runs: dict = {key: [] for key in decks}
     for k in range(repeat):
-        result = fb.run_deck(binary, deck, work / f"out-{compute}-{files}-{k}")
-        if result["rc"] != 0 or "summary" not in result:
-            raise SystemExit(f"fekap failed on {deck} (exit {result['rc']}):\n{result['stderr']}")
-        s = result["summary"]
-        n = s["configurations solved"]
-        runs.append({
-            "configs": n,
-            "analysis_us": 1e6 * s["time in analysis (s)"] / n,
-            "total_us": 1e6 * s["total time (s)"] / n,
-            "output_us": 1e6 * s["time in output (s)"] / n,
-            "assembly_us": 1e6 * s["of which assembly (s)"] / n,
-            "factorisation_us": 1e6 * s["of which factorisation (s)"] / n,
-            "solves_us": 1e6 * s["of which solves (s)"] / n,
-            "wall_us": 1e6 * result["wall"] / n,
-            "iterations_per_step": s["Newton iterations"] / max(1, n - 1),
-        })
-        shutil.rmtree(result["outdir"], ignore_errors=True)
-    median = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
-    median["other_us"] = median["analysis_us"] - median["assembly_us"] - median["factorisation_us"] \
-        - median["solves_us"]
-    median["spread_analysis_us"] = (min(r["analysis_us"] for r in runs), max(r["analysis_us"] for r in runs))
-    return median
+        for key, deck in decks.items():
+            runs[key].append(fourbar_run(binary, work, deck, k))
+    cases = {}
+    for key, rs in runs.items():
+        median = {name: statistics.median(r[name] for r in rs) for name in rs[0]}
+        median["other_us"] = median["analysis_us"] - median["assembly_us"] - median["factorisation_us"] \
+            - median["solves_us"]
+        median["spread_analysis_us"] = (min(r["analysis_us"] for r in rs), max(r["analysis_us"] for r in rs))
+        cases[key] = median
+    return cases
 
 
 def listing_count(result: dict, text: str) -> int:
@@ -210,7 +228,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="FEKAP benchmarks")
     parser.add_argument("--quick", action="store_true",
                         help="reduced run for the tests: dt = 1e-3, 1 repetition, small scissors, no docs")
-    parser.add_argument("--repeat", type=int, help="repetitions per case (default 5, quick 1)")
+    parser.add_argument("--repeat", type=int, help="repetitions per case (default 9, quick 1)")
     parser.add_argument("--dt", type=float, help="time step of Example 1 (default 1e-4, quick 1e-3)")
     parser.add_argument("--no-scissor", action="store_true", help="skip the scissor-lift scaling runs")
     parser.add_argument("--sizes", help="scissor cells, comma-separated (default 10,100,1000,3000,10000)")
@@ -218,7 +236,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--bin", help="fekap executable (default: $FEKAP_BIN, else build/local/bin/fekap)")
     parser.add_argument("--no-docs", action="store_true", help="do not write docs/performance*")
     args = parser.parse_args(argv)
-    repeat = args.repeat or (1 if args.quick else 5)
+    repeat = args.repeat or (1 if args.quick else 9)
     dt = args.dt or (1e-3 if args.quick else 1e-4)
     sizes = [int(x) for x in (args.sizes or ("10,30" if args.quick else "10,100,1000,3000,10000")).split(",") if x]
     dense_sizes = [int(x) for x in (args.dense_sizes or ("10" if args.quick else "10,100")).split(",") if x]
@@ -231,11 +249,10 @@ def main(argv: list[str] | None = None) -> int:
 
     print(f"\nExample 1, dt = {dt:g} ({round(1 / dt)} steps), median of {repeat} run(s); "
           "us per configuration")
-    cases = {}
+    cases = fourbar_cases(binary, work, dt, repeat)
     for files in FILES:
         for compute in COMPUTE:
-            c = fourbar_case(binary, work, dt, compute, files, repeat)
-            cases[(compute, files)] = c
+            c = cases[(compute, files)]
             print(f"  {COMPUTE[compute]:36s} {FILES[files]:12s} analysis {c['analysis_us']:8.2f}  "
                   f"total {c['total_us']:8.2f}  (assembly {c['assembly_us']:.2f}, factorisation "
                   f"{c['factorisation_us']:.2f}, solves {c['solves_us']:.2f}, other {c['other_us']:.2f}, "

@@ -351,6 +351,19 @@ def test_penalty_range():
         deck.write_text(text.replace("guide -5 0 5 0  pin", f"guide -5 0 5 0  pin  penalty={factor}*100/3"))
         out, _ = run_case(str(deck))
         compare(out, "B", b_exact, 1e-8)
+    # Example 5 with stiffer penalties: positions stay solved to round-off (a
+    # Newton stop on its estimate once left P 9e-8 off here; the estimate is
+    # now checked with the factor of the converged configuration).
+    text = (ROOT / "decks/quick-return.deck").read_text()
+    for penalty in ("1e1", "1e4"):
+        deck = OUT / f"quick-return-penalty-{penalty}.deck"
+        deck.write_text(text.replace("on O4B  pin", f"on O4B  pin  penalty={penalty}")
+                        .replace("guide -400 500 100 500  pin", f"guide -400 500 100 500  pin  penalty={penalty}"))
+        out, _ = run_case(str(deck), "--compute", "positions")
+        p = point_series(out, "P")
+        worst = max(max(abs(p["x"][i] - quick_return_exact(t)[0].f), abs(p["y"][i] - quick_return_exact(t)[1].f))
+                    for i, t in enumerate(p["t"]))
+        check(worst < 1e-10, f"quick-return, penalty {penalty}: P off by {worst:.2e}")
 
 
 # ------------------------------------------------------------- long runs, meshes
