@@ -218,6 +218,9 @@ def test_double_crank_exactly_collinear():
             check(err < 1e-9, f"t = {t}: position error {err:.2e}")
             verr = max(abs(float(r["vx"]) - fx.d), abs(float(r["vy"]) - fy.d)) / (2 * math.pi)
             check(verr < 1e-8, f"t = {t}: velocity error {verr:.2e}")
+    # Positions only: the same two configurations are noted as singular.
+    out, _ = run_case("decks/double-crank.deck", "--dt", "0.05", "--compute", "positions", name="dc-positions")
+    check(listing(out).count("singular configuration") == 2, "positions only: both singular configurations noted")
     # With the paper's predictor Newton cannot get past the singular point (it
     # reaches t = 0.25, step 5, but no configuration of step 6 is admissible):
     # exit 3, the message names the step and its time, the rows before it kept.

@@ -107,8 +107,9 @@ module fekap_solver_fem
       real(dp) :: t = 0
       !> Whether v (and a) belong to the accepted configuration.
       logical :: has_velocity = .false., has_acceleration = .false.
-      !> Whether kff holds the factor of the tangent at (within tolerance of) q.
-      logical :: factor_current = .false.
+      !> Whether kff holds the factor of the tangent at (within tolerance of) q,
+      !> and whether factoring the tangent at q failed (a singular configuration).
+      logical :: factor_current = .false., accepted_singular = .false.
       !> Quadratic-convergence constant M of Newton (c(k+1) = M c(k)**2) measured
       !> in the last step that showed it, for the estimated stop.
       real(dp) :: newton_constant = 0
@@ -559,6 +560,7 @@ contains
             call branch_jump(self, t, qt, info == 0, error)
             if (allocated(error)) return
             self%factor_current = info == 0
+            self%accepted_singular = info /= 0
          end if
          call accept(self, t, qt)
          if (stalled_correction > 0) then
@@ -777,6 +779,7 @@ contains
       self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
       call factor(self, info)
       self%factor_current = info == 0
+      self%accepted_singular = info /= 0
    end subroutine refactor_at_accepted
 
    !> Driven dofs at time t: the initial value plus the law's change since t_start.
@@ -1276,7 +1279,29 @@ contains
       real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven), ratio, clock
       integer :: i, k, info
       character(len=160) :: note
-      if (.not. self%model%analysis%velocities) return
+      if (.not. self%model%analysis%velocities) then
+         ! Positions only: the material tangent at the configuration is factored
+         ! anyway (for the branch-jump check), so stationary configurations are
+         ! still noted, at no cost.
+         if (self%accepted_singular) then
+            ratio = 0
+         else if (self%factor_current) then
+            ratio = self%kff%pivot_ratio()
+         else
+            return
+         end if
+         self%counts%min_pivot_ratio = min(self%counts%min_pivot_ratio, ratio)
+         self%reference_pivot = max(self%reference_pivot, ratio)
+         if (ratio < singular_drop*self%reference_pivot .or. ratio < singular_floor) then
+            write (note, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent has no inverse)'
+            self%note = trim(note)
+         else if (ratio < near_singular_drop*self%reference_pivot) then
+            write (note, '(a,es12.5,a,es9.2,a)') 't = ', self%t, ': near a stationary configuration (pivot ratio ', &
+               & ratio, ')'
+            self%note = trim(note)
+         end if
+         return
+      end if
       call refactor_at_accepted(self, info)
       ratio = 0
       if (info == 0) ratio = self%kff%pivot_ratio()
