@@ -125,8 +125,8 @@ module fekap_solver_fem
       !> the history (a smooth continuation of the last configurations).
       real(dp), allocatable :: q_predicted(:)
       logical :: hermite_prediction = .false.
-      !> Pivot ratio of the factor behind the last drive response, and the largest one.
-      real(dp) :: response_pivot = 0, largest_response_pivot = 0
+      !> Pivot ratio of the factor behind the last drive response.
+      real(dp) :: response_pivot = 0
       !> Drive laws' values at the start time: drives move from the initial configuration.
       real(dp), allocatable :: law0(:)
       !> Length weight of each dof for the correction test: 1 for translations,
@@ -142,7 +142,8 @@ module fekap_solver_fem
       !> Element strain (and gap per model size) above which a converged
       !> configuration is rejected: min(1e-3, max(1e-8, 100 tol)).
       real(dp) :: admissible_strain = min_admissible_strain
-      !> Largest pivot ratio of a rate tangent so far (the reference for near-singular warnings).
+      !> Largest pivot ratio of a tangent at an accepted configuration so far
+      !> (the reference for singular and near-singular configurations).
       real(dp) :: reference_pivot = 0
       !> Remark on the accepted configuration for the listing (empty if none).
       character(len=note_length) :: note = ''
@@ -257,13 +258,12 @@ contains
          ! The response at the start: the branch-jump check's reference and the
          ! first velocity of the predictor's history.
          call refactor_at_accepted(self, info)
-         call note_response_pivot(self, info == 0)
+         self%has_jump_response = info == 0
          if (info == 0) then
+            call note_response_pivot(self, self%kff%pivot_ratio())
             call drive_response(self, self%jump_response)
-            self%has_jump_response = .true.
-            self%hist_velocity(:, 1) = matmul(self%jump_response, drive_rates(self, self%t))
-            self%has_hist_velocity(1) = .true.
          end if
+         call record_velocity(self)
       end if
       call solve_rates(self)
       call fill_result(self, result)
@@ -387,8 +387,8 @@ contains
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r0, scale, correction, previous, strain, clock, kg_above, stalled_correction
-      integer :: i, k, info, element, pass, at_floor
+      real(dp) :: r0, scale, correction, previous, strain, kg_above, stalled_correction
+      integer :: i, info, element, pass, at_floor
       logical :: moved, by_estimate
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof)
@@ -403,6 +403,7 @@ contains
             call drive_increment_residual(self, t, scale)
          end if
          self%factor_current = .false.
+         self%accepted_singular = .false.
          iterations = 0
          r0 = 0
          previous = 0
@@ -425,11 +426,7 @@ contains
             by_estimate = .false.
             relocations: do pass = 0, size(mesh%slides)*8
                do i = 0, self%model%analysis%max_iter
-                  clock = clock_seconds()
-                  call assemble_tangent(mesh, qt, t, self%seg, self%r, self%kff, self%kfd, kg_above)
-                  self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
-                  self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-                  self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
+                  call assemble(self, qt, t, kg_above)
                   residual = free_norm(self, self%r)
                   if (i == 0) then
                      r0 = residual
@@ -450,8 +447,7 @@ contains
                      ! the geometric stiffness of the iterate's stresses may still
                      ! carry Newton there (full Newton from here on in this step).
                      kg_above = 0
-                     call assemble_tangent(mesh, qt, t, self%seg, self%r, self%kff, self%kfd, kg_above)
-                     self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+                     call assemble(self, qt, t, kg_above)
                      call factor(self, info)
                   end if
                   if (info > 0) then
@@ -459,26 +455,13 @@ contains
                      call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
                      return
                   end if
-                  do k = 1, mesh%nfree
-                     self%rhs(k, 1) = -self%r(eqd(k))
-                  end do
-                  clock = clock_seconds()
-                  call self%kff%solve(self%rhs)
-                  self%counts%seconds_solves = self%counts%seconds_solves + (clock_seconds() - clock)
-                  correction = 0
-                  do k = 1, mesh%nfree
-                     correction = max(correction, abs(self%rhs(k, 1))*self%dof_length(eqd(k)))
-                  end do
+                  call newton_correction(self, correction)
                   if (correction > divergence_length*self%size) then
                      write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
                      call analysis_error(error, trim(msg))
                      return
                   end if
-                  do k = 1, mesh%nfree
-                     qt(eqd(k)) = qt(eqd(k)) + self%rhs(k, 1)
-                  end do
-                  iterations = iterations + 1
-                  self%counts%iterations = self%counts%iterations + 1
+                  call apply_correction(self, qt, iterations)
                   if (self%conv%mode /= convergence_paper) then
                      if (is_converged(self%conv, residual, r0, scale, correction)) exit
                      by_estimate = .not. self%loaded
@@ -510,11 +493,7 @@ contains
             ! check's response (and from it the predictor's velocity) and, once
             ! accepted, the rates' tangent. The last Newton factor, one correction
             ! away, would give velocities off by that correction.
-            clock = clock_seconds()
-            call assemble_tangent(mesh, qt, t, self%seg, self%r, self%kff, self%kfd, huge(1.0_dp))
-            self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
-            self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-            self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
+            call assemble(self, qt, t, huge(1.0_dp))
             ! The residual reported for the step is the one at the accepted configuration.
             residual = free_norm(self, self%r)
             call factor(self, info)
@@ -524,20 +503,9 @@ contains
             ! margin, or it is applied as one more Newton iteration and Newton
             ! goes on. (Measured: with a slideline penalty 10 times the default
             ! the estimate after one correction missed by 1e-7.)
-            do k = 1, mesh%nfree
-               self%rhs(k, 1) = -self%r(eqd(k))
-            end do
-            call self%kff%solve(self%rhs)
-            correction = 0
-            do k = 1, mesh%nfree
-               correction = max(correction, abs(self%rhs(k, 1))*self%dof_length(eqd(k)))
-            end do
+            call newton_correction(self, correction)
             if (correction <= estimate_margin*self%conv%length) exit verification
-            do k = 1, mesh%nfree
-               qt(eqd(k)) = qt(eqd(k)) + self%rhs(k, 1)
-            end do
-            iterations = iterations + 1
-            self%counts%iterations = self%counts%iterations + 1
+            call apply_correction(self, qt, iterations)
             if (iterations >= self%model%analysis%max_iter) then
                write (msg, '(a,es12.5,a,i0,a,es9.2)') 't = ', t, ': Newton did not converge in ', iterations, &
                   & ' iterations (residual ', residual
@@ -569,14 +537,10 @@ contains
                & ', bounds the error of this configuration'
             self%note = trim(msg)
          end if
-         if (.not. self%loaded .and. self%has_jump_response .and. &
-            & self%response_pivot >= near_singular_drop*self%largest_response_pivot) then
-            ! The velocity for the predictor's history: the linear response of
-            ! the branch-jump check to the drive rates (the same whatever rates
-            ! the run computes, so positions do not depend on them).
-            self%hist_velocity(:, 1) = matmul(self%jump_response, drive_rates(self, t))
-            self%has_hist_velocity(1) = .true.
-         end if
+         ! The velocity for the predictor's history comes from the branch-jump
+         ! check's response (the same whatever rates the run computes, so
+         ! positions do not depend on them).
+         if (.not. self%loaded) call record_velocity(self)
       end associate
    end subroutine solve_step
 
@@ -768,15 +732,9 @@ contains
    subroutine refactor_at_accepted(self, info)
       type(fem_stepper_type), intent(inout) :: self
       integer, intent(out) :: info
-      real(dp) :: clock
       info = 0
       if (self%factor_current) return
-      clock = clock_seconds()
-      call assemble_tangent(self%mesh, self%q, self%t, self%seg, self%r, self%kff, self%kfd, &
-         & geometric_above=merge(0.0_dp, huge(1.0_dp), self%loaded))
-      self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
-      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-      self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
+      call assemble(self, self%q, self%t, merge(0.0_dp, huge(1.0_dp), self%loaded))
       call factor(self, info)
       self%factor_current = info == 0
       self%accepted_singular = info /= 0
@@ -892,7 +850,7 @@ contains
       !> Whether kff holds the factor of the material tangent at qt.
       logical, intent(in) :: factored
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: f, df, ddf, f0, floor, bound, ratio, worst, turn, dd(self%mesh%ndriven)
+      real(dp) :: f, df, ddf, f0, floor, bound, ratio, worst, turn, pivot, dd(self%mesh%ndriven)
       integer :: i, j, worst_dof, flip_link(2), flip_node, crossing(3)
       logical :: has_response
       character(len=200) :: msg
@@ -910,11 +868,12 @@ contains
             end if
          end do
          ! Response at the new configuration (unless its tangent is singular).
-         has_response = factored
-         if (has_response) has_response = self%kff%pivot_ratio() >= singular_floor
+         pivot = 0
+         if (factored) pivot = self%kff%pivot_ratio()
+         has_response = pivot >= singular_floor .and. factored
          resp = 0
          if (has_response) call drive_response(self, resp)
-         call note_response_pivot(self, has_response)
+         call note_response_pivot(self, merge(pivot, 0.0_dp, has_response))
          dq_new = matmul(resp, dd)
          dq_old = 0
          if (self%has_jump_response) dq_old = matmul(self%jump_response, dd)
@@ -1096,15 +1055,24 @@ contains
    end subroutine restore_state
 
    !> Record the pivot ratio of the factor behind a drive response (0 if
-   !> none), and the largest so far: the predictor trusts a response as a
+   !> none) in the run's reference: the predictor trusts a response as a
    !> velocity only away from stationary configurations.
-   subroutine note_response_pivot(self, has_response)
+   subroutine note_response_pivot(self, ratio)
       type(fem_stepper_type), intent(inout) :: self
-      logical, intent(in) :: has_response
-      self%response_pivot = 0
-      if (has_response) self%response_pivot = self%kff%pivot_ratio()
-      self%largest_response_pivot = max(self%largest_response_pivot, self%response_pivot)
+      real(dp), intent(in) :: ratio
+      self%response_pivot = ratio
+      self%reference_pivot = max(self%reference_pivot, ratio)
    end subroutine note_response_pivot
+
+   !> The velocity of the newest configuration of the predictor's history:
+   !> the drive response times the drive rates, when the response is known
+   !> and not near a stationary configuration.
+   subroutine record_velocity(self)
+      type(fem_stepper_type), intent(inout) :: self
+      self%has_hist_velocity(1) = self%has_jump_response .and. &
+         & self%response_pivot >= near_singular_drop*self%reference_pivot
+      if (self%has_hist_velocity(1)) self%hist_velocity(:, 1) = matmul(self%jump_response, drive_rates(self, self%t))
+   end subroutine record_velocity
 
    !> Linear response of every dof to unit changes of the drives, (ndof,
    !> ndriven): R_f = -K_ff^-1 K_fd with the current factor, 1 on the drive's
@@ -1254,6 +1222,51 @@ contains
       self%counts%steps = self%counts%steps + 1
    end subroutine accept
 
+   !> Residual and tangent at q (geometric stiffness where strained above
+   !> geometric_above, see beam_residual) into r, kff and kfd, timed and counted.
+   subroutine assemble(self, q, t, geometric_above)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: q(:), t, geometric_above
+      real(dp) :: clock
+      clock = clock_seconds()
+      call assemble_tangent(self%mesh, q, t, self%seg, self%r, self%kff, self%kfd, geometric_above)
+      self%counts%seconds_assembly = self%counts%seconds_assembly + (clock_seconds() - clock)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
+   end subroutine assemble
+
+   !> The Newton correction for the assembled residual with the current
+   !> factor, into rhs, and its length (rotations weighted by the model size).
+   subroutine newton_correction(self, correction)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(out) :: correction
+      real(dp) :: clock
+      integer :: k
+      do k = 1, self%mesh%nfree
+         self%rhs(k, 1) = -self%r(self%mesh%eq_dof(k))
+      end do
+      clock = clock_seconds()
+      call self%kff%solve(self%rhs)
+      self%counts%seconds_solves = self%counts%seconds_solves + (clock_seconds() - clock)
+      correction = 0
+      do k = 1, self%mesh%nfree
+         correction = max(correction, abs(self%rhs(k, 1))*self%dof_length(self%mesh%eq_dof(k)))
+      end do
+   end subroutine newton_correction
+
+   !> Add the correction in rhs to q: one Newton iteration more.
+   subroutine apply_correction(self, q, iterations)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(inout) :: q(:)
+      integer, intent(inout) :: iterations
+      integer :: k
+      do k = 1, self%mesh%nfree
+         q(self%mesh%eq_dof(k)) = q(self%mesh%eq_dof(k)) + self%rhs(k, 1)
+      end do
+      iterations = iterations + 1
+      self%counts%iterations = self%counts%iterations + 1
+   end subroutine apply_correction
+
    !> Factor the assembled tangent, counting Cholesky and LU fallbacks.
    subroutine factor(self, info)
       type(fem_stepper_type), intent(inout) :: self
@@ -1279,62 +1292,56 @@ contains
       real(dp) :: f, vd(self%mesh%ndriven), ad(self%mesh%ndriven), ratio, clock
       integer :: i, k, info
       character(len=160) :: note
-      if (.not. self%model%analysis%velocities) then
-         ! Positions only: the material tangent at the configuration is factored
-         ! anyway (for the branch-jump check), so stationary configurations are
-         ! still noted, at no cost.
-         if (self%accepted_singular) then
-            ratio = 0
-         else if (self%factor_current) then
-            ratio = self%kff%pivot_ratio()
-         else
-            return
-         end if
-         self%counts%min_pivot_ratio = min(self%counts%min_pivot_ratio, ratio)
-         self%reference_pivot = max(self%reference_pivot, ratio)
-         if (ratio < singular_drop*self%reference_pivot .or. ratio < singular_floor) then
-            write (note, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent has no inverse)'
-            self%note = trim(note)
-         else if (ratio < near_singular_drop*self%reference_pivot) then
-            write (note, '(a,es12.5,a,es9.2,a)') 't = ', self%t, ': near a stationary configuration (pivot ratio ', &
-               & ratio, ')'
-            self%note = trim(note)
-         end if
+      character(:), allocatable :: consequence
+      ! The pivot ratio of the tangent at the configuration: a stationary one is
+      ! noted also when only positions are computed (the tangent is factored
+      ! for the branch-jump check anyway, so at no cost).
+      if (self%model%analysis%velocities) call refactor_at_accepted(self, info)
+      if (self%accepted_singular) then
+         ratio = 0
+      else if (self%factor_current) then
+         ratio = self%kff%pivot_ratio()
+      else
          return
       end if
-      call refactor_at_accepted(self, info)
-      ratio = 0
-      if (info == 0) ratio = self%kff%pivot_ratio()
       self%counts%min_pivot_ratio = min(self%counts%min_pivot_ratio, ratio)
       self%reference_pivot = max(self%reference_pivot, ratio)
       if (ratio < singular_drop*self%reference_pivot .or. ratio < singular_floor) then
-         write (note, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent has no inverse): '// &
-            & 'velocities and accelerations are left out of this step'
-         self%note = trim(note)
+         consequence = ''
+         if (self%model%analysis%velocities) consequence = ': velocities and accelerations are left out of this step'
+         write (note, '(a,es12.5,a)') 't = ', self%t, ': singular configuration (the tangent has no inverse)'
+         self%note = trim(note)//consequence
          return
       else if (ratio < near_singular_drop*self%reference_pivot) then
-         write (note, '(a,es12.5,a,es9.2,a)') 't = ', self%t, ': near a stationary configuration (pivot ratio ', ratio, &
-            & '): velocities and accelerations are ill-conditioned'
-         self%note = trim(note)
+         consequence = ')'
+         if (self%model%analysis%velocities) consequence = '): velocities and accelerations are ill-conditioned'
+         write (note, '(a,es12.5,a,es9.2)') 't = ', self%t, ': near a stationary configuration (pivot ratio ', ratio
+         self%note = trim(note)//consequence
       end if
+      if (.not. self%model%analysis%velocities) return
       associate (mesh => self%mesh, eqd => self%mesh%eq_dof)
          do i = 1, mesh%ndriven
             call self%model%drives(i)%law%eval(self%t, f, vd(i), ad(i))
          end do
-         self%v = 0
-         do i = 1, mesh%ndriven
-            self%v(mesh%driven_dof(i)) = vd(i)
-         end do
-         do k = 1, mesh%nfree
-            self%rhs(k, 1) = -dot_product(self%kfd(k, :), vd)
-            if (self%loaded) self%rhs(k, 1) = self%rhs(k, 1) + mesh%f_ext(eqd(k))
-         end do
-         clock = clock_seconds()
-         call self%kff%solve(self%rhs)
-         self%counts%seconds_solves = self%counts%seconds_solves + (clock_seconds() - clock)
-         do k = 1, mesh%nfree
-            self%v(eqd(k)) = self%rhs(k, 1)
-         end do
+         if (self%has_jump_response .and. .not. self%loaded) then
+            ! (47) is R vd with the drive response R of this factor, known already.
+            self%v = matmul(self%jump_response, vd)
+         else
+            self%v = 0
+            do i = 1, mesh%ndriven
+               self%v(mesh%driven_dof(i)) = vd(i)
+            end do
+            do k = 1, mesh%nfree
+               self%rhs(k, 1) = -dot_product(self%kfd(k, :), vd)
+               if (self%loaded) self%rhs(k, 1) = self%rhs(k, 1) + mesh%f_ext(eqd(k))
+            end do
+            clock = clock_seconds()
+            call self%kff%solve(self%rhs)
+            self%counts%seconds_solves = self%counts%seconds_solves + (clock_seconds() - clock)
+            do k = 1, mesh%nfree
+               self%v(eqd(k)) = self%rhs(k, 1)
+            end do
+         end if
          self%counts%velocity_solves = self%counts%velocity_solves + 1
          self%has_velocity = .true.
          if (.not. self%model%analysis%accelerations) return
