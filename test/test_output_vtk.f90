@@ -73,7 +73,7 @@ contains
       do
          read (unit, '(a)', iostat=ios) line
          if (ios /= 0) exit
-         lines = [lines, line]
+         lines = [character(len=max_line) :: lines, line]
       end do
       close (unit)
    end subroutine read_lines

@@ -12,6 +12,7 @@ module fekap_output_vtk
    use fekap_kinds, only: dp
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type
+   use fekap_output_format, only: real_text, integer_text
    implicit none
    private
 
@@ -19,8 +20,6 @@ module fekap_output_vtk
 
    !> VTK's cell type of a two-point line.
    integer, parameter :: vtk_line = 3
-   !> Width of one real field before blanks are squeezed out.
-   integer, parameter :: real_width = 25
 
 contains
 
@@ -36,14 +35,11 @@ contains
       real(dp), intent(in) :: initial_pos(:, :)
       integer :: npoint, ncell, c
       logical :: vel, acc
-      character(len=12) :: np_text, nc_text
 
       npoint = size(result%mesh_pos, 2)
       ncell = size(result%cells, 2)
       vel = model%analysis%velocities .and. result%has_velocity
       acc = vel .and. model%analysis%accelerations .and. result%has_acceleration
-      write (np_text, '(i0)') npoint
-      write (nc_text, '(i0)') ncell
 
       write (unit, '(a)') '<?xml version="1.0"?>'
       write (unit, '(a)') '<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">'
@@ -53,7 +49,7 @@ contains
       write (unit, '(8x,a)') real_text(result%t)
       write (unit, '(a)') '      </DataArray>'
       write (unit, '(a)') '    </FieldData>'
-      write (unit, '(a)') '    <Piece NumberOfPoints="'//trim(np_text)//'" NumberOfCells="'//trim(nc_text)//'">'
+      write (unit, '(a)') '    <Piece NumberOfPoints="'//integer_text(npoint)//'" NumberOfCells="'//integer_text(ncell)//'">'
 
       write (unit, '(a)') '      <PointData Vectors="displacement">'
       call write_vectors(unit, 'displacement', result%mesh_pos - initial_pos)
@@ -162,14 +158,5 @@ contains
       integer, intent(in) :: unit
       write (unit, '(a)') '        </DataArray>'
    end subroutine close_array
-
-   !> x with 17 significant digits, without blanks.
-   pure function real_text(x) result(text)
-      real(dp), intent(in) :: x
-      character(:), allocatable :: text
-      character(len=real_width) :: field
-      write (field, '(es25.16e3)') x
-      text = trim(adjustl(field))
-   end function real_text
 
 end module fekap_output_vtk

@@ -7,12 +7,13 @@ module fekap_solver_run
    use fekap_solver_interrupt, only: interrupt_signal
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes
-   use fekap_solver_stepper, only: stepper_type
+   use fekap_solver_stepper, only: stepper_type, clock_seconds
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
       & write_steps_header, write_steps_row
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop
    use fekap_output_vtk, only: write_vtu, write_pvd
+   use fekap_output_format, only: integer_text
    implicit none
    private
 
@@ -83,8 +84,7 @@ contains
       type(error_type), allocatable :: step_error
       type(vtk_state_type) :: vtk
       integer :: n, nsteps, rows, l
-      integer(8) :: clock_rate, c0, c1, c_start
-      real(dp) :: seconds(3)
+      real(dp) :: seconds(3), c0, c1, c_start
       character(len=100) :: where_
       logical :: vel, acc
 
@@ -94,7 +94,7 @@ contains
       call new_step_result(result, size(model%nodes), size(model%links))
       seconds = 0
       rows = 0
-      call system_clock(c_start, clock_rate)
+      c_start = clock_seconds()
       if (units%points /= no_unit) call write_points_header(units%points, vel, acc)
       if (units%links /= no_unit) call write_links_header(units%links, vel, acc)
       if (units%steps /= no_unit) call write_steps_header(units%steps)
@@ -107,7 +107,7 @@ contains
       end if
 
       do n = 0, nsteps
-         call system_clock(c0)
+         c0 = clock_seconds()
          result%step = n
          result%cuts = 0
          if (n == 0) then
@@ -115,15 +115,11 @@ contains
          else
             call stepper%advance(step_time(model, n, nsteps), result, step_error)
          end if
-         call system_clock(c1)
-         seconds(1) = seconds(1) + real(c1 - c0, dp)/clock_rate
+         c1 = clock_seconds()
+         seconds(1) = seconds(1) + (c1 - c0)
          if (allocated(step_error)) then
             write (where_, '(a,i0,a,es12.5,a)') 'step ', n, ' (t = ', step_time(model, n, nsteps), '): '
             call analysis_error(error, trim(where_)//' '//step_error%message)
-            if (units%listing /= no_unit) then
-               call write_listing_stop(units%listing, error%message)
-               flush (units%listing)
-            end if
             exit
          end if
          if (units%vtk) then
@@ -133,40 +129,43 @@ contains
             if (n == 0) vtk%initial_pos = result%mesh_pos
          end if
          if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
-            if (units%points /= no_unit) call write_points_rows(units%points, model, result, vel, acc)
-            if (units%links /= no_unit) call write_links_rows(units%links, model, result, vel, acc)
-            if (units%steps /= no_unit) call write_steps_row(units%steps, result)
+            if (units%points /= no_unit) then
+               call write_points_rows(units%points, model, result, vel, acc)
+               rows = rows + size(model%output%points)
+            end if
+            if (units%links /= no_unit) then
+               call write_links_rows(units%links, model, result, vel, acc)
+               rows = rows + size(model%output%links)
+            end if
+            if (units%steps /= no_unit) then
+               call write_steps_row(units%steps, result)
+               rows = rows + 1
+            end if
             if (units%listing /= no_unit) call write_listing_step(units%listing, result)
-            rows = rows + size(model%output%points) + size(model%output%links) + 1
             call flush_all(units)
             if (units%vtk) then
                call write_vtk_step(units, model, result, vtk, error)
-               if (allocated(error)) then
-                  if (units%listing /= no_unit) call write_listing_stop(units%listing, error%message)
-                  exit
-               end if
+               if (allocated(error)) exit
             end if
          end if
          if (units%listing /= no_unit) then
-            if (len_trim(result%note) > 0) write (units%listing, '(10x,a)') 'note: step '//trim(int_text(n))//', '// &
+            if (len_trim(result%note) > 0) write (units%listing, '(10x,a)') 'note: step '//integer_text(n)//', '// &
                & trim(result%note)
          end if
-         call system_clock(c0)
-         seconds(2) = seconds(2) + real(c0 - c1, dp)/clock_rate
+         c0 = clock_seconds()
+         seconds(2) = seconds(2) + (c0 - c1)
          if (interrupt_signal() /= 0 .and. n < nsteps) then
             write (where_, '(a,i0,a,i0,a,es12.5,a)') 'interrupted by signal ', interrupt_signal(), ' after step ', n, &
                & ' (t = ', result%t, ')'
             call fatal_error(error, trim(where_)//'; the rows of the completed steps are kept')
-            if (units%listing /= no_unit) then
-               call write_listing_stop(units%listing, error%message)
-               flush (units%listing)
-            end if
             exit
          end if
       end do
-      call system_clock(c1)
-      seconds(3) = real(c1 - c_start, dp)/clock_rate
+      seconds(3) = clock_seconds() - c_start
       if (units%listing /= no_unit) then
+         ! Whatever stopped the run (analysis failure, VTK file, signal) is
+         ! told before the summary.
+         if (allocated(error)) call write_listing_stop(units%listing, error%message)
          if (units%vtk) then
             call write_listing_summary(units%listing, stepper%counts, rows, seconds, vtk_files=size(vtk%steps))
          else
@@ -234,12 +233,6 @@ contains
          call fatal_error(error, path//': cannot write this file')
       end if
    end subroutine open_replace
-
-   pure function int_text(n) result(text)
-      integer, intent(in) :: n
-      character(len=12) :: text
-      write (text, '(i0)') n
-   end function int_text
 
    subroutine flush_all(units)
       type(run_units_type), intent(in) :: units
