@@ -404,7 +404,7 @@ contains
       write (*, '(6x,a)') got%message
       call check(error, got%kind, error_analysis, 'kind')
       ! The step is cut max_cuts times before it is given up; the message says what to try.
-      call check(error, index(got%message, 'step 1 at t = ') == 1 .and. &
+      call check(error, index(got%message, 't = ') == 1 .and. &
          & index(got%message, ' did not converge in 1 iterations (residual ') > 0 .and. &
          & index(got%message, '(after 8 step cuts; try a smaller time step or another predictor)') > 0, &
          & 'message: '//got%message)

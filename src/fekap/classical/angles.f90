@@ -208,9 +208,7 @@ contains
       integer, intent(in) :: n
       character(*), intent(in) :: what
       character(:), allocatable :: text
-      character(len=12) :: buf
-      write (buf, '(i0)') n
-      text = trim(buf)//' '//what
+      text = int_text(n)//' '//what
       if (n /= 1) text = text//'s'
    end function count_text
 
@@ -297,7 +295,7 @@ contains
             if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
          end if
          if (iterations >= self%analysis%max_iter) then
-            call analysis_error(error, no_convergence_text(self%step, t, iterations, r))
+            call analysis_error(error, no_convergence_text(t, iterations, r))
             return
          end if
          call tangent(self, self%d, k)
@@ -305,7 +303,7 @@ contains
          call solve2(k, -p, delta, error)
          self%counts%lu_factorisations = self%counts%lu_factorisations + 1
          if (allocated(error)) then
-            error%message = 'step '//int_text(self%step)//' at t = '//real_text(t)//': '//error%message
+            error%message = 't = '//real_text(t)//': '//error%message
             return
          end if
          iterations = iterations + 1
@@ -313,7 +311,7 @@ contains
          self%d = self%d + delta
          correction = maxval(abs(delta)*self%length(2:3))
          if (correction > divergence_length*self%size) then
-            call analysis_error(error, 'step '//int_text(self%step)//' at t = '//real_text(t)// &
+            call analysis_error(error, 't = '//real_text(t)// &
                & ': Newton diverged at iteration '//int_text(iterations))
             return
          end if
@@ -334,7 +332,7 @@ contains
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, self%d(where_) - self%history%q(where_, 1), &
          & 'the angle of link '//trim(self%link_name(where_ + 1)))
       if (len(jump) > 0) then
-         call analysis_error(error, 'step '//int_text(self%step)//' at '//jump)
+         call analysis_error(error, jump)
          return
       end if
       self%branch = new

@@ -128,7 +128,6 @@ contains
       real(dp), allocatable :: a(:, :)
       integer, allocatable :: jpvt(:)
       integer :: n, m, rank, k, info
-      character(len=12) :: b1, b2
       character(:), allocatable :: verb
 
       n = self%system%n
@@ -150,10 +149,8 @@ contains
       end if
       if (initial) then
          if (rank < n) then
-            write (b1, '(i0)') n
-            write (b2, '(i0)') rank
-            call input_error(error, 'the mechanism is not determined by its constraints: '//trim(b1)// &
-               & ' body coordinates but '//trim(b2)//' independent constraint equations; add drives or supports')
+            call input_error(error, 'the mechanism is not determined by its constraints: '//int_text(n)// &
+               & ' body coordinates but '//int_text(rank)//' independent constraint equations; add drives or supports')
             return
          end if
          self%redundant = m > rank
@@ -324,7 +321,7 @@ contains
       if (self%redundant) then
          call self%system%residual(self%q, t, self%phi)
          if (maxval(abs(self%phi)) > redundant_tol*self%size) then
-            call analysis_error(error, 'step '//int_text(self%step)//' at t = '//real_text(t)// &
+            call analysis_error(error, 't = '//real_text(t)// &
                & ': Newton converged to a configuration that violates the removed (redundant) equations (residual '// &
                & real_text(maxval(abs(self%phi)))//'), not a configuration of the mechanism')
             return
@@ -352,7 +349,7 @@ contains
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
          & self%q(3*where_) - self%history%q(3*where_, 1), 'the angle of link '//trim(self%body_name(where_)))
       if (len(jump) > 0) then
-         call analysis_error(error, 'step '//int_text(self%step)//' at '//jump)
+         call analysis_error(error, jump)
          return
       end if
       self%branch = new
@@ -434,7 +431,7 @@ contains
             if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
          end if
          if (iterations >= self%analysis%max_iter) then
-            call analysis_error(error, no_convergence_text(self%step, t, iterations, r))
+            call analysis_error(error, no_convergence_text(t, iterations, r))
             return
          end if
          call self%system%jacobian(self%q, self%jac_all)
@@ -452,7 +449,7 @@ contains
             correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
          end do
          if (correction > divergence_length*self%size) then
-            call analysis_error(error, 'step '//int_text(self%step)//' at t = '//real_text(t)// &
+            call analysis_error(error, 't = '//real_text(t)// &
                & ': Newton diverged at iteration '//int_text(iterations))
             return
          end if
@@ -496,21 +493,12 @@ contains
          end do
       end if
       if (info /= 0) then
-         call analysis_error(error, singular_text(self, t))
+         call analysis_error(error, 't = '//real_text(t)//': the constraint Jacobian is singular '// &
+            & '(a singular configuration of the mechanism)')
          return
       end if
       call dense_lu_solve(self%jac, self%ipiv, self%rhs, info)
    end subroutine factor_and_solve
-
-   function singular_text(self, t) result(text)
-      type(cartesian_stepper_type), intent(in) :: self
-      real(dp), intent(in) :: t
-      character(:), allocatable :: text
-      character(len=12) :: buf
-      write (buf, '(i0)') self%step
-      text = 'step '//trim(buf)//' at t = '//real_text(t)// &
-         & ': the constraint Jacobian is singular (a singular configuration of the mechanism)'
-   end function singular_text
 
    !> Rates at the accepted configuration (when asked for) and the step's result.
    subroutine finish_step(self, t, iterations, result, error)

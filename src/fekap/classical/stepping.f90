@@ -173,15 +173,12 @@ contains
    end function new_step_convergence
 
    !> The message of a step that hit max_iter.
-   pure function no_convergence_text(step, t, iterations, residual) result(text)
-      integer, intent(in) :: step, iterations
+   pure function no_convergence_text(t, iterations, residual) result(text)
+      integer, intent(in) :: iterations
       real(dp), intent(in) :: t, residual
       character(:), allocatable :: text
-      character(len=16) :: buf
-      write (buf, '(i0)') step
-      text = 'step '//trim(buf)//' at t = '//real_text(t)
-      write (buf, '(i0)') iterations
-      text = text//' did not converge in '//trim(buf)//' iterations (residual '//real_text(residual)//')'
+      text = 't = '//real_text(t)//': Newton did not converge in '//int_text(iterations)//' iterations (residual '// &
+         & real_text(residual)//')'
    end function no_convergence_text
 
    !> An integer as text.
@@ -248,11 +245,9 @@ contains
       class(step_cuts_type), intent(inout) :: self
       type(error_type), intent(in) :: reason
       type(error_type), allocatable, intent(out) :: error
-      character(len=16) :: buf
       self%cuts = self%cuts + 1
       if (self%cuts > max_cuts) then
-         write (buf, '(i0)') max_cuts
-         call analysis_error(error, reason%message//' (after '//trim(buf)// &
+         call analysis_error(error, reason%message//' (after '//int_text(max_cuts)// &
             & ' step cuts; try a smaller time step or another predictor)')
          return
       end if
@@ -273,11 +268,9 @@ contains
    pure function cuts_note(self) result(text)
       class(step_cuts_type), intent(in) :: self
       character(:), allocatable :: text
-      character(len=16) :: buf
       text = ''
       if (.not. allocated(self%first)) return
-      write (buf, '(i0)') self%cuts
-      text = 'step cut '//trim(buf)//' time(s); first rejection: '//self%first
+      text = 'step cut '//int_text(self%cuts)//' time(s); first rejection: '//self%first
       if (allocated(self%last)) text = text//'; last rejection: '//self%last
    end function cuts_note
 
