@@ -4,7 +4,7 @@
 module fekap_deck_geometry
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, section_type, node_type, link_type, weld_type, support_type, &
-      & find_node, find_link, model_size, dof_x, dof_y, dof_rot
+      & model_size, dof_x, dof_y, dof_rot
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, same_name
    use fekap_deck_name_index, only: new_name_index
@@ -234,7 +234,7 @@ contains
          list(n)%loc = ctx%loc(iline, 1)
          ok = .true.
          do k = 1, 2
-            list(n)%node(k) = lookup_node(ctx, model, iline, k + 1)
+            list(n)%node(k) = lookup_node(ctx, iline, k + 1)
             ok = ok .and. list(n)%node(k) > 0
          end do
          ! Links with bad sections or element counts are kept (no cascade of
@@ -294,7 +294,7 @@ contains
       do i = 1, size(lines)
          iline = lines(i)
          if (.not. ctx%require(iline, form, 'a WELDs line')) cycle
-         node = lookup_node(ctx, model, iline, 1)
+         node = lookup_node(ctx, iline, 1)
          if (node == 0) cycle
          n = n + 1
          list(n) = weld_type()   ! the slot may hold a dropped entry
@@ -303,7 +303,7 @@ contains
          allocate (list(n)%links(0))
          ok = .true.
          do k = 2, ctx%nfields(iline)
-            link = lookup_link(ctx, model, iline, k)
+            link = lookup_link(ctx, iline, k)
             if (link == 0) then
                ok = .false.
                cycle
@@ -355,7 +355,7 @@ contains
       do i = 1, size(lines)
          iline = lines(i)
          if (.not. ctx%require(iline, 'node what-is-fixed', 'a SUPPorts line')) cycle
-         node = lookup_node(ctx, model, iline, 1)
+         node = lookup_node(ctx, iline, 1)
          if (node == 0) cycle
          s = 0
          do j = 1, n
@@ -385,7 +385,7 @@ contains
                   case ('pin', 'x', 'y', 'rot', 'rotation')
                   case default
                      k = k + 1
-                     link = lookup_link(ctx, model, iline, k)
+                     link = lookup_link(ctx, iline, k)
                      if (link == 0) then
                         k = k + 1
                         cycle
@@ -431,9 +431,8 @@ contains
    end subroutine read_supports
 
    !> The node named by field itok, or 0 after reporting an undefined one.
-   integer function lookup_node(ctx, model, iline, itok) result(node)
+   integer function lookup_node(ctx, iline, itok) result(node)
       type(context_type), intent(inout) :: ctx
-      type(model_type), intent(in) :: model
       integer, intent(in) :: iline, itok
       node = ctx%nodes%find(ctx%field(iline, itok))
       if (node == 0) call ctx%error(iline, itok, "undefined node '"//ctx%field(iline, itok)//"'", &
@@ -441,9 +440,8 @@ contains
    end function lookup_node
 
    !> The link named by field itok, or 0 after reporting an undefined one.
-   integer function lookup_link(ctx, model, iline, itok) result(link)
+   integer function lookup_link(ctx, iline, itok) result(link)
       type(context_type), intent(inout) :: ctx
-      type(model_type), intent(in) :: model
       integer, intent(in) :: iline, itok
       link = ctx%links%find(ctx%field(iline, itok))
       if (link == 0) call ctx%error(iline, itok, "undefined link '"//ctx%field(iline, itok)//"'", &

@@ -53,12 +53,12 @@ contains
          drive%loc = ctx%loc(iline, 1)
          if (is_word_of(ctx%field(iline, 1), 'rotation', 3)) then
             drive%dof = dof_rot
-            drive%link = lookup_link(ctx, model, iline, 2)
+            drive%link = lookup_link(ctx, iline, 2)
             if (drive%link == 0) cycle
             drive%node = model%links(drive%link)%node(1)
          else if (lower(ctx%field(iline, 1)) == 'x' .or. lower(ctx%field(iline, 1)) == 'y') then
             drive%dof = merge(dof_x, dof_y, lower(ctx%field(iline, 1)) == 'x')
-            drive%node = lookup_node(ctx, model, iline, 2)
+            drive%node = lookup_node(ctx, iline, 2)
             if (drive%node == 0) cycle
          else
             call ctx%error(iline, 1, "unknown drive '"//ctx%field(iline, 1)//"'", label='allowed: '//form)
@@ -292,7 +292,7 @@ contains
          n = n + 1
          list(n) = load_type()   ! the slot may hold a dropped entry
          list(n)%loc = ctx%loc(iline, 1)
-         list(n)%node = lookup_node(ctx, model, iline, 1)
+         list(n)%node = lookup_node(ctx, iline, 1)
          ok = list(n)%node > 0
          call ctx%real_field(iline, 2, list(n)%force(1), fine)
          ok = ok .and. fine
@@ -308,7 +308,7 @@ contains
                      & label='a LOADs line is: '//form)
                   ok = .false.
                end if
-               list(n)%link = lookup_link(ctx, model, iline, 5)
+               list(n)%link = lookup_link(ctx, iline, 5)
                if (list(n)%link > 0 .and. list(n)%node > 0) then
                   if (.not. has_end(model, list(n)%link, list(n)%node)) then
                      call ctx%error(iline, 5, 'link '//model%links(list(n)%link)%name//' has no end at node '// &
@@ -353,14 +353,14 @@ contains
          list(n)%name = ctx%field(iline, 1)
          list(n)%loc = ctx%loc(iline, 1)
          allocate (list(n)%master_links(0))
-         list(n)%slave = lookup_node(ctx, model, iline, 2)
+         list(n)%slave = lookup_node(ctx, iline, 2)
          ok = list(n)%slave > 0
          word = lower(ctx%field(iline, 3))
          k = 4
          if (word == 'on') then
             do while (k <= nf)
                if (is_option(ctx%field(iline, k))) exit
-               link = lookup_link(ctx, model, iline, k)
+               link = lookup_link(ctx, iline, k)
                if (link > 0) then
                   if (list(n)%slave > 0) then
                      if (has_end(model, link, list(n)%slave)) then
@@ -426,7 +426,7 @@ contains
                   ok = .false.
                else
                   k = k + 1
-                  list(n)%slave_link = lookup_link(ctx, model, iline, k)
+                  list(n)%slave_link = lookup_link(ctx, iline, k)
                   ok = ok .and. list(n)%slave_link > 0
                   if (list(n)%slave_link > 0 .and. list(n)%slave > 0) then
                      if (.not. has_end(model, list(n)%slave_link, list(n)%slave)) then

@@ -4,11 +4,12 @@
 module fekap_deck_settings
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
-      & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, find_node, find_link, &
+      & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, &
       & solver_band, solver_dense
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower
    use fekap_deck_context, only: context_type
+   use fekap_deck_geometry, only: lookup_node, lookup_link
    use fekap_deck_expression, only: safe_add
    implicit none
    private
@@ -238,10 +239,8 @@ contains
             if (.not. ctx%require(iline, 'track NODE [NODE ...]', 'a track line')) cycle
             tracked = .true.
             do k = 2, ctx%nfields(iline)
-               idx = find_node(model, ctx%field(iline, k))
-               if (idx == 0) then
-                  call ctx%error(iline, k, "undefined node '"//ctx%field(iline, k)//"'", label='define it in NODEs')
-               else if (.not. any(points == idx)) then
+               idx = lookup_node(ctx, iline, k)
+               if (idx > 0 .and. .not. any(points == idx)) then
                   points = [points, idx]
                end if
             end do
@@ -249,10 +248,8 @@ contains
             if (.not. ctx%require(iline, 'angles LINK [LINK ...]', 'an angles line')) cycle
             angled = .true.
             do k = 2, ctx%nfields(iline)
-               idx = find_link(model, ctx%field(iline, k))
-               if (idx == 0) then
-                  call ctx%error(iline, k, "undefined link '"//ctx%field(iline, k)//"'", label='define it in LINKs')
-               else if (.not. any(links == idx)) then
+               idx = lookup_link(ctx, iline, k)
+               if (idx > 0 .and. .not. any(links == idx)) then
                   links = [links, idx]
                end if
             end do
