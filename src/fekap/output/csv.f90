@@ -23,11 +23,7 @@ contains
    subroutine write_points_header(unit, velocities, accelerations)
       integer, intent(in) :: unit
       logical, intent(in) :: velocities, accelerations
-      character(:), allocatable :: header
-      header = 'step,t,point,x,y'
-      if (velocities) header = header//',vx,vy'
-      if (velocities .and. accelerations) header = header//',ax,ay'
-      call emit(unit, header)
+      call write_rates_header(unit, 'step,t,point,x,y', ',vx,vy', ',ax,ay', velocities, accelerations)
    end subroutine write_points_header
 
    !> One row per tracked point.
@@ -36,27 +32,11 @@ contains
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       logical, intent(in) :: velocities, accelerations
-      integer :: i, node, nval
-      real(dp) :: values(7)
+      integer :: i, node
       do i = 1, size(model%output%points)
          node = model%output%points(i)
-         values(1:3) = [result%t, result%pos(:, node)]
-         nval = 3
-         if (velocities .and. .not. result%has_velocity) then
-            ! Not computed at this step (a singular configuration): empty fields.
-            call write_row(unit, result%step, model%nodes(node)%name, values(1:nval), &
-               & blanks=merge(4, 2, accelerations))
-            cycle
-         end if
-         if (velocities) then
-            values(4:5) = result%vel(:, node)
-            nval = 5
-            if (accelerations) then
-               values(6:7) = result%acc(:, node)
-               nval = 7
-            end if
-         end if
-         call write_row(unit, result%step, model%nodes(node)%name, values(1:nval))
+         call write_rates_row(unit, result, model%nodes(node)%name, result%pos(:, node), result%vel(:, node), &
+            & result%acc(:, node), velocities, accelerations)
       end do
    end subroutine write_points_rows
 
@@ -64,11 +44,7 @@ contains
    subroutine write_links_header(unit, velocities, accelerations)
       integer, intent(in) :: unit
       logical, intent(in) :: velocities, accelerations
-      character(:), allocatable :: header
-      header = 'step,t,link,angle'
-      if (velocities) header = header//',omega'
-      if (velocities .and. accelerations) header = header//',alpha'
-      call emit(unit, header)
+      call write_rates_header(unit, 'step,t,link,angle', ',omega', ',alpha', velocities, accelerations)
    end subroutine write_links_header
 
    !> One row per reported link.
@@ -77,28 +53,47 @@ contains
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       logical, intent(in) :: velocities, accelerations
-      integer :: i, link, nval
-      real(dp) :: values(4)
+      integer :: i, link
       do i = 1, size(model%output%links)
          link = model%output%links(i)
-         values(1:2) = [result%t, result%angle(link)]
-         nval = 2
-         if (velocities .and. .not. result%has_velocity) then
-            call write_row(unit, result%step, model%links(link)%name, values(1:nval), &
-               & blanks=merge(2, 1, accelerations))
-            cycle
-         end if
-         if (velocities) then
-            values(3) = result%omega(link)
-            nval = 3
-            if (accelerations) then
-               values(4) = result%alpha(link)
-               nval = 4
-            end if
-         end if
-         call write_row(unit, result%step, model%links(link)%name, values(1:nval))
+         call write_rates_row(unit, result, model%links(link)%name, result%angle(link:link), &
+            & result%omega(link:link), result%alpha(link:link), velocities, accelerations)
       end do
    end subroutine write_links_rows
+
+   !> The header of a table of values and their rates: the rate columns only
+   !> when computed.
+   subroutine write_rates_header(unit, values, rates, second_rates, velocities, accelerations)
+      integer, intent(in) :: unit
+      character(*), intent(in) :: values, rates, second_rates
+      logical, intent(in) :: velocities, accelerations
+      if (velocities .and. accelerations) then
+         call emit(unit, values//rates//second_rates)
+      else if (velocities) then
+         call emit(unit, values//rates)
+      else
+         call emit(unit, values)
+      end if
+   end subroutine write_rates_header
+
+   !> `step,t,name,q[,dq[,ddq]]`: the rate columns as computed, left empty at a
+   !> step where they are not known (a singular configuration).
+   subroutine write_rates_row(unit, result, name, q, dq, ddq, velocities, accelerations)
+      integer, intent(in) :: unit
+      type(step_result_type), intent(in) :: result
+      character(*), intent(in) :: name
+      real(dp), intent(in) :: q(:), dq(:), ddq(:)
+      logical, intent(in) :: velocities, accelerations
+      if (velocities .and. .not. result%has_velocity) then
+         call write_row(unit, result%step, name, [result%t, q], blanks=size(q)*merge(2, 1, accelerations))
+      else if (velocities .and. accelerations) then
+         call write_row(unit, result%step, name, [result%t, q, dq, ddq])
+      else if (velocities) then
+         call write_row(unit, result%step, name, [result%t, q, dq])
+      else
+         call write_row(unit, result%step, name, [result%t, q])
+      end if
+   end subroutine write_rates_row
 
    subroutine write_steps_header(unit)
       integer, intent(in) :: unit
