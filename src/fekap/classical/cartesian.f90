@@ -66,6 +66,9 @@ module fekap_classical_cartesian
       !> ones removed, slidelines on master chains): then the determinant of the
       !> last configuration is recomputed with the equations of the step.
       logical :: changing_equations = .false.
+      !> Time of the accepted configuration at which the equations were last
+      !> chosen (huge: not yet).
+      real(dp) :: equations_time = huge(1.0_dp)
       !> Name of a link of each body, for messages.
       character(len=64), allocatable :: body_name(:)
       !> Jump check: the state of the accepted configuration and the largest
@@ -227,6 +230,7 @@ contains
       t = self%analysis%t_start
       self%q = self%system%bodies%q0
       self%history%count = 0
+      self%equations_time = huge(1.0_dp)
       call self%system%residual(self%q, t, self%phi)
       scale = active_norm(self)
       call solve_positions(self, t, scale, iterations, error)
@@ -299,13 +303,19 @@ contains
       character(:), allocatable :: jump
 
       iterations = 0
-      if (self%redundant) then
-         call select_equations(self, self%history%q(:, 1), .false., error)
-         if (allocated(error)) return
+      ! The equations (and master segments) to solve are chosen at the last
+      ! accepted configuration, once: a retry after a step cut starts from
+      ! the same configuration and would choose the same.
+      if (self%equations_time /= self%history%t(1)) then
+         if (self%redundant) then
+            call select_equations(self, self%history%q(:, 1), .false., error)
+            if (allocated(error)) return
+         end if
+         call self%system%select_segments(self%history%q(:, 1))
+         ! With other equations the determinant of the last configuration is another one.
+         if (self%changing_equations) call branch_state(self, self%history%q(:, 1), .true., self%branch)
+         self%equations_time = self%history%t(1)
       end if
-      call self%system%select_segments(self%history%q(:, 1))
-      ! With other equations the determinant of the last configuration is another one.
-      if (self%changing_equations) call branch_state(self, self%history%q(:, 1), .true., self%branch)
       ! The scale of the default test: the residual of the drive increment alone.
       self%q = self%history%q(:, 1)
       call set_driven_angles(self, t)

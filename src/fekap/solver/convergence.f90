@@ -2,7 +2,7 @@
 !> counts are comparable, and the predictors' extrapolation.
 module fekap_solver_convergence
    use fekap_kinds, only: dp
-   use fekap_model, only: convergence_paper
+   use fekap_model, only: convergence_paper, convergence_default
    implicit none
    private
 
@@ -11,7 +11,7 @@ module fekap_solver_convergence
    !> Settings of the test; see docs/theory.md, "Convergence".
    type :: convergence_type
       !> convergence_paper or convergence_default.
-      integer :: mode = 2
+      integer :: mode = convergence_default
       !> Residual ratio tolerance.
       real(dp) :: tol = 1.0e-10_dp
       !> Absolute length tolerance on the last correction (length_tol * model size).
