@@ -61,9 +61,10 @@ contains
       result%mesh_pos = result%pos
       result%mesh_vel = result%vel
       result%mesh_acc = result%acc
+      ! The cells do not change from step to step: set once.
+      if (allocated(result%cell_force)) return
       result%cells = links_nodes
       result%cell_link = [(l, l=1, size(links_nodes, 2))]
-      if (allocated(result%cell_force)) deallocate (result%cell_force)
       allocate (result%cell_force(3, size(links_nodes, 2)), source=0.0_dp)
    end subroutine fill_fields_from_nodes
 

@@ -1402,6 +1402,11 @@ contains
             allocate (result%mesh_pos(2, mesh%npoint), result%mesh_vel(2, mesh%npoint), &
                & result%mesh_acc(2, mesh%npoint), result%cell_force(3, size(mesh%elements)))
             allocate (result%cells(2, size(mesh%elements)), result%cell_link(size(mesh%elements)))
+            ! The cells do not change from step to step.
+            do e = 1, size(mesh%elements)
+               result%cells(:, e) = mesh%dof_point(mesh%edof([1, 4], e))
+               result%cell_link(e) = mesh%elink(e)
+            end do
          end if
          do ip = 1, mesh%npoint
             result%mesh_pos(:, ip) = self%q(mesh%tdof(:, ip))
@@ -1409,8 +1414,6 @@ contains
             result%mesh_acc(:, ip) = self%a(mesh%tdof(:, ip))
          end do
          do e = 1, size(mesh%elements)
-            result%cells(:, e) = mesh%dof_point(mesh%edof([1, 4], e))
-            result%cell_link(e) = mesh%elink(e)
             do k = 1, 6
                xe(k) = self%q(mesh%edof(k, e))
             end do
