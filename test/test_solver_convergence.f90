@@ -83,10 +83,10 @@ contains
    !> polynomial of degree 2n - 1 (unequal steps), and misses one of degree 2n.
    subroutine test_hermite_extrapolate(error)
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: tk(3), q(2, 3), v(2, 3), qpred(2)
+      real(dp) :: tk(4), q(2, 4), v(2, 4), qpred(2)
       integer :: n, k
-      tk = [0.3_dp, 0.2_dp, 0.05_dp]
-      do n = 2, 3
+      tk = [0.3_dp, 0.2_dp, 0.05_dp, 0.0_dp]
+      do n = 2, 4
          do k = 1, n
             q(:, k) = [poly(tk(k), 2*n - 1), poly(tk(k), 2*n)]
             v(:, k) = [dpoly(tk(k), 2*n - 1), dpoly(tk(k), 2*n)]

@@ -62,34 +62,40 @@ contains
 
    !> Hermite extrapolation to time t from configurations q(:, k) at times
    !> tk(k) (k = 1 the newest) and their velocities v(:, k): the polynomial of
-   !> degree 2n - 1 through the n positions and velocities, in Newton's form on
-   !> the doubled nodes. With two (three) configurations its error is of order
-   !> h**4 (h**6), against h**3 for quadratic extrapolation of positions.
+   !> degree 2n - 1 through the n positions and velocities. With two (three,
+   !> four) configurations its error is of order h**4 (h**6, h**8), against
+   !> h**3 for quadratic extrapolation of positions.
    pure subroutine hermite_extrapolate(q, v, tk, t, qpred)
       real(dp), intent(in) :: q(:, :), v(:, :), tk(:), t
       real(dp), intent(out) :: qpred(:)
-      real(dp) :: z(2*size(tk)), c(size(qpred), 2*size(tk))
-      integer :: i, j, m
-      m = 2*size(tk)
-      ! Nodes oldest first, each twice; c holds the divided differences.
-      do i = 1, size(tk)
-         z(2*i - 1:2*i) = tk(size(tk) + 1 - i)
-         c(:, 2*i - 1) = q(:, size(tk) + 1 - i)
-         c(:, 2*i) = q(:, size(tk) + 1 - i)
-      end do
-      do j = 1, m - 1
-         do i = m, j + 1, -1
-            if (j == 1 .and. mod(i, 2) == 0) then
-               c(:, i) = v(:, size(tk) + 1 - i/2)        ! f[z, z] = f'(z)
-            else
-               c(:, i) = (c(:, i) - c(:, i - 1))/(z(i) - z(i - j))
-            end if
-         end do
-      end do
-      qpred = c(:, m)
-      do i = m - 1, 1, -1
-         qpred = c(:, i) + (t - z(i))*qpred
+      real(dp) :: wq, wv
+      integer :: k
+      qpred = 0
+      do k = 1, size(tk)
+         call hermite_weights(tk, k, t, wq, wv)
+         qpred = qpred + wq*q(:, k) + wv*v(:, k)
       end do
    end subroutine hermite_extrapolate
+
+   !> Weights of the k-th position and velocity in the Hermite polynomial
+   !> through the nodes tk, at t: with the Lagrange basis polynomial l_k,
+   !>   wq = (1 - 2 l_k'(t_k) (t - t_k)) l_k(t)**2,  wv = (t - t_k) l_k(t)**2,
+   !>   l_k'(t_k) = sum over m /= k of 1 / (t_k - t_m).
+   pure subroutine hermite_weights(tk, k, t, wq, wv)
+      real(dp), intent(in) :: tk(:), t
+      integer, intent(in) :: k
+      real(dp), intent(out) :: wq, wv
+      real(dp) :: l, slope
+      integer :: m
+      l = 1
+      slope = 0
+      do m = 1, size(tk)
+         if (m == k) cycle
+         l = l*(t - tk(m))/(tk(k) - tk(m))
+         slope = slope + 1/(tk(k) - tk(m))
+      end do
+      wq = (1 - 2*slope*(t - tk(k)))*l**2
+      wv = (t - tk(k))*l**2
+   end subroutine hermite_weights
 
 end module fekap_solver_convergence
