@@ -38,12 +38,14 @@ contains
    !> A random symmetric positive definite n x n matrix of half-bandwidth kd
    !> in upper band storage (off-diagonal entries in [-1, 1], the diagonal
    !> dominant by a random margin); with `indefinite`, A(j, j) of that row
-   !> made negative, so that the Cholesky factorisation stops there.
-   subroutine random_band(state, n, kd, a, indefinite)
+   !> made negative, so that the Cholesky factorisation stops there; with
+   !> `sparse`, about half the entries inside the band zero.
+   subroutine random_band(state, n, kd, a, indefinite, sparse)
       integer, intent(inout) :: state
       integer, intent(in) :: n, kd
       real(dp), allocatable, intent(out) :: a(:, :)
       integer, intent(in), optional :: indefinite
+      logical, intent(in), optional :: sparse
       real(dp) :: row(n)
       integer :: i, j
       allocate (a(kd + 1, n), source=0.0_dp)
@@ -51,6 +53,9 @@ contains
       do j = 1, n
          do i = max(1, j - kd), j - 1
             a(kd + 1 + i - j, j) = 2*next_random(state) - 1
+            if (present(sparse)) then
+               if (sparse .and. next_random(state) < 0.5_dp) a(kd + 1 + i - j, j) = 0
+            end if
             row(i) = row(i) + abs(a(kd + 1 + i - j, j))
             row(j) = row(j) + abs(a(kd + 1 + i - j, j))
          end do
@@ -116,22 +121,24 @@ contains
    end subroutine band_from
 
    !> The factor of band_cholesky is dpbtrf's (exactly where dpbtrf runs the
-   !> same unblocked algorithm, kd <= 32; to round-off beyond).
+   !> same unblocked algorithm, kd <= 32; to round-off beyond), also for
+   !> bands with zeros inside (which both skip).
    subroutine test_cholesky(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: a(:, :), f(:, :), g(:, :)
-      integer :: state, kd, in, n, info, info_lapack
+      integer :: state, kd, in, n, info, info_lapack, is
       character(len=64) :: label
       state = 2024
       do kd = 0, narrow_band + 2
-         do in = 1, size(orders) + 2
-            n = order(in, kd)
-            call random_band(state, n, kd, a)
+         do in = 1, 2*(size(orders) + 2)
+            is = (in - 1)/(size(orders) + 2)
+            n = order(in - is*(size(orders) + 2), kd)
+            call random_band(state, n, kd, a, sparse=is == 1)
             f = a
             call band_cholesky(f, n, kd, info)
             g = a
             call dpbtrf('U', n, kd, g, kd + 1, info_lapack)
-            write (label, '(a,i0,a,i0)') 'n = ', n, ', kd = ', kd
+            write (label, '(a,i0,a,i0,a)') 'n = ', n, ', kd = ', kd, trim(merge(', sparse', '        ', is == 1))
             call check(error, info, 0, 'info, '//trim(label))
             call check(error, info_lapack, 0, 'LAPACK info, '//trim(label))
             call check(error, maxval(abs(f - g))/maxval(abs(g)), 0.0_dp, 'factor vs dpbtrf, '//trim(label), &
