@@ -3,6 +3,7 @@ program tester
    use fekap_testing, only: unittest_type, run_testsuite
    use test_drive_law, only: collect_drive_law
    use test_element_beam, only: collect_element_beam
+   use test_assembly_band, only: collect_assembly_band
    use test_solver_fem, only: collect_solver_fem
    use test_solver_convergence, only: collect_solver_convergence
    use test_contact_slideline, only: collect_contact_slideline
@@ -34,6 +35,7 @@ program tester
 
    call run('drive_law', collect_drive_law)
    call run('element_beam', collect_element_beam)
+   call run('assembly_band', collect_assembly_band)
    call run('solver_convergence', collect_solver_convergence)
    call run('solver_fem', collect_solver_fem)
    call run('contact_slideline', collect_contact_slideline)

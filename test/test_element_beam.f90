@@ -1,5 +1,6 @@
 !> Tests of fekap_element_beam: tangent and second derivative against finite
-!> differences, symmetry, rigid motions of any size.
+!> differences, symmetry, rigid motions of any size; the sparse element
+!> kernels against a straightforward dense reference of the same equations.
 module test_element_beam
    use fekap_kinds, only: dp
    use fekap_testing, only: unittest_type, new_unittest, check, error_type
@@ -19,7 +20,8 @@ contains
          & new_unittest('beam_residual_rigid_motion', test_rigid_motion), &
          & new_unittest('beam_residual_material_part', test_material_part), &
          & new_unittest('beam_second_derivative', test_second_derivative), &
-         & new_unittest('beam_max_strain', test_max_strain) &
+         & new_unittest('beam_max_strain', test_max_strain), &
+         & new_unittest('beam_kernels_reference', test_kernels_reference) &
          & ]
    end subroutine collect_element_beam
 
@@ -186,5 +188,148 @@ contains
       call check(error, beam_max_strain(beam, [0.0_dp, 0.0_dp, -0.15_dp, 2.0_dp, 0.0_dp, 0.15_dp]), 0.3_dp, &
          & rel=1.0e-12_dp)
    end subroutine test_max_strain
+
+   !> The element kernels (which work on the few nonzeros of the B vectors)
+   !> agree with a dense reference of (27)-(53) to round-off: residual,
+   !> tangent with kg everywhere, nowhere and at strained Gauss points only,
+   !> second derivative, largest strain.
+   subroutine test_kernels_reference(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(beam_type) :: beam
+      real(dp) :: xe(6), v(6), p(6), k(6, 6), pr(6), kr(6, 6), d2p(6), d2r(6), above(3)
+      real(dp), parameter :: tol = 1.0e-13_dp
+      integer :: state, icase, j, ng
+      character(len=64) :: label
+      state = 31337
+      do ng = 1, 2
+         do icase = 1, 60
+            call random_case(state, ng, beam, xe)
+            do j = 1, 6
+               v(j) = 2*next_random(state) - 1
+            end do
+            write (label, '(a,i0,a,i0)') 'gauss ', ng, ', case ', icase
+            call beam_residual(beam, xe, p)
+            call reference_residual(beam, xe, 0.0_dp, pr, kr)
+            call check(error, maxval(abs(p - pr))/maxval(abs(pr)), 0.0_dp, 'residual, '//trim(label), abs=tol)
+            ! Thresholds: kg everywhere, only where strained more than Gauss point 1
+            ! (kg nowhere with one point), nowhere.
+            above = [0.0_dp, reference_strain(beam, xe, 1)*(1 + 1.0e-9_dp), huge(1.0_dp)]
+            do j = 1, 3
+               call beam_residual(beam, xe, p, k, above(j))
+               call reference_residual(beam, xe, above(j), pr, kr)
+               call check(error, maxval(abs(p - pr))/maxval(abs(pr)), 0.0_dp, 'residual with tangent, '//trim(label), &
+                  & abs=tol)
+               call check(error, maxval(abs(k - kr))/maxval(abs(kr)), 0.0_dp, 'tangent, '//trim(label), abs=tol)
+            end do
+            call beam_second_derivative(beam, xe, v, d2p)
+            call reference_second_derivative(beam, xe, v, d2r)
+            call check(error, maxval(abs(d2p - d2r))/maxval(abs(d2r)), 0.0_dp, 'second derivative, '//trim(label), &
+               & abs=tol)
+            call check(error, beam_max_strain(beam, xe), &
+               & max(reference_strain(beam, xe, 1), reference_strain(beam, xe, ng)), 'max strain, '//trim(label), &
+               & rel=tol)
+            if (allocated(error)) return
+         end do
+      end do
+   end subroutine test_kernels_reference
+
+   !> Strain state at Gauss point ig, dense: the map Bw from element dofs to
+   !> w = (x1', x2', phi), strains (27), gradients and Hessians of Gamma1, Gamma2 in w.
+   subroutine reference_point(beam, xe, ig, wl, bw, gam, grad, hess)
+      type(beam_type), intent(in) :: beam
+      real(dp), intent(in) :: xe(6)
+      integer, intent(in) :: ig
+      real(dp), intent(out) :: wl, bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2)
+      real(dp) :: xi, n1, n2, a(2), phi, c, s
+      xi = 0
+      wl = beam%length
+      if (beam%ngauss == 2) then
+         xi = merge(-1, 1, ig == 1)/sqrt(3.0_dp)
+         wl = beam%length/2
+      end if
+      n1 = (1 - xi)/2
+      n2 = (1 + xi)/2
+      bw = 0
+      bw(1, 1) = -1/beam%length
+      bw(1, 4) = 1/beam%length
+      bw(2, 2) = -1/beam%length
+      bw(2, 5) = 1/beam%length
+      bw(3, 3) = n1
+      bw(3, 6) = n2
+      a = (xe(4:5) - xe(1:2))/beam%length
+      phi = beam%angle + n1*xe(3) + n2*xe(6)
+      c = cos(phi)
+      s = sin(phi)
+      gam = [c*a(1) + s*a(2) - 1, -s*a(1) + c*a(2), (xe(6) - xe(3))/beam%length]
+      grad(:, 1) = [c, s, gam(2)]
+      grad(:, 2) = [-s, c, -(1 + gam(1))]
+      hess(:, :, 1) = reshape([0.0_dp, 0.0_dp, -s, 0.0_dp, 0.0_dp, c, -s, c, -(1 + gam(1))], [3, 3])
+      hess(:, :, 2) = reshape([0.0_dp, 0.0_dp, -c, 0.0_dp, 0.0_dp, -s, -c, -s, -gam(2)], [3, 3])
+   end subroutine reference_point
+
+   !> Largest strain of Gauss point ig: |Gamma1|, |Gamma2|, |kappa| L.
+   real(dp) function reference_strain(beam, xe, ig)
+      type(beam_type), intent(in) :: beam
+      real(dp), intent(in) :: xe(6)
+      integer, intent(in) :: ig
+      real(dp) :: wl, bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2)
+      call reference_point(beam, xe, ig, wl, bw, gam, grad, hess)
+      reference_strain = max(abs(gam(1)), abs(gam(2)), abs(gam(3))*beam%length)
+   end function reference_strain
+
+   !> p = sum wl (P b1 + V b2 + M bk) (38) and
+   !> k = sum wl [EA b1 b1^T + kGA b2 b2^T + EI bk bk^T + Bw^T (P H1 + V H2) Bw] (43)-(44)
+   !> as dense products, b_m = Bw^T grad Gamma_m; kg only where the strain exceeds `above`.
+   subroutine reference_residual(beam, xe, above, p, k)
+      type(beam_type), intent(in) :: beam
+      real(dp), intent(in) :: xe(6), above
+      real(dp), intent(out) :: p(6), k(6, 6)
+      real(dp) :: wl, bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), sig(3), b(6, 3), kg(3, 3)
+      integer :: ig, m
+      p = 0
+      k = 0
+      do ig = 1, beam%ngauss
+         call reference_point(beam, xe, ig, wl, bw, gam, grad, hess)
+         sig = beam%c*gam
+         b(:, 1) = matmul(grad(:, 1), bw)
+         b(:, 2) = matmul(grad(:, 2), bw)
+         b(:, 3) = [0.0_dp, 0.0_dp, -1/beam%length, 0.0_dp, 0.0_dp, 1/beam%length]
+         do m = 1, 3
+            p = p + wl*sig(m)*b(:, m)
+            k = k + wl*beam%c(m)*spread(b(:, m), 2, 6)*spread(b(:, m), 1, 6)
+         end do
+         if (reference_strain(beam, xe, ig) > above) then
+            kg = sig(1)*hess(:, :, 1) + sig(2)*hess(:, :, 2)
+            k = k + wl*matmul(transpose(bw), matmul(kg, bw))
+         end if
+      end do
+   end subroutine reference_residual
+
+   !> d2p = sum wl sum_m [S_m Bw^T T_m + 2 C_m (b_m . v) Bw^T H_m vw + C_m (vw . H_m vw) b_m], vw = Bw v.
+   subroutine reference_second_derivative(beam, xe, v, d2p)
+      type(beam_type), intent(in) :: beam
+      real(dp), intent(in) :: xe(6), v(6)
+      real(dp), intent(out) :: d2p(6)
+      real(dp) :: wl, bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), sig(3), t3(3, 2), vw(3), bm(6), phi, c, s, vp
+      integer :: ig, m
+      d2p = 0
+      do ig = 1, beam%ngauss
+         call reference_point(beam, xe, ig, wl, bw, gam, grad, hess)
+         sig = beam%c*gam
+         vw = matmul(bw, v)
+         vp = vw(3)
+         phi = beam%angle + bw(3, 3)*xe(3) + bw(3, 6)*xe(6)
+         c = cos(phi)
+         s = sin(phi)
+         t3(:, 1) = [-c*vp**2, -s*vp**2, -2*vp*(c*vw(1) + s*vw(2)) - gam(2)*vp**2]
+         t3(:, 2) = [s*vp**2, -c*vp**2, 2*vp*(s*vw(1) - c*vw(2)) + (1 + gam(1))*vp**2]
+         do m = 1, 2
+            bm = matmul(grad(:, m), bw)
+            d2p = d2p + wl*(sig(m)*matmul(t3(:, m), bw) &
+               & + 2*beam%c(m)*dot_product(bm, v)*matmul(matmul(hess(:, :, m), vw), bw) &
+               & + beam%c(m)*dot_product(vw, matmul(hess(:, :, m), vw))*bm)
+         end do
+      end do
+   end subroutine reference_second_derivative
 
 end module test_element_beam

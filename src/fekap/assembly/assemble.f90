@@ -65,25 +65,25 @@ contains
          do i = 1, 6
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do
-         call scatter_element(mesh%scatter_map(:, :, e), ke, kff, kfd)
+         call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), mesh%scatter_count(2, e), ke, &
+            & kff, kfd)
       end do
       call add_contact(mesh, q, seg, r, kff, kfd)
    end subroutine assemble_tangent
 
-   !> Add an element tangent through its precomputed scatter map.
-   pure subroutine scatter_element(map, ke, kff, kfd)
-      integer, intent(in) :: map(:, :)
+   !> Add an element tangent through its precomputed lists of destinations
+   !> (see mesh_type%scatter_map): nb entries into the band, then nd into kfd.
+   pure subroutine scatter_element(map, nb, nd, ke, kff, kfd)
+      integer, intent(in) :: map(3, 36), nb, nd
       real(dp), intent(in) :: ke(36)
       type(band_matrix_type), intent(inout) :: kff
       real(dp), intent(inout) :: kfd(:, :)
-      integer :: k
-      do k = 1, 36
-         select case (map(1, k))
-         case (1)
-            kff%a(map(2, k), map(3, k)) = kff%a(map(2, k), map(3, k)) + ke(k)
-         case (2)
-            kfd(map(2, k), map(3, k)) = kfd(map(2, k), map(3, k)) + ke(k)
-         end select
+      integer :: m
+      do m = 1, nb
+         kff%a(map(2, m), map(3, m)) = kff%a(map(2, m), map(3, m)) + ke(map(1, m))
+      end do
+      do m = nb + 1, nb + nd
+         kfd(map(2, m), map(3, m)) = kfd(map(2, m), map(3, m)) + ke(map(1, m))
       end do
    end subroutine scatter_element
 

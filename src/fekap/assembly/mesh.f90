@@ -78,10 +78,14 @@ module fekap_assembly_mesh
       !> (ndof): external nodal loads at unit load factor.
       real(dp), allocatable :: f_ext(:)
       type(slide_type), allocatable :: slides(:)
-      !> (3, 36, nelem): where entry k = i + 6 (j - 1) of element e's tangent goes:
-      !> (1, row, column) of the band storage, (2, equation, drive) of the
-      !> free-driven block, or (0, 0, 0) nowhere (fixed dofs, lower triangle).
+      !> (3, 36, nelem): where the entries of element e's tangent go, as lists
+      !> of (k, row, column), k = i + 6 (j - 1) the entry of the 6 x 6 tangent:
+      !> first scatter_count(1, e) entries into the band storage (row, column),
+      !> then scatter_count(2, e) into the free-driven block (equation, drive).
+      !> Entries on fixed dofs and in the band's lower triangle are not listed.
       integer, allocatable :: scatter_map(:, :, :)
+      !> (2, nelem): the lengths of the band and free-driven lists of scatter_map.
+      integer, allocatable :: scatter_count(:, :)
    end type mesh_type
 
 contains
@@ -459,12 +463,16 @@ contains
    end subroutine number_equations
 
    !> Destinations of every element tangent entry (see mesh_type%scatter_map),
-   !> so that assembly adds without looking up equation numbers.
+   !> so that assembly adds without looking up equation numbers or skipping
+   !> entries that go nowhere.
    pure subroutine build_scatter_map(self)
       type(mesh_type), intent(inout) :: self
-      integer :: e, i, j, ei, ej, dj
+      integer :: e, i, j, ei, ej, dj, nb, nd, band(3, 36), driven(3, 36)
       allocate (self%scatter_map(3, 36, size(self%elements)), source=0)
+      allocate (self%scatter_count(2, size(self%elements)), source=0)
       do e = 1, size(self%elements)
+         nb = 0
+         nd = 0
          do j = 1, 6
             dj = self%edof(j, e)
             ej = self%eq(dj)
@@ -472,12 +480,19 @@ contains
                ei = self%eq(self%edof(i, e))
                if (ei == 0) cycle
                if (ej > 0) then
-                  if (ei <= ej) self%scatter_map(:, i + 6*(j - 1), e) = [1, self%kd + 1 + ei - ej, ej]
+                  if (ei <= ej) then
+                     nb = nb + 1
+                     band(:, nb) = [i + 6*(j - 1), self%kd + 1 + ei - ej, ej]
+                  end if
                else if (self%drive_col(dj) > 0) then
-                  self%scatter_map(:, i + 6*(j - 1), e) = [2, ei, self%drive_col(dj)]
+                  nd = nd + 1
+                  driven(:, nd) = [i + 6*(j - 1), ei, self%drive_col(dj)]
                end if
             end do
          end do
+         self%scatter_map(:, 1:nb, e) = band(:, 1:nb)
+         self%scatter_map(:, nb + 1:nb + nd, e) = driven(:, 1:nd)
+         self%scatter_count(:, e) = [nb, nd]
       end do
    end subroutine build_scatter_map
 

@@ -54,43 +54,22 @@ contains
       end if
    end subroutine gauss_point
 
-   !> Strain state at one Gauss point: the map Bw from element dofs to
-   !> w = (x1', x2', phi), strains, and gradients/Hessians of Gamma1, Gamma2 in w.
-   pure subroutine point_state(self, xe, xi, bw, gam, grad, hess)
+   !> Section angle phi, its cosine and sine, and the strains Gamma1, Gamma2
+   !> (27) at the Gauss point with shape functions n1, n2; rl = 1/length.
+   pure subroutine point_strain(self, xe, n1, n2, rl, c, s, g1, g2)
       type(beam_type), intent(in) :: self
-      real(dp), intent(in) :: xe(6), xi
-      real(dp), intent(out) :: bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2)
-      real(dp) :: n1, n2, a(2), phi, c, s
-      n1 = (1 - xi)/2
-      n2 = (1 + xi)/2
-      bw = 0
-      bw(1, 1) = -1/self%length
-      bw(1, 4) = 1/self%length
-      bw(2, 2) = -1/self%length
-      bw(2, 5) = 1/self%length
-      bw(3, 3) = n1
-      bw(3, 6) = n2
-      a = (xe(4:5) - xe(1:2))/self%length
+      real(dp), intent(in) :: xe(6), n1, n2, rl
+      real(dp), intent(out) :: c, s, g1, g2
+      real(dp) :: phi, a1, a2
+      a1 = (xe(4) - xe(1))*rl
+      a2 = (xe(5) - xe(2))*rl
       phi = self%angle + n1*xe(3) + n2*xe(6)
+      ! One sincos call: the compiler pairs cos and sin of the same argument.
       c = cos(phi)
       s = sin(phi)
-      gam(1) = c*a(1) + s*a(2) - 1
-      gam(2) = -s*a(1) + c*a(2)
-      gam(3) = (xe(6) - xe(3))/self%length
-      grad(:, 1) = [c, s, gam(2)]
-      grad(:, 2) = [-s, c, -(1 + gam(1))]
-      hess = 0
-      hess(1, 3, 1) = -s
-      hess(2, 3, 1) = c
-      hess(3, 1, 1) = -s
-      hess(3, 2, 1) = c
-      hess(3, 3, 1) = -(1 + gam(1))
-      hess(1, 3, 2) = -c
-      hess(2, 3, 2) = -s
-      hess(3, 1, 2) = -c
-      hess(3, 2, 2) = -s
-      hess(3, 3, 2) = -gam(2)
-   end subroutine point_state
+      g1 = c*a1 + s*a2 - 1
+      g2 = -s*a1 + c*a2
+   end subroutine point_strain
 
    !> Internal force p (38) and, if asked, the tangent k = km + kg (43)-(44);
    !> kg is left out at Gauss points whose largest strain (|Gamma1|, |Gamma2|,
@@ -101,89 +80,165 @@ contains
    !>   km = EA b1 b1^T + kGA b2 b2^T + EI bk bk^T,  b_m = Bw^T grad Gamma_m,
    !>   kg = Bw^T (P H1 + V H2) Bw = g13 (ax ph^T + ph ax^T) + g23 (ay ph^T + ph ay^T) + g33 ph ph^T
    !> with g13 = -s P - c V, g23 = c P - s V, g33 = -(1 + Gamma1) P - Gamma2 V (the paper's G).
+   !> The vectors are sparse: ax, ay and the translational parts of b1, b2 are
+   !> -/+ (1/L) times a direction at the two nodes (e1 = (c, s) for b1,
+   !> e2 = (-s, c) for b2), ph and the rotational parts of b1, b2 are (n1, n2)
+   !> times a number, bk = (1/L) (-1, +1) on the rotations. So k has three
+   !> blocks, summed over the Gauss points and spread out at the end:
+   !>   translation-translation  -/+ M,  M = w/(2L) (EA e1 e1^T + kGA e2 e2^T),
+   !>   translation-rotation     -/+ h n_b,  h = (wl/L) (EA Gamma2 e1 - kGA (1 + Gamma1) e2 + (g13, g23)),
+   !>   rotation-rotation        r n_a n_b + wl EI/L^2 (-/+ 1),  r = wl (EA Gamma2^2 + kGA (1 + Gamma1)^2 + g33),
+   !> (wl = w L / 2 the Gauss weight times the Jacobian; -/+: minus for unlike nodes).
    pure subroutine beam_residual(self, xe, p, k, geometric_above)
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6)
       real(dp), intent(out) :: p(6)
       real(dp), intent(out), optional :: k(6, 6)
       real(dp), intent(in), optional :: geometric_above
-      real(dp) :: b1(6), b2(6), bk(6), ax(6), ay(6), ph(6), sig(3), a(2)
-      real(dp) :: xi, w, wl, n1, n2, phi, c, s, g1, g2, g13, g23, g33, rl
-      integer :: ig, i, j
-      real(dp) :: kg_strain
+      real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, fx, fy, fm, fk
+      real(dp) :: g13, g23, g33, kg_strain, ea, ga, ca, cb, m11, m12, m22, hx, hy, r
+      real(dp) :: th(2, 2), rr(3), ei
+      integer :: ig
       kg_strain = 0
       if (present(geometric_above)) kg_strain = geometric_above
       rl = 1/self%length
-      a = (xe(4:5) - xe(1:2))*rl
-      ax = [-rl, 0.0_dp, 0.0_dp, rl, 0.0_dp, 0.0_dp]
-      ay = [0.0_dp, -rl, 0.0_dp, 0.0_dp, rl, 0.0_dp]
-      bk = [0.0_dp, 0.0_dp, -rl, 0.0_dp, 0.0_dp, rl]
+      kap = (xe(6) - xe(3))*rl
+      ea = self%c(1)
+      ga = self%c(2)
       p = 0
-      if (present(k)) k = 0
+      m11 = 0
+      m12 = 0
+      m22 = 0
+      th = 0
+      rr = 0
+      ei = 0
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
          wl = w*self%length/2
          n1 = (1 - xi)/2
          n2 = (1 + xi)/2
-         phi = self%angle + n1*xe(3) + n2*xe(6)
-         c = cos(phi)
-         s = sin(phi)
-         g1 = c*a(1) + s*a(2) - 1                          ! (27)
-         g2 = -s*a(1) + c*a(2)
-         sig = self%c*[g1, g2, (xe(6) - xe(3))*rl]         ! (30)
-         ph = [0.0_dp, 0.0_dp, n1, 0.0_dp, 0.0_dp, n2]
-         b1 = c*ax + s*ay + g2*ph                           ! dGamma1/dxe
-         b2 = -s*ax + c*ay - (1 + g1)*ph                    ! dGamma2/dxe
-         p = p + wl*(sig(1)*b1 + sig(2)*b2 + sig(3)*bk)     ! (38)
+         call point_strain(self, xe, n1, n2, rl, c, s, g1, g2)     ! (27)
+         sp = ea*g1                                                ! (30)
+         sv = ga*g2
+         sm = self%c(3)*kap
+         ! (38): p = wl (P b1 + V b2 + M bk), by parts.
+         fx = wl*rl*(sp*c - sv*s)
+         fy = wl*rl*(sp*s + sv*c)
+         fm = wl*(sp*g2 - sv*(1 + g1))
+         fk = wl*sm*rl
+         p(1) = p(1) - fx
+         p(2) = p(2) - fy
+         p(3) = p(3) + fm*n1 - fk
+         p(4) = p(4) + fx
+         p(5) = p(5) + fy
+         p(6) = p(6) + fm*n2 + fk
          if (.not. present(k)) cycle
          g13 = 0
          g23 = 0
          g33 = 0
          if (max(abs(g1), abs(g2), abs(xe(6) - xe(3))) > kg_strain) then
-            g13 = -s*sig(1) - c*sig(2)
-            g23 = c*sig(1) - s*sig(2)
-            g33 = -(1 + g1)*sig(1) - g2*sig(2)
+            g13 = -s*sp - c*sv
+            g23 = c*sp - s*sv
+            g33 = -(1 + g1)*sp - g2*sv
          end if
-         do j = 1, 6                                        ! (43)-(44)
-            do i = 1, 6
-               k(i, j) = k(i, j) + wl*(self%c(1)*b1(i)*b1(j) + self%c(2)*b2(i)*b2(j) + self%c(3)*bk(i)*bk(j) &
-                  & + g13*(ax(i)*ph(j) + ph(i)*ax(j)) + g23*(ay(i)*ph(j) + ph(i)*ay(j)) + g33*ph(i)*ph(j))
-            end do
-         end do
+         ! (43)-(44) by blocks (see above).
+         ca = wl*rl*rl*ea
+         cb = wl*rl*rl*ga
+         m11 = m11 + (ca*c*c + cb*s*s)
+         m12 = m12 + (ca - cb)*c*s
+         m22 = m22 + (ca*s*s + cb*c*c)
+         hx = wl*rl*(ea*g2*c + ga*(1 + g1)*s + g13)
+         hy = wl*rl*(ea*g2*s - ga*(1 + g1)*c + g23)
+         th(:, 1) = th(:, 1) + [hx, hy]*n1
+         th(:, 2) = th(:, 2) + [hx, hy]*n2
+         r = wl*(ea*g2*g2 + ga*(1 + g1)**2 + g33)
+         rr = rr + r*[n1*n1, n1*n2, n2*n2]
+         ei = ei + wl*self%c(3)*rl*rl
       end do
+      if (present(k)) call spread_tangent(m11, m12, m22, th, rr, ei, k)
    end subroutine beam_residual
+
+   !> The element tangent from its blocks (see beam_residual): dofs
+   !> (x1, y1, theta1, x2, y2, theta2); th(d, b) = sum h(d) n_b, rr = sum r
+   !> (n1 n1, n1 n2, n2 n2), ei = sum wl EI / L^2.
+   pure subroutine spread_tangent(m11, m12, m22, th, rr, ei, k)
+      real(dp), intent(in) :: m11, m12, m22, th(2, 2), rr(3), ei
+      real(dp), intent(out) :: k(6, 6)
+      ! Translations of both nodes.
+      k(1:2, 1) = [m11, m12]
+      k(1:2, 2) = [m12, m22]
+      k(4:5, 4:5) = k(1:2, 1:2)
+      k(1:2, 4:5) = -k(1:2, 1:2)
+      k(4:5, 1:2) = -k(1:2, 1:2)
+      ! Rotations.
+      k(3, 3) = rr(1) + ei
+      k(3, 6) = rr(2) - ei
+      k(6, 3) = k(3, 6)
+      k(6, 6) = rr(3) + ei
+      ! Translation-rotation, and its mirror image.
+      k(1:2, 3) = -th(:, 1)
+      k(4:5, 3) = th(:, 1)
+      k(1:2, 6) = -th(:, 2)
+      k(4:5, 6) = th(:, 2)
+      k(3, 1:2) = k(1:2, 3)
+      k(3, 4:5) = k(4:5, 3)
+      k(6, 1:2) = k(1:2, 6)
+      k(6, 4:5) = k(4:5, 6)
+   end subroutine spread_tangent
 
    !> Second directional derivative d2p = d^2 p / dd^2 [v, v] of the internal
    !> force: the term (dK/dt) v of the acceleration equations (48)-(53),
    !> exact at any configuration (at a stress-free one it reduces to (49)).
+   !> With vw = Bw v (the rates of x1', x2', phi) at a Gauss point,
+   !>   d2p = sum wl Bw^T y,  y = sum_m [S_m T_m + 2 C_m (grad_m . vw) H_m vw + C_m (vw . H_m vw) grad_m]
+   !> over Gamma1, Gamma2 (S = P, V; C = EA, kGA): grad_m, H_m and T_m are the
+   !> first, second and (contracted twice with vw) third derivatives of
+   !> Gamma_m in w. kappa is linear in the dofs: no term. Bw^T y is
+   !> (1/L) (-y1, -y2, 0, y1, y2, 0) + y3 (0, 0, n1, 0, 0, n2).
    pure subroutine beam_second_derivative(self, xe, v, d2p)
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6), v(6)
       real(dp), intent(out) :: d2p(6)
-      real(dp) :: bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), bk(6), sig(3), t3(3, 2), vw(3)
-      real(dp) :: xi, w, wl, phi, c, s, vp
-      integer :: ig, m
+      real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, rl, vw1, vw2, vp, d1, d2, vp2
+      real(dp) :: sp, sv, gv1, gv2, q1, q2, y(3)
+      integer :: ig
+      rl = 1/self%length
+      vw1 = (v(4) - v(1))*rl
+      vw2 = (v(5) - v(2))*rl
       d2p = 0
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
          wl = w*self%length/2
-         call point_state(self, xe, xi, bw, gam, grad, hess)
-         sig = self%c*gam
-         vw = matmul(bw, v)
-         vp = vw(3)
-         phi = self%angle + bw(3, 3)*xe(3) + bw(3, 6)*xe(6)
-         c = cos(phi)
-         s = sin(phi)
-         ! Third derivatives of Gamma1, Gamma2 in w contracted twice with vw.
-         t3(:, 1) = [-c*vp**2, -s*vp**2, -2*vp*(c*vw(1) + s*vw(2)) - gam(2)*vp**2]
-         t3(:, 2) = [s*vp**2, -c*vp**2, 2*vp*(s*vw(1) - c*vw(2)) + (1 + gam(1))*vp**2]
-         do m = 1, 2
-            bk = matmul(grad(:, m), bw)
-            d2p = d2p + wl*(sig(m)*matmul(t3(:, m), bw) &
-               & + 2*self%c(m)*dot_product(bk, v)*matmul(matmul(hess(:, :, m), vw), bw) &
-               & + self%c(m)*dot_product(vw, matmul(hess(:, :, m), vw))*bk)
-         end do
-         ! kappa is linear in d: no second derivative.
+         n1 = (1 - xi)/2
+         n2 = (1 + xi)/2
+         call point_strain(self, xe, n1, n2, rl, c, s, g1, g2)
+         sp = self%c(1)*g1
+         sv = self%c(2)*g2
+         vp = n1*v(3) + n2*v(6)
+         vp2 = vp*vp
+         ! vw in the section's frame (e1, e2).
+         d1 = c*vw1 + s*vw2
+         d2 = -s*vw1 + c*vw2
+         ! grad_m . vw and vw . H_m vw.
+         gv1 = d1 + g2*vp
+         gv2 = d2 - (1 + g1)*vp
+         q1 = 2*vp*d2 - (1 + g1)*vp2
+         q2 = -2*vp*d1 - g2*vp2
+         ! Gamma1: T_1 = (-c vp^2, -s vp^2, -2 vp d1 - Gamma2 vp^2), H_1 vw = (-s vp, c vp, gv2).
+         y(1) = sp*(-c*vp2) + 2*self%c(1)*gv1*(-s*vp) + self%c(1)*q1*c
+         y(2) = sp*(-s*vp2) + 2*self%c(1)*gv1*(c*vp) + self%c(1)*q1*s
+         y(3) = sp*(-2*vp*d1 - g2*vp2) + 2*self%c(1)*gv1*gv2 + self%c(1)*q1*g2
+         ! Gamma2: T_2 = (s vp^2, -c vp^2, -2 vp d2 + (1 + Gamma1) vp^2), H_2 vw = (-c vp, -s vp, -gv1).
+         y(1) = y(1) + sv*(s*vp2) + 2*self%c(2)*gv2*(-c*vp) - self%c(2)*q2*s
+         y(2) = y(2) + sv*(-c*vp2) + 2*self%c(2)*gv2*(-s*vp) + self%c(2)*q2*c
+         y(3) = y(3) + sv*(-2*vp*d2 + (1 + g1)*vp2) - 2*self%c(2)*gv2*gv1 - self%c(2)*q2*(1 + g1)
+         y = wl*y
+         d2p(1) = d2p(1) - rl*y(1)
+         d2p(2) = d2p(2) - rl*y(2)
+         d2p(3) = d2p(3) + n1*y(3)
+         d2p(4) = d2p(4) + rl*y(1)
+         d2p(5) = d2p(5) + rl*y(2)
+         d2p(6) = d2p(6) + n2*y(3)
       end do
    end subroutine beam_second_derivative
 
@@ -191,13 +246,15 @@ contains
    pure real(dp) function beam_max_strain(self, xe) result(strain)
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6)
-      real(dp) :: bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), xi, w
+      real(dp) :: xi, w, rl, c, s, g1, g2
       integer :: ig
-      strain = 0
+      rl = 1/self%length
+      ! kappa is constant along the element.
+      strain = abs((xe(6) - xe(3))/self%length)*self%length
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
-         call point_state(self, xe, xi, bw, gam, grad, hess)
-         strain = max(strain, abs(gam(1)), abs(gam(2)), abs(gam(3))*self%length)
+         call point_strain(self, xe, (1 - xi)/2, (1 + xi)/2, rl, c, s, g1, g2)
+         strain = max(strain, abs(g1), abs(g2))
       end do
    end function beam_max_strain
 
@@ -206,13 +263,14 @@ contains
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6)
       real(dp) :: sig(3)
-      real(dp) :: bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), xi, w
+      real(dp) :: xi, w, rl, c, s, g1, g2
       integer :: ig
+      rl = 1/self%length
       sig = 0
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
-         call point_state(self, xe, xi, bw, gam, grad, hess)
-         sig = sig + self%c*gam/self%ngauss
+         call point_strain(self, xe, (1 - xi)/2, (1 + xi)/2, rl, c, s, g1, g2)
+         sig = sig + self%c*[g1, g2, (xe(6) - xe(3))*rl]/self%ngauss
       end do
    end function beam_resultants
 

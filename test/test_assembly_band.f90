@@ -1,0 +1,282 @@
+!> Tests of fekap_assembly_band: the in-house narrow-band Cholesky factor and
+!> solve against LAPACK (dpbtrf/dpbtrs) and against A x = b, for every
+!> half-bandwidth up to a little past narrow_band; the band matrix's choice of
+!> solver, its LU fallback and its dense mode.
+module test_assembly_band
+   use fekap_kinds, only: dp
+   use fekap_testing, only: unittest_type, new_unittest, check, error_type
+   use fekap_assembly_lapack, only: dpbtrf, dpbtrs
+   use fekap_assembly_band, only: band_matrix_type, new_band_matrix, narrow_band, band_cholesky, &
+      & band_cholesky_solve
+   implicit none
+   private
+   public :: collect_assembly_band
+
+   !> Orders tried for every half-bandwidth (besides kd + 1 and 2 kd + 3).
+   integer, parameter :: orders(4) = [1, 2, 9, 70]
+
+contains
+
+   subroutine collect_assembly_band(tests)
+      type(unittest_type), allocatable, intent(out) :: tests(:)
+      tests = [ &
+         & new_unittest('band_cholesky', test_cholesky), &
+         & new_unittest('band_cholesky_not_positive_definite', test_not_positive_definite), &
+         & new_unittest('band_cholesky_solve', test_cholesky_solve), &
+         & new_unittest('band_factor', test_factor), &
+         & new_unittest('band_solve', test_solve) &
+         & ]
+   end subroutine collect_assembly_band
+
+   !> A reproducible pseudo-random number in [0, 1) (a linear congruential generator).
+   real(dp) function next_random(state)
+      integer, intent(inout) :: state
+      state = modulo(state*16807, 2147483647)
+      next_random = real(state, dp)/2147483647.0_dp
+   end function next_random
+
+   !> A random symmetric positive definite n x n matrix of half-bandwidth kd
+   !> in upper band storage (off-diagonal entries in [-1, 1], the diagonal
+   !> dominant by a random margin); with `indefinite`, A(j, j) of that row
+   !> made negative, so that the Cholesky factorisation stops there; with
+   !> `sparse`, about half the entries inside the band zero.
+   subroutine random_band(state, n, kd, a, indefinite, sparse)
+      integer, intent(inout) :: state
+      integer, intent(in) :: n, kd
+      real(dp), allocatable, intent(out) :: a(:, :)
+      integer, intent(in), optional :: indefinite
+      logical, intent(in), optional :: sparse
+      real(dp) :: row(n)
+      integer :: i, j
+      allocate (a(kd + 1, n), source=0.0_dp)
+      row = 0
+      do j = 1, n
+         do i = max(1, j - kd), j - 1
+            a(kd + 1 + i - j, j) = 2*next_random(state) - 1
+            if (present(sparse)) then
+               if (sparse .and. next_random(state) < 0.5_dp) a(kd + 1 + i - j, j) = 0
+            end if
+            row(i) = row(i) + abs(a(kd + 1 + i - j, j))
+            row(j) = row(j) + abs(a(kd + 1 + i - j, j))
+         end do
+      end do
+      do j = 1, n
+         a(kd + 1, j) = row(j)*(1 + next_random(state)) + 0.1_dp
+      end do
+      if (present(indefinite)) a(kd + 1, indefinite) = -a(kd + 1, indefinite)
+   end subroutine random_band
+
+   !> y = A x for A in upper band storage (symmetric), x with several columns.
+   function band_times(a, kd, x) result(y)
+      real(dp), intent(in) :: a(:, :), x(:, :)
+      integer, intent(in) :: kd
+      real(dp) :: y(size(x, 1), size(x, 2))
+      integer :: i, j
+      y = 0
+      do j = 1, size(x, 1)
+         y(j, :) = y(j, :) + a(kd + 1, j)*x(j, :)
+         do i = max(1, j - kd), j - 1
+            y(i, :) = y(i, :) + a(kd + 1 + i - j, j)*x(j, :)
+            y(j, :) = y(j, :) + a(kd + 1 + i - j, j)*x(i, :)
+         end do
+      end do
+   end function band_times
+
+   !> Order number `in` to try with half-bandwidth kd: orders, then kd + 1 and 2 kd + 3.
+   pure integer function order(in, kd)
+      integer, intent(in) :: in, kd
+      integer :: all(size(orders) + 2)
+      all = [orders, kd + 1, 2*kd + 3]
+      order = all(in)
+   end function order
+
+   !> Random right-hand sides, n x nrhs, in [-1, 1].
+   function random_columns(state, n, nrhs) result(b)
+      integer, intent(inout) :: state
+      integer, intent(in) :: n, nrhs
+      real(dp) :: b(n, nrhs)
+      integer :: i, k
+      do k = 1, nrhs
+         do i = 1, n
+            b(i, k) = 2*next_random(state) - 1
+         end do
+      end do
+   end function random_columns
+
+   !> The band matrix type holding a (upper band storage) through its add.
+   subroutine band_from(a, kd, mat, dense)
+      real(dp), intent(in) :: a(:, :)
+      integer, intent(in) :: kd
+      type(band_matrix_type), intent(out) :: mat
+      logical, intent(in) :: dense
+      integer :: i, j
+      call new_band_matrix(mat, size(a, 2), kd, dense)
+      do j = 1, size(a, 2)
+         do i = max(1, j - kd), j
+            call mat%add(i, j, a(kd + 1 + i - j, j))
+            ! The lower triangle is ignored.
+            if (i < j) call mat%add(j, i, 1.0e30_dp)
+         end do
+      end do
+   end subroutine band_from
+
+   !> The factor of band_cholesky is dpbtrf's (exactly where dpbtrf runs the
+   !> same unblocked algorithm, kd <= 32; to round-off beyond), also for
+   !> bands with zeros inside (which both skip).
+   subroutine test_cholesky(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: a(:, :), f(:, :), g(:, :)
+      integer :: state, kd, in, n, info, info_lapack, is
+      character(len=64) :: label
+      state = 2024
+      do kd = 0, narrow_band + 2
+         do in = 1, 2*(size(orders) + 2)
+            is = (in - 1)/(size(orders) + 2)
+            n = order(in - is*(size(orders) + 2), kd)
+            call random_band(state, n, kd, a, sparse=is == 1)
+            f = a
+            call band_cholesky(f, n, kd, info)
+            g = a
+            call dpbtrf('U', n, kd, g, kd + 1, info_lapack)
+            write (label, '(a,i0,a,i0,a)') 'n = ', n, ', kd = ', kd, trim(merge(', sparse', '        ', is == 1))
+            call check(error, info, 0, 'info, '//trim(label))
+            call check(error, info_lapack, 0, 'LAPACK info, '//trim(label))
+            call check(error, maxval(abs(f - g))/maxval(abs(g)), 0.0_dp, 'factor vs dpbtrf, '//trim(label), &
+               & abs=merge(0.0_dp, 1.0e-14_dp, kd <= 32))
+            if (allocated(error)) return
+         end do
+      end do
+   end subroutine test_cholesky
+
+   !> A matrix that is not positive definite: info is the equation whose pivot
+   !> is not positive, as from dpbtrf.
+   subroutine test_not_positive_definite(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: a(:, :), f(:, :)
+      integer :: state, kd, n, bad, info, info_lapack
+      character(len=64) :: label
+      state = 99
+      do kd = 0, narrow_band + 2, 3
+         n = kd + 12
+         do bad = 1, n, 5
+            call random_band(state, n, kd, a, indefinite=bad)
+            f = a
+            call band_cholesky(f, n, kd, info)
+            write (label, '(a,i0,a,i0,a,i0)') 'n = ', n, ', kd = ', kd, ', negative pivot at ', bad
+            call check(error, info, bad, trim(label))
+            f = a
+            call dpbtrf('U', n, kd, f, kd + 1, info_lapack)
+            call check(error, info, info_lapack, 'same as dpbtrf, '//trim(label))
+            if (allocated(error)) return
+         end do
+      end do
+      ! A zero pivot is not positive either.
+      call random_band(state, 5, 2, a)
+      a(3, 1) = 0
+      call band_cholesky(a, 5, 2, info)
+      call check(error, info, 1, 'zero pivot')
+   end subroutine test_not_positive_definite
+
+   !> band_cholesky_solve with 1 and 3 right-hand sides: A x = b to round-off,
+   !> and the same x as dpbtrs.
+   subroutine test_cholesky_solve(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: a(:, :), f(:, :), b(:, :), x(:, :), xl(:, :)
+      integer :: state, kd, in, n, nrhs, info
+      character(len=64) :: label
+      state = 7
+      do kd = 0, narrow_band + 2
+         do in = 1, size(orders) + 2
+            n = order(in, kd)
+            do nrhs = 1, 3, 2
+               call random_band(state, n, kd, a)
+               f = a
+               call band_cholesky(f, n, kd, info)
+               b = random_columns(state, n, nrhs)
+               x = b
+               call band_cholesky_solve(f, n, kd, x)
+               xl = b
+               call dpbtrs('U', n, kd, nrhs, f, kd + 1, xl, n, info)
+               write (label, '(a,i0,a,i0,a,i0)') 'n = ', n, ', kd = ', kd, ', columns ', nrhs
+               call check(error, maxval(abs(band_times(a, kd, x) - b))/(maxval(abs(a))*maxval(abs(x))), 0.0_dp, &
+                  & 'residual, '//trim(label), abs=1.0e-14_dp)
+               call check(error, maxval(abs(x - xl))/maxval(abs(xl)), 0.0_dp, 'vs dpbtrs, '//trim(label), &
+                  & abs=1.0e-13_dp)
+               if (allocated(error)) return
+            end do
+         end do
+      end do
+   end subroutine test_cholesky_solve
+
+   !> The band matrix factors by Cholesky (in-house loops up to narrow_band,
+   !> dpbtrf beyond: the same factor to round-off), falls back to LU when the
+   !> matrix is not positive definite, and in dense mode always uses LU.
+   subroutine test_factor(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(band_matrix_type) :: mat
+      real(dp), allocatable :: a(:, :), g(:, :)
+      integer :: state, kd, n, info, info_lapack
+      character(len=64) :: label
+      state = 555
+      do kd = max(0, narrow_band - 2), narrow_band + 2
+         n = 3*kd + 5
+         write (label, '(a,i0,a,i0)') 'n = ', n, ', kd = ', kd
+         call random_band(state, n, kd, a)
+         call band_from(a, kd, mat, dense=.false.)
+         call mat%factor(info)
+         g = a
+         call dpbtrf('U', n, kd, g, kd + 1, info_lapack)
+         call check(error, info, 0, 'info, '//trim(label))
+         call check(error, .not. mat%is_lu, 'Cholesky, '//trim(label))
+         call check(error, maxval(abs(mat%f(1:kd + 1, :) - g))/maxval(abs(g)), 0.0_dp, &
+            & 'factor vs dpbtrf, '//trim(label), abs=1.0e-14_dp)
+         call check(error, mat%pivot_ratio() > 0, 'pivot ratio, '//trim(label))
+         call random_band(state, n, kd, a, indefinite=n/2)
+         call band_from(a, kd, mat, dense=.false.)
+         call mat%factor(info)
+         call check(error, info, 0, 'LU info, '//trim(label))
+         call check(error, mat%is_lu, 'LU fallback, '//trim(label))
+         call band_from(a, kd, mat, dense=.true.)
+         call mat%factor(info)
+         call check(error, info, 0, 'dense info, '//trim(label))
+         call check(error, mat%is_lu, 'dense LU, '//trim(label))
+         if (allocated(error)) return
+      end do
+   end subroutine test_factor
+
+   !> The band matrix solves A x = b with one and several right-hand sides on
+   !> every path: Cholesky in-house and LAPACK, LU fallback, dense.
+   subroutine test_solve(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(band_matrix_type) :: mat
+      real(dp), allocatable :: a(:, :), b(:, :), x(:, :)
+      integer :: state, kd, n, info, nrhs, path
+      character(len=80) :: label
+      character(len=8), parameter :: paths(3) = [character(len=8) :: 'Cholesky', 'band LU', 'dense LU']
+      state = 4711
+      do kd = max(0, narrow_band - 2), narrow_band + 2
+         n = 3*kd + 5
+         do path = 1, 3
+            do nrhs = 1, 3, 2
+               if (path == 1) then
+                  call random_band(state, n, kd, a)
+               else
+                  call random_band(state, n, kd, a, indefinite=n/2)
+               end if
+               call band_from(a, kd, mat, dense=path == 3)
+               call mat%factor(info)
+               b = random_columns(state, n, nrhs)
+               x = b
+               call mat%solve(x)
+               write (label, '(a,i0,a,i0,a,i0,a,a)') 'n = ', n, ', kd = ', kd, ', columns ', nrhs, ', ', &
+                  & trim(paths(path))
+               call check(error, info, 0, 'info, '//trim(label))
+               call check(error, maxval(abs(band_times(a, kd, x) - b))/(maxval(abs(a))*maxval(abs(x))), 0.0_dp, &
+                  & 'residual, '//trim(label), abs=1.0e-13_dp)
+               if (allocated(error)) return
+            end do
+         end do
+      end do
+   end subroutine test_solve
+
+end module test_assembly_band
