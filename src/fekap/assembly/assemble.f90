@@ -44,7 +44,8 @@ contains
    !> the band matrix (equation order), free-driven part into kfd(eq, drive).
    !> `geometric_above` leaves out the beams' geometric stiffness where they are
    !> strained less (see beam_residual; huge: the material tangent only, (46)).
-   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd, geometric_above)
+   !> `strain` and `element` are max_strain's, found on the way.
+   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd, geometric_above, strain, element)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:), lambda
       integer, intent(in) :: seg(:)
@@ -52,16 +53,24 @@ contains
       type(band_matrix_type), intent(inout) :: kff
       real(dp), intent(out) :: kfd(:, :)
       real(dp), intent(in), optional :: geometric_above
-      real(dp) :: pe(6), ke(6, 6), xe(6)
+      real(dp), intent(out) :: strain
+      integer, intent(out) :: element
+      real(dp) :: pe(6), ke(6, 6), xe(6), s
       integer :: e, i
       r = -lambda*mesh%f_ext
       call kff%zero()
       kfd = 0
+      strain = 0
+      element = 0
       do e = 1, size(mesh%elements)
          do i = 1, 6
             xe(i) = q(mesh%edof(i, e))
          end do
-         call beam_residual(mesh%elements(e), xe, pe, ke, geometric_above)
+         call beam_residual(mesh%elements(e), xe, pe, ke, geometric_above, s)
+         if (s > strain .or. element == 0) then
+            strain = s
+            element = e
+         end if
          do i = 1, 6
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do

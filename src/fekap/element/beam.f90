@@ -89,12 +89,14 @@ contains
    !>   translation-rotation     -/+ h n_b,  h = (wl/L) (EA Gamma2 e1 - kGA (1 + Gamma1) e2 + (g13, g23)),
    !>   rotation-rotation        r n_a n_b + wl EI/L^2 (-/+ 1),  r = wl (EA Gamma2^2 + kGA (1 + Gamma1)^2 + g33),
    !> (wl = w L / 2 the Gauss weight times the Jacobian; -/+: minus for unlike nodes).
-   pure subroutine beam_residual(self, xe, p, k, geometric_above)
+   pure subroutine beam_residual(self, xe, p, k, geometric_above, strain)
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6)
       real(dp), intent(out) :: p(6)
       real(dp), intent(out), optional :: k(6, 6)
       real(dp), intent(in), optional :: geometric_above
+      !> The largest strain, as beam_max_strain (a by-product of the Gauss points).
+      real(dp), intent(out), optional :: strain
       real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, fx, fy, fm, fk
       real(dp) :: g13, g23, g33, kg_strain, ea, ga, ca, cb, m11, m12, m22, hx, hy, r
       real(dp) :: th(2, 2), rr(3), ei
@@ -112,12 +114,14 @@ contains
       th = 0
       rr = 0
       ei = 0
+      if (present(strain)) strain = abs((xe(6) - xe(3))/self%length)*self%length
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
          wl = w*self%length/2
          n1 = (1 - xi)/2
          n2 = (1 + xi)/2
          call point_strain(self, xe, n1, n2, rl, c, s, g1, g2)     ! (27)
+         if (present(strain)) strain = max(strain, abs(g1), abs(g2))
          sp = ea*g1                                                ! (30)
          sv = ga*g2
          sm = self%c(3)*kap

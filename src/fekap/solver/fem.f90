@@ -178,6 +178,13 @@ module fekap_solver_fem
       logical :: verify_failed = .false.
       !> The accepted state before the step at each verification depth.
       type(saved_state_type) :: before(0:max_verify_depth)
+      !> The largest element strain at the configuration of the last tangent
+      !> assembly, and its element.
+      real(dp) :: assembled_strain = 0
+      integer :: assembled_element = 0
+      !> Whether the predictor extrapolated: guard_extrapolation then checks it
+      !> with the strains of the step's first assembly.
+      logical :: guard_pending = .false.
       !> Steps advanced so far, and whether the phases of this one are timed.
       integer :: advances = 0
       logical :: timing = .true.
@@ -447,6 +454,10 @@ contains
             relocations: do pass = 0, size(mesh%slides)*8
                do i = 0, self%model%analysis%max_iter
                   call assemble(self, qt, t, kg_above)
+                  if (self%guard_pending) then
+                     self%guard_pending = .false.
+                     if (guard_extrapolation(self, t, qt)) call assemble(self, qt, t, kg_above)
+                  end if
                   residual = free_norm(self, self%r)
                   if (i == 0) then
                      r0 = residual
@@ -537,7 +548,9 @@ contains
             previous = correction
          end do verification
          if (.not. self%loaded) then
-            call max_strain(mesh, qt, strain, element)
+            ! The strains of the material tangent's assembly at qt.
+            strain = self%assembled_strain
+            element = self%assembled_element
             if (strain > self%admissible_strain) then
                write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, &
                   & ': Newton converged to a self-stressed configuration (strain ', strain, ' in link '
@@ -638,6 +651,7 @@ contains
       h = t - self%t
       nl = min(self%nhist, lagrange_points)
       self%hermite_prediction = .false.
+      self%guard_pending = .false.
       select case (self%model%analysis%predictor)
       case (predictor_previous)
          qt = self%q
@@ -658,10 +672,10 @@ contains
             end do
             call hermite_extrapolate(self%hist(:, 1:n), self%hist_velocity(:, 1:n), self%thist(1:n), t, qt)
             self%hermite_prediction = .true.
-            call guard_extrapolation(self, t, qt)
+            self%guard_pending = .true.
          else if (self%nhist > 1) then
             call extrapolate(self%hist(:, 1:nl), self%thist(1:nl), t, qt)
-            call guard_extrapolation(self, t, qt)
+            self%guard_pending = .true.
          else
             call tangent_predictor(self, t, qt)
          end if
@@ -695,25 +709,28 @@ contains
 
    !> Extrapolating positions over a large rotation (a quarter turn per step)
    !> distorts the links badly, and Newton from there may find another
-   !> assembly branch. Keep the extrapolation only if it strains the elements
-   !> less than the last configuration with the new drive values does.
-   subroutine guard_extrapolation(self, t, qt)
+   !> assembly branch. Keep the extrapolation qt (just assembled, so its
+   !> strain is known) only if it strains the elements less than the last
+   !> configuration with the new drive values does; else replace it by that
+   !> (and return true).
+   logical function guard_extrapolation(self, t, qt) result(replaced)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       real(dp), intent(inout) :: qt(:)
-      real(dp) :: strain_extrapolated, strain_previous
+      real(dp) :: strain_previous
       integer :: element
-      call set_driven(self, t, qt)
-      call max_strain(self%mesh, qt, strain_extrapolated, element)
-      if (strain_extrapolated < 1.0e-2_dp) return
+      replaced = .false.
+      if (self%assembled_strain < 1.0e-2_dp) return
       self%work = self%q
       call set_driven(self, t, self%work)
       call max_strain(self%mesh, self%work, strain_previous, element)
-      if (strain_previous < strain_extrapolated) then
+      if (strain_previous < self%assembled_strain) then
          qt = self%work
+         self%q_predicted = qt
          self%hermite_prediction = .false.
+         replaced = .true.
       end if
-   end subroutine guard_extrapolation
+   end function guard_extrapolation
 
    !> qt = q + dq with K_ff dq_f = -K_fd dq_d + (t - t_q) f_ext: the tangent at
    !> the accepted configuration applied to the drive and load increments.
@@ -1257,13 +1274,15 @@ contains
    end subroutine accept
 
    !> Residual and tangent at q (geometric stiffness where strained above
-   !> geometric_above, see beam_residual) into r, kff and kfd, timed and counted.
+   !> geometric_above, see beam_residual) into r, kff and kfd, and the largest
+   !> element strain at q, timed and counted.
    subroutine assemble(self, q, t, geometric_above)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: q(:), t, geometric_above
       real(dp) :: clock
       clock = phase_start(self)
-      call assemble_tangent(self%mesh, q, t, self%seg, self%r, self%kff, self%kfd, geometric_above)
+      call assemble_tangent(self%mesh, q, t, self%seg, self%r, self%kff, self%kfd, geometric_above, &
+         & self%assembled_strain, self%assembled_element)
       call phase_end(self, clock, self%counts%seconds_assembly)
       self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
       self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
