@@ -6,14 +6,15 @@
 !>
 !> The n significant digits D of |x| = m 2**e (m < 2**53, read from the bits
 !> of the double) with decimal exponent E are D = round(m 5**k 2**(e + k)),
-!> k = n - 1 - E, computed exactly in 128-bit integers. E is first estimated
-!> from the binary exponent; it is one too low for some values, which then
-!> show one digit too many: that digit is rounded off.
+!> k = n - 1 - E, computed exactly in 128-bit integers. E is floor((e + 52)
+!> log10(2)) or one more, from the binary exponent.
 !>
 !> fast_digits takes the values of a kinematic run (0 <= k <= 31: |x| from
-!> about 10**(n - 32) to 10**n): m 5**k is one product and 2**(e + k) a
-!> shift, and the code has no loop and no branch on the digits (about 20 ns
-!> a number with the 17 digits of the CSV files). decimal_digits takes the
+!> about 10**(n - 32) to 10**n): which of the two E is, one comparison with
+!> a table of powers of ten tells; m 5**k is one product and 2**(e + k) a
+!> shift; the code has no loop and no branch on the digits (about 200
+!> instructions, some 20 ns, a number with the 17 digits of the CSV files,
+!> against about 1 us for the formatted write). decimal_digits takes the
 !> rest of the exact path: m times the two 64-bit halves of 5**k up to
 !> k = 54 (|x| down to about 1e-38), a 128-bit division for k < 0 (down to
 !> -21, |x| < 1e38). Other values (subnormals, NaN, infinities, magnitudes
@@ -65,6 +66,20 @@ module fekap_output_format
       & '0001020304050607080910111213141516171819'//'2021222324252627282930313233343536373839'// &
       & '4041424344454647484950515253545556575859'//'6061626364656667686970717273747576777879'// &
       & '8081828384858687888990919293949596979899'
+   !> The least double >= 10**j: |x| >= 10**j exactly when |x| >= this.
+   real(dp), parameter :: power10_threshold(-30:17) = [ &
+      & 1.0000000000000001e-30_dp, 1.0000000000000001e-29_dp, 1.0000000000000001e-28_dp, 1.0000000000000000e-27_dp, &
+      & 1.0000000000000000e-26_dp, 1.0000000000000000e-25_dp, 1.0000000000000001e-24_dp, 1.0000000000000001e-23_dp, &
+      & 1.0000000000000000e-22_dp, 1.0000000000000001e-21_dp, 1.0000000000000001e-20_dp, 1.0000000000000001e-19_dp, &
+      & 1.0000000000000001e-18_dp, 1.0000000000000001e-17_dp, 1.0000000000000001e-16_dp, 1.0000000000000001e-15_dp, &
+      & 1.0000000000000002e-14_dp, 1.0000000000000000e-13_dp, 1.0000000000000002e-12_dp, 1.0000000000000001e-11_dp, &
+      & 1.0000000000000000e-10_dp, 1.0000000000000001e-9_dp, 1.0000000000000000e-8_dp, 1.0000000000000001e-7_dp, &
+      & 1.0000000000000002e-6_dp, 1.0000000000000001e-5_dp, 1.0000000000000000e-4_dp, 1.0000000000000000e-3_dp, &
+      & 1.0000000000000000e-2_dp, 1.0000000000000001e-1_dp, 1.0000000000000000e0_dp, 1.0000000000000000e1_dp, &
+      & 1.0000000000000000e2_dp, 1.0000000000000000e3_dp, 1.0000000000000000e4_dp, 1.0000000000000000e5_dp, &
+      & 1.0000000000000000e6_dp, 1.0000000000000000e7_dp, 1.0000000000000000e8_dp, 1.0000000000000000e9_dp, &
+      & 1.0000000000000000e10_dp, 1.0000000000000000e11_dp, 1.0000000000000000e12_dp, 1.0000000000000000e13_dp, &
+      & 1.0000000000000000e14_dp, 1.0000000000000000e15_dp, 1.0000000000000000e16_dp, 1.0000000000000000e17_dp]
    !> What lies below the last digit kept: nothing, less than half of it,
    !> exactly half, more than half.
    integer, parameter :: tail_zero = 0, tail_below_half = 1, tail_half = 2, tail_above_half = 3
@@ -104,6 +119,12 @@ contains
       call fast_digits(x, 17, significand, e10, done)
       if (done) then
          call put_17_digits(line, n, x < 0, significand, e10)
+         return
+      else if (x == 0) then
+         ! Exact zeros are common (a constant rate, a fixed coordinate).
+         if (sign(1.0_dp, x) < 0) call append_text(line, n, '-')
+         line(n + 1:n + 23) = '0.0000000000000000E+000'
+         n = n + 23
          return
       end if
       call put_es(line, n, x, 16, 3, 0, done)
@@ -304,7 +325,8 @@ contains
    !> product and 2**(e + k) a right shift: 0 <= k <= 31, 1 <= -(e + k) <=
    !> 126 (normal x from about 10**(ndigits - 32) to 10**ndigits: the values
    !> of a kinematic run). done = .false. (and nothing computed) otherwise.
-   !> Straight-line code: no loop, and no branch on the digits.
+   !> Straight-line code: no loop, and no branch on the digits; E from the
+   !> binary exponent and one comparison with power10_threshold.
    pure subroutine fast_digits(x, ndigits, significand, e10, done)
       real(dp), intent(in) :: x
       integer, intent(in) :: ndigits
@@ -312,20 +334,24 @@ contains
       integer, intent(out) :: e10
       logical, intent(out) :: done
       integer(i16) :: product
-      integer(i8) :: bits, q2, sticky, keep, drop, rest20, high, dropped
+      integer(i8) :: bits, q2, sticky
       integer :: biased, e, k, s
       bits = transfer(x, 0_i8)
       biased = int(iand(shiftr(bits, 52), 2047_i8))
       e = biased - 1075
       ! |x| lies in [2**(e + 52), 2**(e + 53)), so E is floor((e + 52) log10(2))
       ! (78913/2**18 is log10(2) close enough over the whole exponent range)
-      ! or one more.
+      ! or one more: one more when |x| >= 10**(that + 1).
       e10 = shifta((e + 52)*78913, 18)
       k = ndigits - 1 - e10
-      s = -(e + k)
       significand = 0
       done = binary64 .and. biased > 0 .and. biased < 2047 .and. ndigits >= 1 .and. ndigits <= 17 .and. &
-         & k >= 0 .and. k <= max_k_single .and. s >= 1 .and. s <= 126
+         & k >= 0 .and. k <= max_k_single
+      if (.not. done) return
+      e10 = e10 + merge(1, 0, abs(x) >= power10_threshold(e10 + 1))
+      k = ndigits - 1 - e10
+      s = -(e + k)
+      done = k >= 0 .and. s >= 1 .and. s <= 126
       if (.not. done) return
       ! m 5**k < 2**125, in one 64-by-64-bit multiplication where 5**k fits.
       if (k <= max_k_64) then
@@ -333,8 +359,8 @@ contains
       else
          product = ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52))*power5(k)
       end if
-      ! x 10**k times two, floored (< 2 10**(ndigits + 1)): its last bit is
-      ! the rounding bit; sticky (0 or 1) tells whether anything lies below.
+      ! x 10**k times two, floored (< 2 10**ndigits): its last bit is the
+      ! rounding bit; sticky (0 or 1) tells whether anything lies below.
       q2 = int(shiftr(product, s - 1), i8)
       if (s <= 63) then
          ! The bits below the rounding bit are in the low 62 (64-bit work).
@@ -342,22 +368,12 @@ contains
       else
          sticky = merge(1_i8, 0_i8, iand(product, shiftl(1_i16, s - 1) - 1) /= 0)
       end if
-      ! Both roundings are computed and one is selected, without branches
-      ! (their outcome is as random as the digits): ndigits digits (E = e10),
-      ! up on more than half or on half with an odd last digit; or one digit
-      ! more (E = e10 + 1), that digit rounded off alike.
-      keep = shiftr(q2, 1)
-      keep = keep + shiftr(iand(q2, 1_i8) + ior(sticky, iand(keep, 1_i8)), 1)
-      drop = q2/20
-      rest20 = q2 - 20*drop
-      drop = drop + shiftr(rest20 + ior(sticky, iand(drop, 1_i8)) + 5, 4)
-      high = power10(ndigits)
-      ! 1 when q2 >= 2 high (the sign bit of the difference), else 0.
-      dropped = shiftr(2*high - 1 - q2, 63)
-      significand = keep + dropped*(drop - keep)
-      e10 = e10 + int(dropped)
+      ! Up on more than half, or on half with an odd last digit (computed,
+      ! not branched on: the outcome is as random as the digits).
+      significand = shiftr(q2, 1)
+      significand = significand + shiftr(iand(q2, 1_i8) + ior(sticky, iand(significand, 1_i8)), 1)
       ! 9.99...95 rounds to the next power of ten.
-      if (significand == high) then
+      if (significand == power10(ndigits)) then
          significand = power10(ndigits - 1)
          e10 = e10 + 1
       end if
@@ -534,17 +550,31 @@ contains
       text(2:2) = '.'
    end subroutine put_digits
 
-   !> The 8 digits of 0 <= v < 10**8, leading zeros included.
+   !> The 8 digits of 0 <= v < 10**8, leading zeros included. y = v/10**6 in
+   !> 52-bit fixed point holds the first two digits in its integer part; its
+   !> fraction times 100 the next two, and so on: one product a pair, no
+   !> division. (The multiplier ceil(2**52/10**6) makes y too large by less
+   !> than 10**8 2**-52 units; after the three products by 100 that is below
+   !> 0.03 of a unit of the last pair, and the exact fractions are multiples
+   !> of 10**-6, 10**-4, 10**-2: no digit comes out wrong.)
    pure subroutine put_8_digits(text, v)
       character(len=8), intent(inout) :: text
       integer, intent(in) :: v
-      integer :: high, low
-      high = v/10000
-      low = v - 10000*high
-      text(1:2) = digit_pairs(2*(high/100) + 1:2*(high/100) + 2)
-      text(3:4) = digit_pairs(2*mod(high, 100) + 1:2*mod(high, 100) + 2)
-      text(5:6) = digit_pairs(2*(low/100) + 1:2*(low/100) + 2)
-      text(7:8) = digit_pairs(2*mod(low, 100) + 1:2*mod(low, 100) + 2)
+      integer(i8), parameter :: fraction_mask = shiftl(1_i8, 52) - 1, scale = 4503599628_i8
+      integer(i8) :: y
+      integer :: pair
+      y = int(v, i8)*scale
+      pair = int(shiftr(y, 52))
+      text(1:2) = digit_pairs(2*pair + 1:2*pair + 2)
+      y = iand(y, fraction_mask)*100
+      pair = int(shiftr(y, 52))
+      text(3:4) = digit_pairs(2*pair + 1:2*pair + 2)
+      y = iand(y, fraction_mask)*100
+      pair = int(shiftr(y, 52))
+      text(5:6) = digit_pairs(2*pair + 1:2*pair + 2)
+      y = iand(y, fraction_mask)*100
+      pair = int(shiftr(y, 52))
+      text(7:8) = digit_pairs(2*pair + 1:2*pair + 2)
    end subroutine put_8_digits
 
    !> Write the last `count` decimal digits of v >= 0 after position n; advance n.

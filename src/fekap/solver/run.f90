@@ -25,8 +25,9 @@ module fekap_solver_run
    integer, parameter, public :: no_unit = -huge(1)
 
    !> Wall-clock seconds between flushes of the output files during a run:
-   !> a killed run (SIGKILL, power loss) loses at most the rows of this
-   !> last stretch; every other stop flushes all rows.
+   !> a run killed by SIGKILL loses at most the rows of about this last
+   !> stretch (those not yet handed to the system); every other stop
+   !> flushes all rows.
    real(dp), parameter, public :: flush_interval = 0.1_dp
 
    !> Open units of the output files; no_unit for a file that is not written.
