@@ -137,7 +137,9 @@ contains
          call write_mesh_csv(mesh_unit, model)
          close (mesh_unit)
       end if
-      if (model%output%listing) call open_replace(outdir//'/'//stem//'.lis', units%listing, error)
+      ! Formatted stream: the run writes the listing's step lines many at a time.
+      if (model%output%listing) call open_replace(outdir//'/'//stem//'.lis', units%listing, error, stream=.true., &
+         & formatted=.true.)
       if (allocated(error)) return
       if (model%output%vtk) then
          call execute_command_line('mkdir -p "'//outdir//'/vtk"', exitstat=stat)

@@ -14,6 +14,7 @@ program tester
    use test_deck, only: collect_deck
    use test_output_vtk, only: collect_output_vtk
    use test_output_format, only: collect_output_format
+   use test_output_buffer, only: collect_output_buffer
    implicit none
 
    abstract interface
@@ -46,6 +47,7 @@ program tester
    call run('deck', collect_deck)
    call run('output_vtk', collect_output_vtk)
    call run('output_format', collect_output_format)
+   call run('output_buffer', collect_output_buffer)
 
    if (failed > 0) error stop 1
 

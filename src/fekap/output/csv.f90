@@ -1,113 +1,191 @@
 !> CSV tables of a run: points.csv, links.csv, steps.csv and mesh.csv.
-!> Writers take a unit open for unformatted stream access (lines are written
-!> as bytes with their newline: no format to interpret per row) and never
-!> open files themselves. Reals are written with 17 significant digits,
-!> enough to round-trip.
+!> The per-step rows are built with the exact number texts of
+!> fekap_output_format (no format to interpret, no allocation) and appended
+!> to the file's text buffer, which writes them in large pieces; mesh.csv,
+!> written once, goes straight to a unit open for unformatted stream access.
+!> Writers never open files themselves. Reals are written with 17
+!> significant digits, enough to round-trip.
 module fekap_output_csv
    use fekap_kinds, only: dp
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type
-   use fekap_output_format, only: real_text, integer_text, append_real, append_integer
+   use fekap_output_format, only: append_real, append_integer, append_text
+   use fekap_output_buffer, only: text_buffer_type, reserve_text
    implicit none
    private
 
    public :: write_points_header, write_points_rows, write_links_header, write_links_rows
-   public :: write_steps_header, write_steps_row, write_mesh_csv
+   public :: write_steps_header, write_steps_row, write_mesh_csv, new_row_prefix
 
-   !> Width of one real field before blanks are squeezed out.
-   integer, parameter :: real_width = 25
+   !> Longest text of a real (es25.16e3 without its leading blank) and of an
+   !> integer, and of the prefix `step,t,` of a row.
+   integer, parameter :: real_width = 24, integer_width = 11, prefix_length = integer_width + real_width + 2
+
+   !> `step,t,`, the start of every row of a step in every table: its text
+   !> is made once per step (new_row_prefix), not once per row.
+   type, public :: row_prefix_type
+      character(len=prefix_length) :: text = ''
+      integer :: n = 0
+   end type row_prefix_type
 
 contains
 
    !> `step,t,point,x,y[,vx,vy[,ax,ay]]`: rate columns only when computed.
-   subroutine write_points_header(unit, velocities, accelerations)
-      integer, intent(in) :: unit
+   subroutine write_points_header(out, velocities, accelerations)
+      type(text_buffer_type), intent(inout) :: out
       logical, intent(in) :: velocities, accelerations
-      call write_rates_header(unit, 'step,t,point,x,y', ',vx,vy', ',ax,ay', velocities, accelerations)
+      call write_rates_header(out, 'step,t,point,x,y', ',vx,vy', ',ax,ay', velocities, accelerations)
    end subroutine write_points_header
 
    !> One row per tracked point.
-   subroutine write_points_rows(unit, model, result, velocities, accelerations)
-      integer, intent(in) :: unit
+   subroutine write_points_rows(out, model, result, prefix, velocities, accelerations)
+      type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
+      !> new_row_prefix of the result.
+      type(row_prefix_type), intent(in) :: prefix
       logical, intent(in) :: velocities, accelerations
-      integer :: i, node
+      integer :: i, node, length
+      length = 0
+      do i = 1, size(model%output%points)
+         length = length + row_length(len(model%nodes(model%output%points(i))%name), 6)
+      end do
+      call reserve_text(out, length)
       do i = 1, size(model%output%points)
          node = model%output%points(i)
-         call write_rates_row(unit, result, model%nodes(node)%name, result%pos(:, node), result%vel(:, node), &
-            & result%acc(:, node), velocities, accelerations)
+         call append_rates_row(out%text, out%n, prefix%text(1:prefix%n), model%nodes(node)%name, result%pos(:, node), &
+            & result%vel(:, node), result%acc(:, node), result%has_velocity, velocities, accelerations)
       end do
    end subroutine write_points_rows
 
    !> `step,t,link,angle[,omega[,alpha]]`.
-   subroutine write_links_header(unit, velocities, accelerations)
-      integer, intent(in) :: unit
+   subroutine write_links_header(out, velocities, accelerations)
+      type(text_buffer_type), intent(inout) :: out
       logical, intent(in) :: velocities, accelerations
-      call write_rates_header(unit, 'step,t,link,angle', ',omega', ',alpha', velocities, accelerations)
+      call write_rates_header(out, 'step,t,link,angle', ',omega', ',alpha', velocities, accelerations)
    end subroutine write_links_header
 
    !> One row per reported link.
-   subroutine write_links_rows(unit, model, result, velocities, accelerations)
-      integer, intent(in) :: unit
+   subroutine write_links_rows(out, model, result, prefix, velocities, accelerations)
+      type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
+      !> new_row_prefix of the result.
+      type(row_prefix_type), intent(in) :: prefix
       logical, intent(in) :: velocities, accelerations
-      integer :: i, link
+      integer :: i, link, length
+      length = 0
+      do i = 1, size(model%output%links)
+         length = length + row_length(len(model%links(model%output%links(i))%name), 3)
+      end do
+      call reserve_text(out, length)
       do i = 1, size(model%output%links)
          link = model%output%links(i)
-         call write_rates_row(unit, result, model%links(link)%name, result%angle(link:link), &
-            & result%omega(link:link), result%alpha(link:link), velocities, accelerations)
+         call append_rates_row(out%text, out%n, prefix%text(1:prefix%n), model%links(link)%name, result%angle(link:link), &
+            & result%omega(link:link), result%alpha(link:link), result%has_velocity, velocities, accelerations)
       end do
    end subroutine write_links_rows
 
    !> The header of a table of values and their rates: the rate columns only
    !> when computed.
-   subroutine write_rates_header(unit, values, rates, second_rates, velocities, accelerations)
-      integer, intent(in) :: unit
+   subroutine write_rates_header(out, values, rates, second_rates, velocities, accelerations)
+      type(text_buffer_type), intent(inout) :: out
       character(*), intent(in) :: values, rates, second_rates
       logical, intent(in) :: velocities, accelerations
-      if (velocities .and. accelerations) then
-         call emit(unit, values//rates//second_rates)
-      else if (velocities) then
-         call emit(unit, values//rates)
-      else
-         call emit(unit, values)
-      end if
+      call reserve_text(out, len(values) + len(rates) + len(second_rates) + 1)
+      call append_text(out%text, out%n, values)
+      if (velocities) call append_text(out%text, out%n, rates)
+      if (velocities .and. accelerations) call append_text(out%text, out%n, second_rates)
+      call append_text(out%text, out%n, new_line('a'))
    end subroutine write_rates_header
 
-   !> `step,t,name,q[,dq[,ddq]]`: the rate columns as computed, left empty at a
-   !> step where they are not known (a singular configuration).
-   subroutine write_rates_row(unit, result, name, q, dq, ddq, velocities, accelerations)
-      integer, intent(in) :: unit
-      type(step_result_type), intent(in) :: result
-      character(*), intent(in) :: name
-      real(dp), intent(in) :: q(:), dq(:), ddq(:)
-      logical, intent(in) :: velocities, accelerations
-      if (velocities .and. .not. result%has_velocity) then
-         call write_row(unit, result%step, name, [result%t, q], blanks=size(q)*merge(2, 1, accelerations))
-      else if (velocities .and. accelerations) then
-         call write_row(unit, result%step, name, [result%t, q, dq, ddq])
-      else if (velocities) then
-         call write_row(unit, result%step, name, [result%t, q, dq])
-      else
-         call write_row(unit, result%step, name, [result%t, q])
-      end if
-   end subroutine write_rates_row
+   !> Longest row: the prefix, a name, `reals` reals after it and the newline.
+   pure integer function row_length(name_length, reals)
+      integer, intent(in) :: name_length, reals
+      row_length = prefix_length + name_length + reals*(real_width + 1) + 1
+   end function row_length
 
-   subroutine write_steps_header(unit)
-      integer, intent(in) :: unit
-      call emit(unit, 'step,t,iterations,residual,cuts')
+   !> The prefix `step,t,` of the rows of the step of `result`.
+   pure subroutine new_row_prefix(self, result)
+      type(row_prefix_type), intent(out) :: self
+      type(step_result_type), intent(in) :: result
+      self%n = 0
+      call append_integer(self%text, self%n, result%step)
+      call append_char(self%text, self%n, ',')
+      call append_real(self%text, self%n, result%t)
+      call append_char(self%text, self%n, ',')
+   end subroutine new_row_prefix
+
+   !> `step,t,name,q[,dq[,ddq]]` after its prefix `step,t,`: the rate columns
+   !> as computed, left empty at a step where they are not known (a singular
+   !> configuration).
+   pure subroutine append_rates_row(text, n, prefix, name, q, dq, ddq, has_velocity, velocities, accelerations)
+      character(*), intent(inout) :: text
+      integer, intent(inout) :: n
+      character(*), intent(in) :: prefix, name
+      real(dp), intent(in) :: q(:), dq(:), ddq(:)
+      logical, intent(in) :: has_velocity, velocities, accelerations
+      integer :: i
+      call append_text(text, n, prefix)
+      call append_text(text, n, name)
+      call append_values(text, n, q)
+      if (velocities .and. .not. has_velocity) then
+         do i = 1, size(q)*merge(2, 1, accelerations)
+            call append_char(text, n, ',')
+         end do
+      else if (velocities) then
+         call append_values(text, n, dq)
+         if (accelerations) call append_values(text, n, ddq)
+      end if
+      call append_char(text, n, new_line('a'))
+   end subroutine append_rates_row
+
+   !> `,v1,v2,...`
+   pure subroutine append_values(text, n, values)
+      character(*), intent(inout) :: text
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: values(:)
+      integer :: i
+      do i = 1, size(values)
+         call append_char(text, n, ',')
+         call append_real(text, n, values(i))
+      end do
+   end subroutine append_values
+
+   !> One character (inlined here, unlike append_text of another module).
+   pure subroutine append_char(text, n, c)
+      character(*), intent(inout) :: text
+      integer, intent(inout) :: n
+      character, intent(in) :: c
+      text(n + 1:n + 1) = c
+      n = n + 1
+   end subroutine append_char
+
+   subroutine write_steps_header(out)
+      type(text_buffer_type), intent(inout) :: out
+      character(*), parameter :: header = 'step,t,iterations,residual,cuts'
+      call reserve_text(out, len(header) + 1)
+      call append_text(out%text, out%n, header//new_line('a'))
    end subroutine write_steps_header
 
-   subroutine write_steps_row(unit, result)
-      integer, intent(in) :: unit
+   !> `step,t,iterations,residual,cuts`.
+   subroutine write_steps_row(out, result, prefix)
+      type(text_buffer_type), intent(inout) :: out
       type(step_result_type), intent(in) :: result
-      call emit(unit, integer_text(result%step)//','//real_text(result%t)//','// &
-         & integer_text(result%iterations)//','//real_text(result%residual)//','//integer_text(result%cuts))
+      !> new_row_prefix of the result.
+      type(row_prefix_type), intent(in) :: prefix
+      call reserve_text(out, prefix_length + 2*(integer_width + 1) + real_width + 1)
+      call append_text(out%text, out%n, prefix%text(1:prefix%n))
+      call append_integer(out%text, out%n, result%iterations)
+      call append_char(out%text, out%n, ',')
+      call append_real(out%text, out%n, result%residual)
+      call append_char(out%text, out%n, ',')
+      call append_integer(out%text, out%n, result%cuts)
+      call append_char(out%text, out%n, new_line('a'))
    end subroutine write_steps_row
 
-   !> `link,node1,node2`: the end points of every link, for drawing the mechanism.
+   !> `link,node1,node2`: the end points of every link, for drawing the
+   !> mechanism; to a unit open for unformatted stream access.
    subroutine write_mesh_csv(unit, model)
       integer, intent(in) :: unit
       type(model_type), intent(in) :: model
@@ -118,33 +196,6 @@ contains
             & model%nodes(model%links(l)%node(2))%name)
       end do
    end subroutine write_mesh_csv
-
-   !> `step,t,name,v2,...`: values(1) is t; `blanks` empty fields follow.
-   subroutine write_row(unit, step, name, values, blanks)
-      integer, intent(in) :: unit, step
-      character(*), intent(in) :: name
-      real(dp), intent(in) :: values(:)
-      integer, intent(in), optional :: blanks
-      character(len=40 + len(name) + real_width*size(values)) :: line
-      integer :: i, n
-      n = 0
-      call append_integer(line, n, step)
-      line(n + 1:n + 1) = ','
-      n = n + 1
-      call append_real(line, n, values(1))
-      line(n + 1:n + 1 + len(name)) = ','//name
-      n = n + 1 + len(name)
-      do i = 2, size(values)
-         line(n + 1:n + 1) = ','
-         n = n + 1
-         call append_real(line, n, values(i))
-      end do
-      if (present(blanks)) then
-         line(n + 1:n + blanks) = repeat(',', blanks)
-         n = n + blanks
-      end if
-      call emit(unit, line(1:n))
-   end subroutine write_row
 
    !> One line of text and its newline.
    subroutine emit(unit, text)

@@ -6,11 +6,13 @@ module fekap_output_listing
       & predictor_previous, predictor_extrapolate, convergence_paper, joint_prismatic
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: work_counts_type, phase_seconds
-   use fekap_output_format, only: append_es, append_i
+   use fekap_output_format, only: append_es, append_i, append_integer, append_text
+   use fekap_output_buffer, only: text_buffer_type, reserve_text
    implicit none
    private
 
    public :: write_listing_model, write_listing_plan, write_listing_step_header, write_listing_step
+   public :: write_listing_note
    public :: write_listing_summary, write_listing_stop, plan_text
 
    real(dp), parameter :: rad2deg = 180/acos(-1.0_dp)
@@ -178,20 +180,33 @@ contains
       write (unit, '(a8,a20,a12,a16,a6)') 'step', 't', 'iterations', 'residual', 'cuts'
    end subroutine write_listing_step_header
 
-   subroutine write_listing_step(unit, result)
-      integer, intent(in) :: unit
+   !> The step's line, to the listing's text buffer.
+   subroutine write_listing_step(out, result)
+      type(text_buffer_type), intent(inout) :: out
       type(step_result_type), intent(in) :: result
-      character(len=62) :: line
-      integer :: n
       ! As the format (i8,es20.11,i12,es16.6,i6), without its cost.
-      n = 0
-      call append_i(line, n, result%step, 8)
-      call append_es(line, n, result%t, 20, 11, 0)
-      call append_i(line, n, result%iterations, 12)
-      call append_es(line, n, result%residual, 16, 6, 0)
-      call append_i(line, n, result%cuts, 6)
-      write (unit, '(a)') line(1:n)
+      call reserve_text(out, 63)
+      call append_i(out%text, out%n, result%step, 8)
+      call append_es(out%text, out%n, result%t, 20, 11, 0)
+      call append_i(out%text, out%n, result%iterations, 12)
+      call append_es(out%text, out%n, result%residual, 16, 6, 0)
+      call append_i(out%text, out%n, result%cuts, 6)
+      call append_text(out%text, out%n, new_line('a'))
    end subroutine write_listing_step
+
+   !> A note on step `step` (a near-singular configuration, step cuts), after
+   !> its line, to the listing's text buffer.
+   subroutine write_listing_note(out, step, note)
+      type(text_buffer_type), intent(inout) :: out
+      integer, intent(in) :: step
+      character(*), intent(in) :: note
+      call reserve_text(out, len(note) + 36)
+      call append_text(out%text, out%n, repeat(' ', 10)//'note: step ')
+      call append_integer(out%text, out%n, step)
+      call append_text(out%text, out%n, ', ')
+      call append_text(out%text, out%n, note)
+      call append_text(out%text, out%n, new_line('a'))
+   end subroutine write_listing_note
 
    !> Closing summary: counts of the work done and time per phase (the
    !> phases timed on a sample of the steps, scaled to the analysis time).

@@ -1,0 +1,70 @@
+!> The text of an output file gathered in memory and written in large
+!> pieces. A Fortran write statement costs 0.2 to 0.5 us however short its
+!> text, as much as the text of several numbers, so the per-step rows are
+!> appended here (whole lines) and written when the buffer is full and when
+!> the run flushes its files.
+module fekap_output_buffer
+   implicit none
+   private
+
+   public :: text_buffer_type, new_text_buffer, reserve_text, write_buffered
+
+   !> Starting capacity in characters: a write holds hundreds of rows, and
+   !> pieces over 64 KiB skip gfortran's own unit buffer (128 KiB for
+   !> unformatted units: a piece more than half its size is written directly,
+   !> not copied into it first).
+   integer, parameter :: default_capacity = 131072
+
+   type :: text_buffer_type
+      !> The file's unit, open for stream access: unformatted, or formatted
+      !> when `formatted` (a newline in its text then ends a record).
+      integer :: unit = 0
+      logical :: formatted = .false.
+      !> text(1:n) is held: whole lines, each ending in new_line('a').
+      character(:), allocatable :: text
+      integer :: n = 0
+   end type text_buffer_type
+
+contains
+
+   !> An empty buffer for `unit`.
+   pure subroutine new_text_buffer(self, unit, formatted)
+      type(text_buffer_type), intent(out) :: self
+      !> A unit open for stream access.
+      integer, intent(in) :: unit
+      !> The unit is open for formatted stream access.
+      logical, intent(in) :: formatted
+      self%unit = unit
+      self%formatted = formatted
+      allocate (character(len=default_capacity) :: self%text)
+      self%n = 0
+   end subroutine new_text_buffer
+
+   !> Make room for `length` more characters after text(1:n): write what is
+   !> held if they do not fit, and grow the buffer (once) for a longer piece.
+   subroutine reserve_text(self, length)
+      type(text_buffer_type), intent(inout) :: self
+      integer, intent(in) :: length
+      if (self%n + length <= len(self%text)) return
+      call write_buffered(self)
+      if (length > len(self%text)) then
+         deallocate (self%text)
+         allocate (character(len=2*length) :: self%text)
+      end if
+   end subroutine reserve_text
+
+   !> Write the held text to the unit and empty the buffer (the unit's own
+   !> buffer is not flushed).
+   subroutine write_buffered(self)
+      type(text_buffer_type), intent(inout) :: self
+      if (self%n == 0) return
+      if (self%formatted) then
+         ! The record end of the write is the last newline.
+         write (self%unit, '(a)') self%text(1:self%n - 1)
+      else
+         write (self%unit) self%text(1:self%n)
+      end if
+      self%n = 0
+   end subroutine write_buffered
+
+end module fekap_output_buffer
