@@ -125,7 +125,7 @@ contains
    !> bands with zeros inside (which both skip).
    subroutine test_cholesky(error)
       type(error_type), allocatable, intent(out) :: error
-      real(dp), allocatable :: a(:, :), f(:, :), g(:, :)
+      real(dp), allocatable :: a(:, :), f(:, :), g(:, :), recip(:)
       integer :: state, kd, in, n, info, info_lapack, is
       character(len=64) :: label
       state = 2024
@@ -135,7 +135,8 @@ contains
             n = order(in - is*(size(orders) + 2), kd)
             call random_band(state, n, kd, a, sparse=is == 1)
             f = a
-            call band_cholesky(f, n, kd, info)
+            recip = spread(0.0_dp, 1, n)
+            call band_cholesky(f, n, kd, info, recip)
             g = a
             call dpbtrf('U', n, kd, g, kd + 1, info_lapack)
             write (label, '(a,i0,a,i0,a)') 'n = ', n, ', kd = ', kd, trim(merge(', sparse', '        ', is == 1))
@@ -143,6 +144,8 @@ contains
             call check(error, info_lapack, 0, 'LAPACK info, '//trim(label))
             call check(error, maxval(abs(f - g))/maxval(abs(g)), 0.0_dp, 'factor vs dpbtrf, '//trim(label), &
                & abs=merge(0.0_dp, 1.0e-14_dp, kd <= 32))
+            if (allocated(error)) return
+            call check(error, all(recip == 1/f(kd + 1, :)), 'reciprocals of the pivots, '//trim(label))
             if (allocated(error)) return
          end do
       end do
@@ -152,7 +155,7 @@ contains
    !> is not positive, as from dpbtrf.
    subroutine test_not_positive_definite(error)
       type(error_type), allocatable, intent(out) :: error
-      real(dp), allocatable :: a(:, :), f(:, :)
+      real(dp), allocatable :: a(:, :), f(:, :), recip(:)
       integer :: state, kd, n, bad, info, info_lapack
       character(len=64) :: label
       state = 99
@@ -161,7 +164,8 @@ contains
          do bad = 1, n, 5
             call random_band(state, n, kd, a, indefinite=bad)
             f = a
-            call band_cholesky(f, n, kd, info)
+            recip = spread(0.0_dp, 1, n)
+            call band_cholesky(f, n, kd, info, recip)
             write (label, '(a,i0,a,i0,a,i0)') 'n = ', n, ', kd = ', kd, ', negative pivot at ', bad
             call check(error, info, bad, trim(label))
             f = a
@@ -173,7 +177,8 @@ contains
       ! A zero pivot is not positive either.
       call random_band(state, 5, 2, a)
       a(3, 1) = 0
-      call band_cholesky(a, 5, 2, info)
+      recip = spread(0.0_dp, 1, 5)
+      call band_cholesky(a, 5, 2, info, recip)
       call check(error, info, 1, 'zero pivot')
    end subroutine test_not_positive_definite
 
@@ -181,7 +186,7 @@ contains
    !> and the same x as dpbtrs.
    subroutine test_cholesky_solve(error)
       type(error_type), allocatable, intent(out) :: error
-      real(dp), allocatable :: a(:, :), f(:, :), b(:, :), x(:, :), xl(:, :)
+      real(dp), allocatable :: a(:, :), f(:, :), b(:, :), x(:, :), xl(:, :), recip(:)
       integer :: state, kd, in, n, nrhs, info
       character(len=64) :: label
       state = 7
@@ -191,10 +196,11 @@ contains
             do nrhs = 1, 3, 2
                call random_band(state, n, kd, a)
                f = a
-               call band_cholesky(f, n, kd, info)
+               recip = spread(0.0_dp, 1, n)
+               call band_cholesky(f, n, kd, info, recip)
                b = random_columns(state, n, nrhs)
                x = b
-               call band_cholesky_solve(f, n, kd, x)
+               call band_cholesky_solve(f, recip, n, kd, x)
                xl = b
                call dpbtrs('U', n, kd, nrhs, f, kd + 1, xl, n, info)
                write (label, '(a,i0,a,i0,a,i0)') 'n = ', n, ', kd = ', kd, ', columns ', nrhs

@@ -54,6 +54,8 @@ module fekap_assembly_band
       real(dp), allocatable :: fd(:, :)
       !> Diagonal of the factored matrix, to measure its pivots against.
       real(dp), allocatable :: diag(:)
+      !> 1 / U(j, j) of an in-house Cholesky factor (band_cholesky_solve).
+      real(dp), allocatable :: recip(:)
    contains
       procedure :: zero => band_zero
       procedure :: add => band_add
@@ -79,7 +81,7 @@ contains
          allocate (self%a(kd + 1, n), self%f(3*kd + 1, n), source=0.0_dp)
       end if
       allocate (self%ipiv(n), source=0)
-      allocate (self%diag(n), source=0.0_dp)
+      allocate (self%diag(n), self%recip(n), source=0.0_dp)
    end subroutine new_band_matrix
 
    pure subroutine band_zero(self)
@@ -113,7 +115,7 @@ contains
       self%f(1:kd + 1, :) = self%a
       self%is_lu = .false.
       if (kd <= narrow_band) then
-         call band_cholesky(self%f, self%n, kd, info)
+         call band_cholesky(self%f, self%n, kd, info, self%recip)
       else
          call dpbtrf('U', self%n, kd, self%f, ld, info)
       end if
@@ -163,7 +165,7 @@ contains
          call dgbtrs('N', self%n, self%kd, self%kd, size(b, 2), self%f, size(self%f, 1), self%ipiv, &
             & b, size(b, 1), info)
       else if (self%kd <= narrow_band) then
-         call band_cholesky_solve(self%f, self%n, self%kd, b)
+         call band_cholesky_solve(self%f, self%recip, self%n, self%kd, b)
       else
          call dpbtrs('U', self%n, self%kd, size(b, 2), self%f, size(self%f, 1), b, size(b, 1), info)
       end if
@@ -174,11 +176,13 @@ contains
    !> in place: LAPACK dpbtf2 with uplo = 'U' as plain loops, the same
    !> operations in the same order. info = 0, or the first j at which the
    !> pivot A(j, j) - sum U(k, j)^2 is not positive (f is then partly factored).
-   pure subroutine band_cholesky(f, n, kd, info)
+   pure subroutine band_cholesky(f, n, kd, info, recip)
       !> The band on entry (leading dimension at least kd + 1), U on return.
       real(dp), contiguous, intent(inout) :: f(:, :)
       integer, intent(in) :: n, kd
       integer, intent(out) :: info
+      !> 1 / U(j, j), for band_cholesky_solve.
+      real(dp), intent(out) :: recip(:)
       real(dp) :: ujj, rj, t
       integer :: j, kn, p, q
       info = 0
@@ -193,6 +197,7 @@ contains
          kn = min(kd, n - j)
          ! Row j of U right of the diagonal: U(j, j+q) at f(kd + 1 - q, j + q) (dscal).
          rj = 1/ujj
+         recip(j) = rj
          do q = 1, kn
             f(kd + 1 - q, j + q) = rj*f(kd + 1 - q, j + q)
          end do
@@ -210,13 +215,15 @@ contains
 
    !> Solve U^T U x = b in place with the factor of band_cholesky (or dpbtrf),
    !> column by column of b: LAPACK dpbtrs with uplo = 'U' as plain loops,
-   !> except that both sweeps go by columns of U and multiply by 1/U(j, j).
-   !> The reciprocal does not depend on b, so it is computed off the chain of
-   !> dependent operations that bounds a narrow solve; a division there (as
-   !> in dtbsv) made the solve about 40 % slower at n = 9. Results agree with
-   !> dpbtrs to round-off.
-   pure subroutine band_cholesky_solve(f, n, kd, b)
+   !> except that both sweeps go by columns of U and multiply by 1/U(j, j),
+   !> kept by the factorisation. A division on the chain of dependent
+   !> operations that bounds a narrow solve (as in dtbsv) made the solve about
+   !> 40 % slower at n = 9, and one off the chain still cost about a third.
+   !> Results agree with dpbtrs to round-off.
+   pure subroutine band_cholesky_solve(f, recip, n, kd, b)
       real(dp), contiguous, intent(in) :: f(:, :)
+      !> 1 / U(j, j), from band_cholesky.
+      real(dp), intent(in) :: recip(:)
       integer, intent(in) :: n, kd
       !> Right-hand sides on entry (columns), solutions on return.
       real(dp), contiguous, intent(inout) :: b(:, :)
@@ -225,7 +232,7 @@ contains
       do k = 1, size(b, 2)
          ! U^T y = b: y(j) final, then taken off b(j+1:j+kd) with row j of U.
          do j = 1, n
-            t = b(j, k)*(1/f(kd + 1, j))
+            t = b(j, k)*recip(j)
             b(j, k) = t
             do i = j + 1, min(n, j + kd)
                b(i, k) = b(i, k) - f(kd + 1 + j - i, i)*t
@@ -233,7 +240,7 @@ contains
          end do
          ! U x = y: x(j) final, then taken off y(j-kd:j-1) with column j of U.
          do j = n, 1, -1
-            t = b(j, k)*(1/f(kd + 1, j))
+            t = b(j, k)*recip(j)
             b(j, k) = t
             do i = max(1, j - kd), j - 1
                b(i, k) = b(i, k) - f(kd + 1 + i - j, j)*t

@@ -178,6 +178,9 @@ module fekap_solver_fem
       logical :: verify_failed = .false.
       !> The accepted state before the step at each verification depth.
       type(saved_state_type) :: before(0:max_verify_depth)
+      !> Pivot ratio of the factor in kff, once computed (see factor_pivot).
+      real(dp) :: pivot = 0
+      logical :: pivot_known = .false.
       !> The largest element strain at the configuration of the last tangent
       !> assembly, and its element.
       real(dp) :: assembled_strain = 0
@@ -255,7 +258,7 @@ contains
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
       integer :: info
-      real(dp) :: clock
+      real(dp) :: clock, pivot
       clock = clock_seconds()
       self%timing = .true.
       self%t = self%model%analysis%t_start
@@ -281,7 +284,8 @@ contains
          call refactor_at_accepted(self, info)
          self%has_jump_response = info == 0
          if (info == 0) then
-            call note_response_pivot(self, self%kff%pivot_ratio())
+            call factor_pivot(self, pivot)
+            call note_response_pivot(self, pivot)
             call drive_response(self, self%jump_response)
          end if
          call record_velocity(self)
@@ -899,10 +903,13 @@ contains
          end do
          ! Response at the new configuration (unless its tangent is singular).
          pivot = 0
-         if (factored) pivot = self%kff%pivot_ratio()
+         if (factored) call factor_pivot(self, pivot)
          has_response = pivot >= singular_floor .and. factored
-         resp = 0
-         if (has_response) call drive_response(self, resp)
+         if (has_response) then
+            call drive_response(self, resp)
+         else
+            resp = 0
+         end if
          call note_response_pivot(self, merge(pivot, 0.0_dp, has_response))
          call apply_response(resp, dd, dq_new)
          dq_old = 0
@@ -1340,12 +1347,26 @@ contains
       clock = phase_start(self)
       call self%kff%factor(info)
       call phase_end(self, clock, self%counts%seconds_factorisation)
+      self%pivot_known = .false.
       if (self%kff%is_lu) then
          self%counts%lu_factorisations = self%counts%lu_factorisations + 1
       else
          self%counts%cholesky_factorisations = self%counts%cholesky_factorisations + 1
       end if
    end subroutine factor
+
+   !> The pivot ratio of the factor in kff (band_pivot_ratio), computed once
+   !> per factorisation: the branch-jump check, the drive response and the
+   !> rates all ask for it.
+   subroutine factor_pivot(self, ratio)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(out) :: ratio
+      if (.not. self%pivot_known) then
+         self%pivot = self%kff%pivot_ratio()
+         self%pivot_known = .true.
+      end if
+      ratio = self%pivot
+   end subroutine factor_pivot
 
    !> Velocities K v_f = -K_fd v_d + lambda' f (47) and accelerations
    !> K a_f = -K_fd a_d - d2P[v, v] + lambda'' f (48)-(53), as asked for, with
@@ -1365,7 +1386,7 @@ contains
       if (self%accepted_singular) then
          ratio = 0
       else if (self%factor_current) then
-         ratio = self%kff%pivot_ratio()
+         call factor_pivot(self, ratio)
       else
          return
       end if
@@ -1509,7 +1530,7 @@ contains
    pure real(dp) function free_norm(self, r) result(norm)
       type(fem_stepper_type), intent(in) :: self
       real(dp), intent(in) :: r(:)
-      real(dp) :: biggest
+      real(dp) :: biggest, scale
       integer :: k
       biggest = 0
       do k = 1, self%mesh%nfree
@@ -1517,8 +1538,9 @@ contains
       end do
       norm = 0
       if (.not. biggest > 0) return
+      scale = 1/biggest
       do k = 1, self%mesh%nfree
-         norm = norm + (r(self%mesh%eq_dof(k))/biggest)**2
+         norm = norm + (r(self%mesh%eq_dof(k))*scale)**2
       end do
       norm = biggest*sqrt(norm)
    end function free_norm

@@ -126,8 +126,10 @@ contains
          end do
       end if
 
+      ! One clock read per step boundary: the end of a step's output is the
+      ! start of the next step's analysis.
+      c0 = clock_seconds()
       do n = 0, nsteps
-         c0 = clock_seconds()
          result%step = n
          result%cuts = 0
          if (n == 0) then
