@@ -314,13 +314,15 @@ t = 0.125 (19), where the crank and the coupler pass through collinear and the
 branch-jump check has the step confirmed by solving it again in halves
 (docs/hard-cases.md, rule 3). The difference of one iteration elsewhere is
 within what the reconstructed geometry and the counting convention can
-explain. FEKAP's defaults need 2.12 per step over the 40 steps (85 solves in
-41 configurations; 2 on 36 steps). Three things bring it there (measured
-before, 4.45): Newton's tangent leaves out the geometric stiffness of the
-iterate's small spurious strains, so convergence is quadratic from the first
-iteration (4.45 -> 3.2); the predictor is the Hermite extrapolation through
-the last three configurations and their velocities (the linear response the
-branch check computes anyway), accurate to 1e-5 of the model size mid-turn;
+explain. FEKAP's defaults need 1.65 per step over the 40 steps (66 solves in
+41 configurations; 1 on 18 steps, 2 near t = 0 and 1 where the path curves
+most, 3-4 on the first three steps while the predictor's history fills).
+Three things bring it there (measured before, 4.45): Newton's tangent leaves
+out the geometric stiffness of the iterate's small spurious strains, so
+convergence is quadratic from the first iteration (4.45 -> 3.2); the
+predictor is the Hermite extrapolation through the last four configurations
+and their velocities (the linear response the branch check computes anyway),
+accurate to 2e-7 to 5e-7 of the model size mid-turn (1e-5 with three);
 and the iteration stops on the quadratic-convergence estimate of the next
 correction instead of computing it (docs/theory.md, section 3). The default
 test is also what makes the answer accurate to round-off (see
@@ -335,7 +337,7 @@ step starts with the driving constraint satisfied and only the dependent
 coordinates are iterated. All three methods converge quadratically. With the
 paper's settings FEKAP's FEM needs about 1.5 more solves than its classical
 methods, the paper's "one additional step" plus the counting; with the
-defaults it needs fewer (2.12 against 3.5), since the classical methods keep
+defaults it needs fewer (1.65 against 3.5), since the classical methods keep
 the Lagrange predictor and the verifying iteration.
 
 **dt = 0.25 (Table 2).** With the paper's settings FEKAP's classical methods
@@ -348,15 +350,15 @@ turns below 0.1 rad), ends at the same configuration. Endpoint data cannot
 tell a legitimate crossing from a jump over a near-toggle to the mirror
 branch, which is what this check catches (docs/hard-cases.md, rule 3). The
 steps without a crossing take 9 iterations (earlier, before the check: 11, 9,
-8, 11). With the defaults the FEM needs 51, 10, 29, 5 for the same reason.
+8, 11). With the defaults the FEM needs 49, 10, 30, 7 for the same reason.
 The paper's large counts at t = 1 (Cartesian 11, FEM 18) are not reproduced.
 
 **dt = 0.5 (Table 3).** With the paper's settings FEKAP's classical methods
 need 4 and 4 (paper: angles 8 and 9) and its FEM 98 and 72 (paper: 11 and 13;
 FEKAP before the crossing check: 12 and 14), the halving confirmation of both
 half turns. With the defaults the FEM's first half turn is also cut once (a
-rejected configuration) and takes 69 solves over its sub-steps; the second
-48.
+rejected configuration) and takes 67 solves over its sub-steps; the second
+51.
 
 **The paper's "Not Converged" (Cartesian, dt = 0.5) is not reproduced.**
 FEKAP's Cartesian method converges at both steps of dt = 0.5, in 4 iterations
