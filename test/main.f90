@@ -6,6 +6,7 @@ program tester
    use test_assembly_band, only: collect_assembly_band
    use test_solver_fem, only: collect_solver_fem
    use test_solver_convergence, only: collect_solver_convergence
+   use test_solver_stepper, only: collect_solver_stepper
    use test_contact_slideline, only: collect_contact_slideline
    use test_classical_angles, only: collect_classical_angles
    use test_classical_constraints, only: collect_classical_constraints
@@ -38,6 +39,7 @@ program tester
    call run('element_beam', collect_element_beam)
    call run('assembly_band', collect_assembly_band)
    call run('solver_convergence', collect_solver_convergence)
+   call run('solver_stepper', collect_solver_stepper)
    call run('solver_fem', collect_solver_fem)
    call run('contact_slideline', collect_contact_slideline)
    call run('classical_angles', collect_classical_angles)

@@ -6,6 +6,7 @@ module test_solver_fem
       & convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
+   use fekap_solver_stepper, only: phase_seconds
    use test_mechanisms, only: fourbar_model, cantilever_model, slider_crank_model
    use classical_models, only: four_bar_exact, slider_crank_exact
    implicit none
@@ -29,7 +30,8 @@ contains
          & new_unittest('fem_advance_slider_crank', test_slider_crank), &
          & new_unittest('fem_advance_slider_across_elements', test_slider_across), &
          & new_unittest('fem_advance_positions_only_work', test_positions_only), &
-         & new_unittest('fem_advance_positions_independent_of_rates', test_bit_for_bit) &
+         & new_unittest('fem_advance_positions_independent_of_rates', test_bit_for_bit), &
+         & new_unittest('fem_advance_phase_sample', test_phase_sample) &
          & ]
    end subroutine collect_solver_fem
 
@@ -371,5 +373,27 @@ contains
       call check(error, all(res(1)%angle == res(3)%angle), 'link angles identical with and without rates')
       call check(error, all(res(2)%vel == res(3)%vel), 'velocities identical with and without accelerations')
    end subroutine test_bit_for_bit
+
+   !> The phases of the start, the first 16 steps and every 16th after them
+   !> are timed: a 40-step run has a sample, its phases fit inside it, and
+   !> scaled to a longer analysis they keep their shares.
+   subroutine test_phase_sample(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(fem_stepper_type) :: fem
+      type(step_result_type) :: res
+      real(dp) :: phases(3)
+      call run_counted(.true., .true., fem, res, error)
+      if (allocated(error)) return
+      associate (c => fem%counts)
+         call check(error, c%seconds_sampled > 0, 'a sample was timed')
+         if (allocated(error)) return
+         call check(error, min(c%seconds_assembly, c%seconds_factorisation, c%seconds_solves) >= 0 .and. &
+            & c%seconds_assembly + c%seconds_factorisation + c%seconds_solves <= c%seconds_sampled, &
+            & 'phases within the sampled steps')
+         if (allocated(error)) return
+         phases = phase_seconds(c, 2*c%seconds_sampled)
+         call check(error, sum(phases) <= 2*c%seconds_sampled, 'scaled phases within the analysis')
+      end associate
+   end subroutine test_phase_sample
 
 end module test_solver_fem
