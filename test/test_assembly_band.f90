@@ -4,7 +4,7 @@
 !> solver, its LU fallback and its dense mode.
 module test_assembly_band
    use fekap_kinds, only: dp
-   use fekap_testing, only: unittest_type, new_unittest, check, error_type
+   use fekap_testing, only: unittest_type, new_unittest, check, error_type, next_random
    use fekap_assembly_lapack, only: dpbtrf, dpbtrs
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix, narrow_band, band_cholesky, &
       & band_cholesky_solve
@@ -27,13 +27,6 @@ contains
          & new_unittest('band_solve', test_solve) &
          & ]
    end subroutine collect_assembly_band
-
-   !> A reproducible pseudo-random number in [0, 1) (a linear congruential generator).
-   real(dp) function next_random(state)
-      integer, intent(inout) :: state
-      state = modulo(state*16807, 2147483647)
-      next_random = real(state, dp)/2147483647.0_dp
-   end function next_random
 
    !> A random symmetric positive definite n x n matrix of half-bandwidth kd
    !> in upper band storage (off-diagonal entries in [-1, 1], the diagonal

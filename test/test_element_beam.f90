@@ -3,7 +3,7 @@
 !> kernels against a straightforward dense reference of the same equations.
 module test_element_beam
    use fekap_kinds, only: dp
-   use fekap_testing, only: unittest_type, new_unittest, check, error_type
+   use fekap_testing, only: unittest_type, new_unittest, check, error_type, next_random
    use fekap_element_beam, only: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain
    implicit none
    private
@@ -24,13 +24,6 @@ contains
          & new_unittest('beam_kernels_reference', test_kernels_reference) &
          & ]
    end subroutine collect_element_beam
-
-   !> A reproducible pseudo-random number in [0, 1) (a linear congruential generator).
-   real(dp) function next_random(state)
-      integer, intent(inout) :: state
-      state = modulo(state*16807, 2147483647)
-      next_random = real(state, dp)/2147483647.0_dp
-   end function next_random
 
    !> A random element (inclination in [-pi, pi], stiffnesses over decades) and
    !> a random deformed state of it.

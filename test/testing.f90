@@ -1,12 +1,13 @@
 !> A small assertion and test-runner module in the shape of test-drive.
 module fekap_testing
+   use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, fatal_error
    implicit none
    private
 
    public :: unittest_type, new_unittest, test_interface, check, test_failed, run_testsuite
-   public :: error_type
+   public :: error_type, next_random
 
    abstract interface
       subroutine test_interface(error)
@@ -134,5 +135,15 @@ contains
       passed = passed + np
       failed = failed + nf
    end subroutine run_testsuite
+
+   !> A reproducible pseudo-random number in [0, 1) (a linear congruential generator).
+   real(dp) function next_random(state)
+      integer, intent(inout) :: state
+      ! Park and Miller's minimal standard generator; the state stays in
+      ! 1 .. 2**31 - 2, so the product fits in 64 bits only: use a 64-bit
+      ! intermediate.
+      state = int(modulo(int(state, int64)*16807_int64, 2147483647_int64))
+      next_random = real(state, dp)/2147483647.0_dp
+   end function next_random
 
 end module fekap_testing
