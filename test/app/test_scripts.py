@@ -71,6 +71,21 @@ def test_bench_quick() -> None:
     check(any("N =     10 dense" in line for line in lines), "no dense scissor run")
 
 
+def test_bench_against_short() -> None:
+    """The before/after comparison of two executables (here the same one
+    twice): both cases, both binaries, and the ratios of the medians."""
+    result = script(sys.executable, str(ROOT / "scripts" / "bench_against.py"), fekap_binary(), fekap_binary(),
+                    "--dt", "0.01", "--repeat", "1", timeout=120)
+    lines = result.stdout.splitlines()
+    for files in ("listing", "csv listing"):
+        for label in ("before", "after"):
+            check(any(line.startswith(f"  {files:12s} {label:6s} analysis") for line in lines),
+                  f"no {label} analysis line for {files}:\n{result.stdout}")
+        ratios = [float(line.split()[-1]) for line in lines if line.startswith(f"  {files:12s} after/before")]
+        check(len(ratios) == 2 and all(r > 0 and math.isfinite(r) for r in ratios),
+              f"ratios for {files}: {ratios}\n{result.stdout}")
+
+
 def test_scissor_height_exact() -> None:
     cells = 3
     for solver in ("band", "dense"):
@@ -115,5 +130,5 @@ def test_accuracy_study_short() -> None:
 
 
 if __name__ == "__main__":
-    sys.exit(run_suite("scripts", [test_paper_tables_short, test_bench_quick, test_scissor_height_exact,
-                                   test_scissor_deck_text, test_accuracy_study_short]))
+    sys.exit(run_suite("scripts", [test_paper_tables_short, test_bench_quick, test_bench_against_short,
+                                   test_scissor_height_exact, test_scissor_deck_text, test_accuracy_study_short]))
