@@ -3,23 +3,22 @@
 !> Newton tangents indefinite), a pivoting band LU (LAPACK dgbtrf/dgbtrs) of
 !> the same matrix. LAPACK has no symmetric indefinite band solver.
 !>
-!> The Cholesky factor U (A = U^T U, upper band storage) comes from the
-!> in-house loops band_cholesky and band_cholesky_solve below for
-!> half-bandwidths up to `narrow_band`, and from LAPACK dpbtrf/dpbtrs for wider
-!> bands. The factorisation is LAPACK's unblocked one (dpbtf2) as plain loops,
-!> the same operations in the same order, so the factor is dpbtrf's to the bit
-!> and either solve works with either factor; the solve is dpbtrs's two
-!> triangular sweeps, rearranged (see band_cholesky_solve). They exist because
-!> LAPACK makes BLAS calls per column (dscal and dsyr in dpbtf2, two dtbsv per
-!> right-hand side), and for a small model (Example 1: 9 equations, kd = 5)
-!> that overhead costs as much as the arithmetic: factor 0.22 us instead of
-!> 0.31, solve 0.14 us instead of 0.20 (reference BLAS, 2.1 GHz Xeon).
-!> With the reference BLAS the loops stay faster up to kd of about 100, but
-!> above kd = 32 dpbtrf switches to its blocked algorithm, whose level-3 BLAS
-!> an optimised BLAS makes much faster; up to 32 it runs dpbtf2 itself, which
-!> the loops here do without the calls. So narrow_band = 32: every model in
-!> decks/ and the scissor lifts (kd = 12) take the loops (the 1000-cell lift,
-!> 12,000 equations: 0.75 to 1.0 ms per factorisation instead of 1.2).
+!> Half-bandwidths up to `narrow_band` are factored by the in-house loops
+!> band_ldlt and band_ldlt_solve below, the square-root-free Cholesky
+!> A = U^T D U (U unit upper triangular, in the upper band storage, D on its
+!> diagonal); wider bands by LAPACK dpbtrf/dpbtrs (A = U^T U). The loops exist
+!> because LAPACK makes BLAS calls per column (dscal and dsyr in dpbtf2, two
+!> dtbsv per right-hand side), and for a small model (Example 1: 9 equations,
+!> kd = 5) that overhead costs as much as the arithmetic. Such a narrow
+!> factorisation or solve is a chain of dependent operations, row after row;
+!> without the square root and with a unit diagonal the chain is shorter:
+!> on a 2.1 GHz Xeon with the reference BLAS, factor 0.31 us (dpbtrf), 0.22
+!> (dpbtf2's loops), 0.16-0.18 (U^T D U); solve 0.20 (dpbtrs), 0.11-0.13
+!> (dpbtrs's sweeps as loops). With the reference BLAS the loops stay faster up
+!> to kd of about 100, but above kd = 32 dpbtrf switches to its blocked
+!> algorithm, whose level-3 BLAS an optimised BLAS makes much faster. So
+!> narrow_band = 32: every model in decks/ and the scissor lifts (kd = 12)
+!> take the loops.
 !>
 !> A matrix made with `dense=.true.` keeps the same band assembly storage but
 !> factors and solves the matrix as a full n x n array with dgetrf/dgetrs: a
@@ -31,7 +30,7 @@ module fekap_assembly_band
    private
 
    public :: band_matrix_type, new_band_matrix
-   public :: narrow_band, band_cholesky, band_cholesky_solve
+   public :: narrow_band, band_ldlt, band_ldlt_solve
 
    !> Largest half-bandwidth factored and solved by the in-house loops rather
    !> than LAPACK: dpbtrf's own switch to its blocked algorithm (see the module header).
@@ -43,7 +42,8 @@ module fekap_assembly_band
       integer :: kd = 0
       !> Upper band as LAPACK stores it: A(i, j), i <= j, at a(kd + 1 + i - j, j).
       real(dp), allocatable :: a(:, :)
-      !> Factor: Cholesky in rows 1:kd+1, or band LU in rows 1:3*kd+1.
+      !> Factor: Cholesky (U^T D U up to narrow_band, U^T U beyond) in rows
+      !> 1:kd+1, or band LU in rows 1:3*kd+1.
       real(dp), allocatable :: f(:, :)
       integer, allocatable :: ipiv(:)
       !> Whether the factor in f is an LU (the fallback) rather than a Cholesky factor.
@@ -54,7 +54,7 @@ module fekap_assembly_band
       real(dp), allocatable :: fd(:, :)
       !> Diagonal of the factored matrix, to measure its pivots against.
       real(dp), allocatable :: diag(:)
-      !> 1 / U(j, j) of an in-house Cholesky factor (band_cholesky_solve).
+      !> 1 / D(j) of an in-house factor (band_ldlt_solve).
       real(dp), allocatable :: recip(:)
    contains
       procedure :: zero => band_zero
@@ -115,7 +115,7 @@ contains
       self%f(1:kd + 1, :) = self%a
       self%is_lu = .false.
       if (kd <= narrow_band) then
-         call band_cholesky(self%f, self%n, kd, info, self%recip)
+         call band_ldlt(self%f, self%n, kd, info, self%recip)
       else
          call dpbtrf('U', self%n, kd, self%f, ld, info)
       end if
@@ -165,64 +165,61 @@ contains
          call dgbtrs('N', self%n, self%kd, self%kd, size(b, 2), self%f, size(self%f, 1), self%ipiv, &
             & b, size(b, 1), info)
       else if (self%kd <= narrow_band) then
-         call band_cholesky_solve(self%f, self%recip, self%n, self%kd, b)
+         call band_ldlt_solve(self%f, self%recip, self%n, self%kd, b)
       else
          call dpbtrs('U', self%n, self%kd, size(b, 2), self%f, size(self%f, 1), b, size(b, 1), info)
       end if
    end subroutine band_solve
 
-   !> Cholesky factorisation A = U^T U of the symmetric positive definite band
-   !> matrix in f(1:kd+1, 1:n) (upper band, A(i, j) at f(kd + 1 + i - j, j)),
-   !> in place: LAPACK dpbtf2 with uplo = 'U' as plain loops, the same
-   !> operations in the same order. info = 0, or the first j at which the
-   !> pivot A(j, j) - sum U(k, j)^2 is not positive (f is then partly factored).
-   pure subroutine band_cholesky(f, n, kd, info, recip)
-      !> The band on entry (leading dimension at least kd + 1), U on return.
+   !> Square-root-free Cholesky factorisation A = U^T D U of the symmetric
+   !> positive definite band matrix in f(1:kd+1, 1:n) (upper band, A(i, j) at
+   !> f(kd + 1 + i - j, j)), in place: U(j, j+q) (unit diagonal) at
+   !> f(kd + 1 - q, j + q), D(j) at f(kd + 1, j), and 1/D(j) in recip. The
+   !> operations of LAPACK's dpbtf2 without its square roots (D(j) is
+   !> U_Cholesky(j, j)**2). info = 0, or the first j at which the pivot D(j)
+   !> is not positive (f is then partly factored), as from dpbtrf.
+   pure subroutine band_ldlt(f, n, kd, info, recip)
+      !> The band on entry (leading dimension at least kd + 1), U and D on return.
       real(dp), contiguous, intent(inout) :: f(:, :)
       integer, intent(in) :: n, kd
       integer, intent(out) :: info
-      !> 1 / U(j, j), for band_cholesky_solve.
+      !> 1 / D(j), for band_ldlt_solve.
       real(dp), intent(out) :: recip(:)
-      real(dp) :: ujj, rj, t
+      real(dp) :: rd, t, row(kd)
       integer :: j, kn, p, q
       info = 0
       do j = 1, n
-         ujj = f(kd + 1, j)
-         if (.not. ujj > 0) then
+         if (.not. f(kd + 1, j) > 0) then
             info = j
             return
          end if
-         ujj = sqrt(ujj)
-         f(kd + 1, j) = ujj
+         rd = 1/f(kd + 1, j)
+         recip(j) = rd
          kn = min(kd, n - j)
-         ! Row j of U right of the diagonal: U(j, j+q) at f(kd + 1 - q, j + q) (dscal).
-         rj = 1/ujj
-         recip(j) = rj
+         ! Row j of A right of the diagonal, kept, and row j of U = it / D(j).
          do q = 1, kn
-            f(kd + 1 - q, j + q) = rj*f(kd + 1 - q, j + q)
+            row(q) = f(kd + 1 - q, j + q)
+            f(kd + 1 - q, j + q) = rd*row(q)
          end do
-         ! Trailing block A(j+p, j+q) -= U(j, j+p) U(j, j+q), p <= q (dsyr,
-         ! which also skips the zeros of row j: a band is often sparse inside).
+         ! Trailing block A(j+p, j+q) -= A(j, j+p) U(j, j+q), p <= q, skipping
+         ! the zeros of row j (a band is often sparse inside).
          do q = 1, kn
             t = -f(kd + 1 - q, j + q)
             if (t == 0) cycle
             do p = 1, q
-               f(kd + 1 + p - q, j + q) = f(kd + 1 + p - q, j + q) + f(kd + 1 - p, j + p)*t
+               f(kd + 1 + p - q, j + q) = f(kd + 1 + p - q, j + q) + row(p)*t
             end do
          end do
       end do
-   end subroutine band_cholesky
+   end subroutine band_ldlt
 
-   !> Solve U^T U x = b in place with the factor of band_cholesky (or dpbtrf),
-   !> column by column of b: LAPACK dpbtrs with uplo = 'U' as plain loops,
-   !> except that both sweeps go by columns of U and multiply by 1/U(j, j),
-   !> kept by the factorisation. A division on the chain of dependent
-   !> operations that bounds a narrow solve (as in dtbsv) made the solve about
-   !> 40 % slower at n = 9, and one off the chain still cost about a third.
-   !> Results agree with dpbtrs to round-off.
-   pure subroutine band_cholesky_solve(f, recip, n, kd, b)
+   !> Solve U^T D U x = b in place with the factor of band_ldlt, column by
+   !> column of b: U^T y = b and U x = D^-1 y by columns of U. With U's unit
+   !> diagonal each sweep is a chain of one multiply-add per row, and D^-1 is
+   !> a product by the kept reciprocals, off the chain.
+   pure subroutine band_ldlt_solve(f, recip, n, kd, b)
       real(dp), contiguous, intent(in) :: f(:, :)
-      !> 1 / U(j, j), from band_cholesky.
+      !> 1 / D(j), from band_ldlt.
       real(dp), intent(in) :: recip(:)
       integer, intent(in) :: n, kd
       !> Right-hand sides on entry (columns), solutions on return.
@@ -232,25 +229,25 @@ contains
       do k = 1, size(b, 2)
          ! U^T y = b: y(j) final, then taken off b(j+1:j+kd) with row j of U.
          do j = 1, n
-            t = b(j, k)*recip(j)
-            b(j, k) = t
+            t = b(j, k)
             do i = j + 1, min(n, j + kd)
                b(i, k) = b(i, k) - f(kd + 1 + j - i, i)*t
             end do
          end do
-         ! U x = y: x(j) final, then taken off y(j-kd:j-1) with column j of U.
+         b(1:n, k) = b(1:n, k)*recip(1:n)
+         ! U x = z: x(j) final, then taken off z(j-kd:j-1) with column j of U.
          do j = n, 1, -1
-            t = b(j, k)*recip(j)
-            b(j, k) = t
+            t = b(j, k)
             do i = max(1, j - kd), j - 1
                b(i, k) = b(i, k) - f(kd + 1 + i - j, j)*t
             end do
          end do
       end do
-   end subroutine band_cholesky_solve
+   end subroutine band_ldlt_solve
 
    !> Smallest pivot of the factor relative to the matrix's own diagonal entry:
-   !> min_j U(j,j)^2 / A(j,j) for Cholesky, min_j |U(j,j)| / |A(j,j)| for LU.
+   !> min_j U(j,j)^2 / A(j,j) for Cholesky (D(j) / A(j,j) for U^T D U),
+   !> min_j |U(j,j)| / |A(j,j)| for LU.
    !> Invariant under a diagonal scaling of the unknowns, so stiffness ratios
    !> do not enter; it tends to 0 as the matrix becomes singular.
    pure real(dp) function band_pivot_ratio(self) result(ratio)
@@ -263,6 +260,8 @@ contains
             pivot = abs(self%fd(j, j))
          else if (self%is_lu) then
             pivot = abs(self%f(2*self%kd + 1, j))
+         else if (self%kd <= narrow_band) then
+            pivot = self%f(self%kd + 1, j)
          else
             pivot = self%f(self%kd + 1, j)**2
          end if
