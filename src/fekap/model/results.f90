@@ -6,7 +6,7 @@ module fekap_model_results
    implicit none
    private
 
-   public :: step_result_type, new_step_result, fill_fields_from_nodes
+   public :: step_result_type, new_step_result, fill_fields_from_nodes, has_note
 
    !> Length of a step's note for the listing (fixed-length: gfortran 12 has had
    !> bugs with deferred-length character components of derived types).
@@ -21,7 +21,8 @@ module fekap_model_results
       real(dp) :: residual = 0
       !> Times the step was cut in halves to converge.
       integer :: cuts = 0
-      !> A remark for the listing (a near-singular configuration, rates left out), or empty.
+      !> A remark for the listing (a near-singular configuration, rates left
+      !> out), or empty; left-aligned, so that has_note can tell at once.
       character(len=note_length) :: note = ''
       logical :: has_velocity = .false.
       logical :: has_acceleration = .false.
@@ -41,6 +42,15 @@ module fekap_model_results
    end type step_result_type
 
 contains
+
+   !> Whether a note text (left-aligned, as every note is written) holds a
+   !> note: its first character is not blank. (len_trim would scan all
+   !> note_length characters of an empty note, every step.)
+   pure logical function has_note(note)
+      character(*), intent(in) :: note
+      has_note = len(note) > 0
+      if (has_note) has_note = note(1:1) /= ' '
+   end function has_note
 
    !> Allocate a zeroed result for a model with nnode nodes and nlink links.
    pure subroutine new_step_result(self, nnode, nlink)

@@ -85,14 +85,15 @@ contains
       real(dp), intent(in) :: tk(:), t
       integer, intent(in) :: k
       real(dp), intent(out) :: wq, wv
-      real(dp) :: l, slope
+      real(dp) :: l, slope, r
       integer :: m
       l = 1
       slope = 0
       do m = 1, size(tk)
          if (m == k) cycle
-         l = l*(t - tk(m))/(tk(k) - tk(m))
-         slope = slope + 1/(tk(k) - tk(m))
+         r = 1/(tk(k) - tk(m))
+         l = l*(t - tk(m))*r
+         slope = slope + r
       end do
       wq = (1 - 2*slope*(t - tk(k)))*l**2
       wv = (t - tk(k))*l**2

@@ -9,7 +9,7 @@ module fekap_solver_fem
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type, model_size, dof_rot, predictor_previous, predictor_taylor, &
       & convergence_paper
-   use fekap_model_results, only: step_result_type, note_length
+   use fekap_model_results, only: step_result_type, note_length, has_note
    use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
    use fekap_element_beam, only: beam_resultants
@@ -317,7 +317,7 @@ contains
          ! The listing says why the step was cut (the first and the last rejection).
          write (note, '(a,i0,a)') 'step cut ', self%last_cuts, ' time(s); first rejection:'
          if (allocated(last_reason)) cut_reason = cut_reason//'; last rejection: '//last_reason
-         if (len_trim(self%note) > 0) then
+         if (has_note(self%note)) then
             self%note = trim(note)//' '//cut_reason//'; '//trim(self%note)
          else
             self%note = trim(note)//' '//cut_reason
@@ -1274,7 +1274,7 @@ contains
       self%q = q
       self%t = t
       self%seg_accepted = self%seg
-      self%note = ''
+      if (has_note(self%note)) self%note = ''
       self%has_velocity = .false.
       self%has_acceleration = .false.
       self%counts%steps = self%counts%steps + 1
@@ -1458,7 +1458,7 @@ contains
       type(step_result_type), intent(inout) :: result
       integer :: i, k, dof
       result%t = self%t
-      result%note = self%note
+      if (has_note(self%note) .or. has_note(result%note)) result%note = self%note
       result%has_velocity = self%has_velocity
       result%has_acceleration = self%has_acceleration
       do i = 1, size(self%model%nodes)

@@ -9,7 +9,7 @@ module fekap_solver_run
    use fekap_error, only: error_type, analysis_error, fatal_error
    use fekap_solver_interrupt, only: interrupt_signal
    use fekap_model, only: model_type
-   use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes
+   use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes, has_note
    use fekap_solver_stepper, only: stepper_type, clock_seconds
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
       & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix
@@ -173,7 +173,7 @@ contains
             end if
          end if
          if (units%listing /= no_unit) then
-            if (len_trim(result%note) > 0) call write_listing_note(out%listing, n, trim(result%note))
+            if (has_note(result%note)) call write_listing_note(out%listing, n, trim(result%note))
          end if
          ! c1, read after the step's analysis, serves as the clock here.
          if (c1 - last_flush >= flush_interval) then
