@@ -10,11 +10,13 @@ module classical_models
    use fekap_model_drive_law, only: law_type, new_rate_law, new_harmonic_law
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: stepper_type
+   use fekap_testing, only: check
    implicit none
    private
 
    public :: four_bar_model, appendage_model, double_crank_model, peaucellier_model, slider_crank_model
    public :: prismatic_slider_model, slider_drive_model, quick_return_model, four_bar_exact, slider_crank_exact, run_steps, pi
+   public :: check_branch_jump_cut
 
    real(dp), parameter :: pi = 3.14159265358979323846_dp
 
@@ -339,5 +341,33 @@ contains
          if (allocated(error)) return
       end do
    end subroutine run_steps
+
+   !> Example 1 at dt = 0.5 with the extrapolating predictor landed on the
+   !> other assembly branch (C = (3, -3.873) at t = 1) before the jump check;
+   !> now, with either classical stepper (made from `model`), the step to
+   !> t = 1 is cut, its note names the rejection, and C follows the closed form.
+   subroutine check_branch_jump_cut(stepper, model, error)
+      class(stepper_type), intent(inout) :: stepper
+      type(model_type), intent(in) :: model
+      type(error_type), allocatable, intent(out) :: error
+      type(step_result_type), allocatable :: res(:)
+      real(dp) :: b(2), vb(2), ab(2), c(2), vc(2), ac(2)
+      character(len=24) :: t_text
+      integer :: k
+      call run_steps(stepper, model, res, error)
+      if (allocated(error)) return
+      call check(error, size(res), 3, 'number of results')
+      if (allocated(error)) return
+      do k = 0, ubound(res, 1)
+         call four_bar_exact(res(k)%t, b, vb, ab, c, vc, ac)
+         write (t_text, '(g0)') res(k)%t
+         call check(error, norm2(res(k)%pos(:, 3) - c) < 1.0e-9_dp, 'C on the upper branch at t = '//trim(t_text))
+         if (allocated(error)) return
+      end do
+      call check(error, res(2)%cuts >= 1, 'the step to t = 1 was not cut')
+      if (allocated(error)) return
+      call check(error, index(res(2)%note, 'step cut ') == 1 .and. &
+         & index(res(2)%note, 'assembly-mode jump rejected') > 0, 'note: '//trim(res(2)%note))
+   end subroutine check_branch_jump_cut
 
 end module classical_models

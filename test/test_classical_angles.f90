@@ -10,7 +10,8 @@ module test_classical_angles
       & convergence_default
    use fekap_model_results, only: step_result_type
    use fekap_classical_angles, only: angles_stepper_type, new_angles_stepper
-   use classical_models, only: four_bar_model, appendage_model, slider_crank_model, four_bar_exact, run_steps, pi
+   use classical_models, only: four_bar_model, appendage_model, slider_crank_model, four_bar_exact, run_steps, pi, &
+      & check_branch_jump_cut
    implicit none
    private
    public :: collect_classical_angles
@@ -199,35 +200,18 @@ contains
       call check(error, stepper%counts%velocity_solves, 0, 'velocity solves without velocities')
    end subroutine test_work_counts
 
-   !> Example 1 at dt = 0.5 with the extrapolating predictor landed on the
-   !> other assembly branch (C = (3, -3.873) at t = 1) before the jump check;
-   !> now the step to t = 1 is cut, its note names the rejection, and B and C
-   !> follow the closed form.
+   !> Example 1 at dt = 0.5, extrapolating predictor: the jump to the other
+   !> branch is cut (check_branch_jump_cut).
    subroutine test_branch_jump_cut(error)
       type(error_type), allocatable, intent(out) :: error
       type(model_type) :: model
       type(angles_stepper_type) :: stepper
-      type(step_result_type), allocatable :: res(:)
-      real(dp) :: b(2), vb(2), ab(2), c(2), vc(2), ac(2)
-      integer :: k
       call four_bar_model(model)
       model%analysis%dt = 0.5_dp
       model%analysis%predictor = predictor_extrapolate
       call new_angles_stepper(stepper, model, error)
       if (allocated(error)) return
-      call run_steps(stepper, model, res, error)
-      if (allocated(error)) return
-      call check(error, size(res), 3, 'number of results')
-      if (allocated(error)) return
-      do k = 0, ubound(res, 1)
-         call four_bar_exact(res(k)%t, b, vb, ab, c, vc, ac)
-         call check(error, norm2(res(k)%pos(:, 3) - c) < 1.0e-9_dp, 'C on the upper branch at t = '//real_str(res(k)%t))
-         if (allocated(error)) return
-      end do
-      call check(error, res(2)%cuts >= 1, 'the step to t = 1 was not cut')
-      if (allocated(error)) return
-      call check(error, index(res(2)%note, 'step cut ') == 1 .and. &
-         & index(res(2)%note, 'assembly-mode jump rejected') > 0, 'note: '//trim(res(2)%note))
+      call check_branch_jump_cut(stepper, model, error)
    end subroutine test_branch_jump_cut
 
    !> Iterations per step of Example 1 at dt = 0.025, 0.25, 0.5 (the paper's

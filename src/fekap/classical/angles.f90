@@ -9,24 +9,21 @@
 module fekap_classical_angles
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error, analysis_error
-   use fekap_model, only: model_type, model_size, analysis_type, dof_x, dof_y, dof_rot, convergence_paper, &
-      & predictor_taylor
+   use fekap_model, only: model_type, model_size, dof_x, dof_y, dof_rot, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_model_results, only: step_result_type, new_step_result
-   use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type, is_converged
-   use fekap_classical_stepping, only: history_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text, step_cuts_type, branch_state_type, branch_jump_text, magnitude_ratio, &
-      & divergence_length, int_text
+   use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
+      & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, divergence_length, &
+      & int_text
    implicit none
    private
 
    public :: angles_stepper_type, new_angles_stepper
 
    !> Orientation-angle stepper of a four-bar linkage.
-   type, extends(stepper_type) :: angles_stepper_type
+   type, extends(classical_stepper_type) :: angles_stepper_type
       private
-      type(analysis_type) :: analysis
       type(convergence_type) :: conv
       integer :: nnode = 0, nlink = 0
       !> Nodes A, B, C, D of the loop (indices into model%nodes).
@@ -44,8 +41,6 @@ module fekap_classical_angles
       !> Current theta1 and its rates, and the unknowns d = (theta2, theta3) with theta2', theta3', theta2'', theta3''.
       real(dp) :: theta1(3) = 0
       real(dp) :: d(2) = 0, dd(2) = 0, ddd(2) = 0
-      type(history_type) :: history
-      integer :: step = 0
       !> Names of the crank, coupler and rocker, for messages.
       character(len=64) :: link_name(3) = ''
       !> Model size, the unit of divergence.
@@ -56,7 +51,9 @@ module fekap_classical_angles
       real(dp) :: reference = 0
    contains
       procedure :: start => angles_start
-      procedure :: advance => angles_advance
+      procedure :: try_step
+      procedure :: rates_at
+      procedure :: finish_step
    end type angles_stepper_type
 
 contains
@@ -226,50 +223,11 @@ contains
       call finish_step(self, self%analysis%t_start, 0, result, error)
    end subroutine angles_start
 
-   !> Advance to time t: Newton's method on the loop closure at t, cutting
-   !> the step in halves (at most max_cuts times) when Newton fails or the
-   !> converged configuration is on another assembly branch; then velocities
-   !> and accelerations.
-   subroutine angles_advance(self, t, result, error)
-      class(angles_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t
-      type(step_result_type), intent(inout) :: result
-      type(error_type), allocatable, intent(out) :: error
-      type(step_cuts_type) :: cuts
-      type(error_type), allocatable :: step_error
-      real(dp) :: t_try
-      integer :: iterations, total
-
-      self%step = self%step + 1
-      self%counts%steps = self%counts%steps + 1
-      call cuts%begin(self%history%t(1), t)
-      total = 0
-      do while (self%history%t(1) < t)
-         t_try = cuts%next(self%history%t(1))
-         call try_step(self, t_try, iterations, step_error)
-         total = total + iterations
-         if (allocated(step_error)) then
-            call cuts%reject(step_error, error)
-            if (allocated(error)) return
-            deallocate (step_error)
-            cycle
-         end if
-         if (t_try < t) then
-            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
-            if (self%analysis%predictor == predictor_taylor) call solve_rates(self, step_error)
-            call cuts%grow()
-         end if
-      end do
-      call finish_step(self, t, total, result, error)
-      result%cuts = cuts%cuts
-      result%note = cuts%note()
-   end subroutine angles_advance
-
    !> Newton's method (11)-(13) on the loop closure (1)-(2) at time t from the
    !> predictor, and the branch-jump check; the configuration is accepted
    !> (pushed on the history) only if both succeed.
    subroutine try_step(self, t, iterations, error)
-      type(angles_stepper_type), intent(inout) :: self
+      class(angles_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
@@ -360,6 +318,15 @@ contains
       ! A singular K has no response: zero, which lets the drive increment bound the change.
       call solve2(k, -self%length(1)*n(:, 1), state%response(:, 1), singular)
    end subroutine branch_state
+
+   !> Rates of the accepted configuration at time t (the crank's own rates
+   !> were set with its angle by try_step).
+   subroutine rates_at(self, t, error)
+      class(angles_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(error_type), allocatable, intent(out) :: error
+      call solve_rates(self, error)
+   end subroutine rates_at
 
    !> Rates at the accepted configuration (when asked for) and the step's result.
    subroutine finish_step(self, t, iterations, result, error)

@@ -15,16 +15,15 @@
 !> conditioned as the mechanism moves.
 module fekap_classical_cartesian
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, input_error, analysis_error, error_analysis
-   use fekap_model, only: model_type, model_size, analysis_type, convergence_paper, predictor_taylor
+   use fekap_error, only: error_type, input_error, analysis_error
+   use fekap_model, only: model_type, model_size, convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
-   use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type, is_converged
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
-   use fekap_classical_stepping, only: history_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text, step_cuts_type, branch_state_type, branch_jump_text, magnitude_ratio, &
-      & lu_determinant, divergence_length, int_text
+   use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
+      & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, &
+      & divergence_length, int_text
    implicit none
    private
 
@@ -39,10 +38,9 @@ module fekap_classical_cartesian
    real(dp), parameter :: pivot_tol = 1.0e-13_dp
 
    !> Cartesian-coordinate stepper.
-   type, extends(stepper_type) :: cartesian_stepper_type
+   type, extends(classical_stepper_type) :: cartesian_stepper_type
       private
       type(constraint_system_type) :: system
-      type(analysis_type) :: analysis
       type(convergence_type) :: conv
       integer :: nnode = 0, nlink = 0
       !> The equations solved (all of them unless redundant ones were removed).
@@ -58,8 +56,6 @@ module fekap_classical_cartesian
       real(dp) :: log_rows = 0
       !> 1 for the translation coordinates, the model size for the angles.
       real(dp), allocatable :: column_scale(:)
-      type(history_type) :: history
-      integer :: step = 0
       !> Model size and the shortest link (the unit of translation drives in the jump check).
       real(dp) :: size = 1, shortest_link = 1
       !> Whether the equations solved can change from step to step (redundant
@@ -77,7 +73,9 @@ module fekap_classical_cartesian
       real(dp) :: reference = 0
    contains
       procedure :: start => cartesian_start
-      procedure :: advance => cartesian_advance
+      procedure :: try_step
+      procedure :: rates_at => solve_rates
+      procedure :: finish_step
    end type cartesian_stepper_type
 
 contains
@@ -244,54 +242,11 @@ contains
       call finish_step(self, t, iterations, result, error)
    end subroutine cartesian_start
 
-   !> Advance to time t: Newton's method on the constraint equations at t,
-   !> cutting the step in halves (at most max_cuts times) when Newton fails or
-   !> the converged configuration is on another assembly branch; then
-   !> velocities and accelerations.
-   subroutine cartesian_advance(self, t, result, error)
-      class(cartesian_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t
-      type(step_result_type), intent(inout) :: result
-      type(error_type), allocatable, intent(out) :: error
-      type(step_cuts_type) :: cuts
-      type(error_type), allocatable :: step_error
-      real(dp) :: t_try
-      integer :: iterations, total
-
-      self%step = self%step + 1
-      self%counts%steps = self%counts%steps + 1
-      call cuts%begin(self%history%t(1), t)
-      total = 0
-      do while (self%history%t(1) < t)
-         t_try = cuts%next(self%history%t(1))
-         call try_step(self, t_try, iterations, step_error)
-         total = total + iterations
-         if (allocated(step_error)) then
-            if (step_error%kind /= error_analysis) then
-               call move_alloc(step_error, error)
-               return
-            end if
-            call cuts%reject(step_error, error)
-            if (allocated(error)) return
-            deallocate (step_error)
-            cycle
-         end if
-         if (t_try < t) then
-            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
-            if (self%analysis%predictor == predictor_taylor) call solve_rates(self, t_try, step_error)
-            call cuts%grow()
-         end if
-      end do
-      call finish_step(self, t, total, result, error)
-      result%cuts = cuts%cuts
-      result%note = cuts%note()
-   end subroutine cartesian_advance
-
    !> Newton's method at time t from the predictor, and the branch-jump
    !> check; the configuration is accepted (pushed on the history) only if both
    !> succeed.
    subroutine try_step(self, t, iterations, error)
-      type(cartesian_stepper_type), intent(inout) :: self
+      class(cartesian_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
@@ -512,7 +467,7 @@ contains
 
    !> Rates at the accepted configuration (when asked for) and the step's result.
    subroutine finish_step(self, t, iterations, result, error)
-      type(cartesian_stepper_type), intent(inout) :: self
+      class(cartesian_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       integer, intent(in) :: iterations
       type(step_result_type), intent(inout) :: result
@@ -559,7 +514,7 @@ contains
    !> as the analysis asks for them (zero otherwise); both known feed the
    !> Taylor predictor.
    subroutine solve_rates(self, t, error)
-      type(cartesian_stepper_type), intent(inout) :: self
+      class(cartesian_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: gamma(self%system%m)

@@ -1,19 +1,22 @@
 !> What both constraint-equation methods share around their Newton solves:
 !> the history of converged configurations behind the predictors, the values
 !> of drives relative to the initial configuration, the convergence settings
-!> taken from the analysis, the step cutting and the assembly-mode (branch)
-!> jump check, and the texts of their messages.
+!> taken from the analysis, the step cutting (the advance of both steppers)
+!> and the assembly-mode (branch) jump check, and the texts of their messages.
 module fekap_classical_stepping
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, analysis_error
+   use fekap_error, only: error_type, analysis_error, error_analysis
    use fekap_model, only: analysis_type, predictor_previous, predictor_extrapolate, predictor_taylor
    use fekap_model_drive_law, only: law_type
+   use fekap_model_results, only: step_result_type
+   use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type, extrapolate
    implicit none
    private
 
    public :: history_type, new_history, drive_value, new_step_convergence, real_text, no_convergence_text
    public :: step_cuts_type, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, int_text
+   public :: classical_stepper_type
 
    !> Step cuts (halvings) allowed within one step before it is given up (as in the FEM).
    integer, parameter, public :: max_cuts = 8
@@ -85,7 +88,97 @@ module fekap_classical_stepping
       procedure :: predict => history_predict
    end type history_type
 
+   !> A constraint-equation method as a stepper. Its advance, the step-cut
+   !> loop around the method's Newton solve, is shared; a method supplies the
+   !> solve of one (sub-)step, the rates at an intermediate point of a cut
+   !> step and the step's result.
+   type, abstract, extends(stepper_type) :: classical_stepper_type
+      type(analysis_type) :: analysis
+      !> The accepted configurations (newest first) and their times.
+      type(history_type) :: history
+      !> Steps advanced so far.
+      integer :: step = 0
+   contains
+      procedure :: advance => classical_advance
+      !> Newton at time t from the predictor and the branch-jump check; the
+      !> configuration is pushed on the history only if both succeed.
+      procedure(try_step_interface), deferred :: try_step
+      !> Rates of the accepted configuration at time t (for the Taylor predictor).
+      procedure(rates_at_interface), deferred :: rates_at
+      !> Rates at the accepted configuration (when asked for) and the step's result.
+      procedure(finish_step_interface), deferred :: finish_step
+   end type classical_stepper_type
+
+   abstract interface
+      subroutine try_step_interface(self, t, iterations, error)
+         import :: classical_stepper_type, dp, error_type
+         class(classical_stepper_type), intent(inout) :: self
+         real(dp), intent(in) :: t
+         integer, intent(out) :: iterations
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine try_step_interface
+
+      subroutine rates_at_interface(self, t, error)
+         import :: classical_stepper_type, dp, error_type
+         class(classical_stepper_type), intent(inout) :: self
+         real(dp), intent(in) :: t
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine rates_at_interface
+
+      subroutine finish_step_interface(self, t, iterations, result, error)
+         import :: classical_stepper_type, dp, error_type, step_result_type
+         class(classical_stepper_type), intent(inout) :: self
+         real(dp), intent(in) :: t
+         integer, intent(in) :: iterations
+         type(step_result_type), intent(inout) :: result
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine finish_step_interface
+   end interface
+
 contains
+
+   !> Advance to time t: the method's Newton solve at t, the step cut in
+   !> halves (at most max_cuts times) when Newton fails or the converged
+   !> configuration is on another assembly branch; then velocities and
+   !> accelerations. Errors other than analysis failures end the run at once.
+   subroutine classical_advance(self, t, result, error)
+      class(classical_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      type(step_cuts_type) :: cuts
+      type(error_type), allocatable :: step_error
+      real(dp) :: t_try
+      integer :: iterations, total
+
+      self%step = self%step + 1
+      self%counts%steps = self%counts%steps + 1
+      call cuts%begin(self%history%t(1), t)
+      total = 0
+      do while (self%history%t(1) < t)
+         t_try = cuts%next(self%history%t(1))
+         call self%try_step(t_try, iterations, step_error)
+         total = total + iterations
+         if (allocated(step_error)) then
+            if (step_error%kind /= error_analysis) then
+               call move_alloc(step_error, error)
+               return
+            end if
+            call cuts%reject(step_error, error)
+            if (allocated(error)) return
+            deallocate (step_error)
+            cycle
+         end if
+         if (t_try < t) then
+            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
+            if (self%analysis%predictor == predictor_taylor) call self%rates_at(t_try, step_error)
+            call cuts%grow()
+         end if
+      end do
+      call self%finish_step(t, total, result, error)
+      result%cuts = cuts%cuts
+      result%note = cuts%note()
+   end subroutine classical_advance
 
    !> An empty history for ncoord coordinates.
    pure subroutine new_history(self, ncoord)
