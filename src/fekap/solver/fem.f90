@@ -431,7 +431,7 @@ contains
          ! accepted configuration within tolerance). It does not depend on the predictor.
          scale = 0
          if (self%conv%mode /= convergence_paper .and. self%model%analysis%predictor /= predictor_previous) then
-            call drive_increment_residual(self, t, scale)
+            call drive_increment_residual(self, t, qt, scale)
          end if
          self%factor_current = .false.
          self%accepted_singular = .false.
@@ -458,6 +458,7 @@ contains
             relocations: do pass = 0, size(mesh%slides)*8
                do i = 0, self%model%analysis%max_iter
                   call assemble(self, qt, t, kg_above)
+                  ! The predictor's guard, once per step: it needs the strains of this first assembly.
                   if (self%guard_pending) then
                      self%guard_pending = .false.
                      if (guard_extrapolation(self, t, qt)) call assemble(self, qt, t, kg_above)
@@ -617,17 +618,16 @@ contains
       done = is_converged(self%conv, residual*next/correction, r0, scale, next/estimate_margin)
    end function converged_by_estimate
 
-   !> Norm of -K_fd (q_d(t) - q_d) + (t - t_q) f_ext over the free dofs.
-   subroutine drive_increment_residual(self, t, scale)
+   !> Norm of -K_fd (q_d(t) - q_d) + (t - t_q) f_ext over the free dofs, with
+   !> the driven dofs at t taken from the predictor qt (set_driven's values).
+   subroutine drive_increment_residual(self, t, qt, scale)
       type(fem_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t
+      real(dp), intent(in) :: t, qt(:)
       real(dp), intent(out) :: scale
       real(dp) :: f
       integer :: i
-      associate (law => self%drive_work(:, 1), rate => self%drive_work(:, 2), rate2 => self%drive_work(:, 3), &
-         & dqd => self%drive_work(:, 4), dd => self%mesh%driven_dof)
-         call self%model%drives%law%eval(t, law, rate, rate2)
-         dqd = self%mesh%q0(dd) + (law - self%law0) - self%q(dd)
+      associate (dqd => self%drive_work(:, 4), dd => self%mesh%driven_dof)
+         dqd = qt(dd) - self%q(dd)
          scale = 0
          do i = 1, self%mesh%nfree
             f = -dot_product(self%kfd(i, :), dqd)
@@ -884,17 +884,16 @@ contains
       !> Whether kff holds the factor of the material tangent at qt.
       logical, intent(in) :: factored
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: f, df, ddf, f0, floor, bound, ratio, worst, turn, pivot
+      real(dp) :: floor, bound, ratio, worst, turn, pivot
       integer :: i, j, worst_dof, flip_link(2), flip_node, crossing(3)
       logical :: has_response
       character(len=200) :: msg
       associate (mesh => self%mesh, eqd => self%mesh%eq_dof, dq_new => self%work, dq_old => self%r, &
          & resp => self%jump_response_new, dd => self%drive_work(:, 4))
+         ! The drive increment over the step (set_driven put it on the driven dofs).
          floor = 0
          do j = 1, mesh%ndriven
-            call self%model%drives(j)%law%eval(t, f, df, ddf)
-            call self%model%drives(j)%law%eval(self%t, f0, df, ddf)
-            dd(j) = f - f0
+            dd(j) = qt(mesh%driven_dof(j)) - self%q(mesh%driven_dof(j))
             if (mesh%dof_kind(mesh%driven_dof(j)) == dof_rot) then
                floor = max(floor, abs(dd(j)))
             else
