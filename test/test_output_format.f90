@@ -43,8 +43,7 @@ contains
    subroutine test_real_text(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: x, u
-      integer :: k, i, seed_size
-      integer, allocatable :: seed(:)
+      integer :: k, i
       ! Zero, the extremes, subnormals and exact integers.
       call check_real(error, 0.0_dp)
       call check_real(error, -0.0_dp)
@@ -73,10 +72,7 @@ contains
          if (allocated(error)) return
       end do
       ! Random values over 1e-20 .. 1e40, both signs.
-      call random_seed(size=seed_size)
-      allocate (seed(seed_size))
-      seed = 20261121
-      call random_seed(put=seed)
+      call seed_random(20261121)
       do i = 1, 20000
          call random_number(u)
          call random_number(x)
@@ -182,12 +178,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       integer(i8) :: bits
       real(dp) :: u(3)
-      integer :: i, seed_size
-      integer, allocatable :: seed(:)
-      call random_seed(size=seed_size)
-      allocate (seed(seed_size))
-      seed = 1987
-      call random_seed(put=seed)
+      integer :: i
+      call seed_random(1987)
       do i = 1, 20000
          call random_number(u)
          bits = ior(shiftl(int(u(1)*2.0_dp**31, i8), 32), int(u(2)*2.0_dp**32, i8))
@@ -228,5 +220,15 @@ contains
          if (allocated(error)) return
       end do
    end subroutine test_append_es_ties
+
+   !> Seed the intrinsic generator with one value (reproducible sequences).
+   subroutine seed_random(value)
+      integer, intent(in) :: value
+      integer :: seed_size
+      integer, allocatable :: seed(:)
+      call random_seed(size=seed_size)
+      allocate (seed(seed_size), source=value)
+      call random_seed(put=seed)
+   end subroutine seed_random
 
 end module test_output_format
