@@ -1,7 +1,8 @@
 !> Tests of fekap_assembly_band: the in-house narrow-band U^T D U factor and
 !> solve against LAPACK (dpbtrf/dpbtrs) and against A x = b, for every
-!> half-bandwidth up to a little past narrow_band; the band matrix's choice of
-!> solver, its LU fallback and its dense mode.
+!> half-bandwidth up to a little past narrow_band, over full bands, bands with
+!> zeros inside and random envelopes; the band matrix's envelope, its choice
+!> of solver, its LU fallback and its dense mode.
 module test_assembly_band
    use fekap_kinds, only: dp
    use fekap_testing, only: unittest_type, new_unittest, check, error_type, next_random
@@ -19,6 +20,7 @@ contains
    subroutine collect_assembly_band(tests)
       type(unittest_type), allocatable, intent(out) :: tests(:)
       tests = [ &
+         & new_unittest('new_band_matrix', test_new), &
          & new_unittest('band_ldlt', test_ldlt), &
          & new_unittest('band_ldlt_not_positive_definite', test_not_positive_definite), &
          & new_unittest('band_ldlt_solve', test_ldlt_solve), &
@@ -29,21 +31,29 @@ contains
 
    !> A random symmetric positive definite n x n matrix of half-bandwidth kd
    !> in upper band storage (off-diagonal entries in [-1, 1], the diagonal
-   !> dominant by a random margin); with `indefinite`, A(j, j) of that row
-   !> made negative, so that the Cholesky factorisation stops there; with
-   !> `sparse`, about half the entries inside the band zero.
-   subroutine random_band(state, n, kd, a, indefinite, sparse)
+   !> dominant by a random margin) and its envelope top (the band, or with
+   !> `envelope` a random first row of each column, the entries above it zero);
+   !> with `indefinite`, A(j, j) of that row made negative, so that the
+   !> Cholesky factorisation stops there; with `sparse`, about half the
+   !> entries inside the envelope zero.
+   subroutine random_band(state, n, kd, a, top, indefinite, sparse, envelope)
       integer, intent(inout) :: state
       integer, intent(in) :: n, kd
       real(dp), allocatable, intent(out) :: a(:, :)
+      integer, allocatable, intent(out) :: top(:)
       integer, intent(in), optional :: indefinite
-      logical, intent(in), optional :: sparse
+      logical, intent(in), optional :: sparse, envelope
       real(dp) :: row(n)
       integer :: i, j
       allocate (a(kd + 1, n), source=0.0_dp)
+      allocate (top(n))
       row = 0
       do j = 1, n
-         do i = max(1, j - kd), j - 1
+         top(j) = max(1, j - kd)
+         if (present(envelope)) then
+            if (envelope) top(j) = top(j) + int(next_random(state)*(j - top(j) + 1))
+         end if
+         do i = top(j), j - 1
             a(kd + 1 + i - j, j) = 2*next_random(state) - 1
             if (present(sparse)) then
                if (sparse .and. next_random(state) < 0.5_dp) a(kd + 1 + i - j, j) = 0
@@ -95,16 +105,16 @@ contains
       end do
    end function random_columns
 
-   !> The band matrix type holding a (upper band storage) through its add.
-   subroutine band_from(a, kd, mat, dense)
+   !> The band matrix type holding a (upper band storage, envelope top) through its add.
+   subroutine band_from(a, kd, top, mat, dense)
       real(dp), intent(in) :: a(:, :)
-      integer, intent(in) :: kd
+      integer, intent(in) :: kd, top(:)
       type(band_matrix_type), intent(out) :: mat
       logical, intent(in) :: dense
       integer :: i, j
-      call new_band_matrix(mat, size(a, 2), kd, dense)
+      call new_band_matrix(mat, size(a, 2), kd, dense, top)
       do j = 1, size(a, 2)
-         do i = max(1, j - kd), j
+         do i = top(j), j
             call mat%add(i, j, a(kd + 1 + i - j, j))
             ! The lower triangle is ignored.
             if (i < j) call mat%add(j, i, 1.0e30_dp)
@@ -112,27 +122,51 @@ contains
       end do
    end subroutine band_from
 
+   !> The envelope of a new band matrix: the band by default, the given one
+   !> where it lies inside the band, clamped to the band (and to the
+   !> diagonal) where it does not.
+   subroutine test_new(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(band_matrix_type) :: mat
+      integer :: j
+      call new_band_matrix(mat, 6, 2)
+      call check(error, all(mat%top == [(max(1, j - 2), j = 1, 6)]), 'default: the band')
+      if (allocated(error)) return
+      call new_band_matrix(mat, 6, 2, top=[1, 1, 3, 2, 5, 4])
+      call check(error, all(mat%top == [1, 1, 3, 2, 5, 4]), 'inside the band: as given')
+      if (allocated(error)) return
+      call new_band_matrix(mat, 6, 2, top=[0, 1, 1, 7, 1, 6])
+      call check(error, all(mat%top == [1, 1, 1, 4, 3, 6]), 'outside: clamped to the band and the diagonal')
+      if (allocated(error)) return
+      call check(error, size(mat%a, 1), 3, 'band storage rows')
+      call check(error, size(mat%f, 1), 7, 'factor storage rows (room for the LU fallback)')
+   end subroutine test_new
+
    !> The factor of band_ldlt is dpbtrf's without the square roots (D = the
    !> Cholesky diagonal squared, U = the Cholesky rows over their diagonal) to
-   !> round-off, also for bands with zeros inside (which both skip).
+   !> round-off, for full bands, bands with zeros inside and random envelopes
+   !> (dpbtrf's factor is zero above the envelope too).
    subroutine test_ldlt(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: a(:, :), f(:, :), g(:, :), recip(:)
-      integer :: state, kd, in, n, info, info_lapack, is
+      integer, allocatable :: top(:)
+      integer :: state, kd, in, n, info, info_lapack, kind, m
+      character(len=12), parameter :: kinds(3) = [character(len=12) :: '', ', sparse', ', envelope']
       character(len=64) :: label
       state = 2024
+      m = size(orders) + 2
       do kd = 0, narrow_band + 2
-         do in = 1, 2*(size(orders) + 2)
-            is = (in - 1)/(size(orders) + 2)
-            n = order(in - is*(size(orders) + 2), kd)
-            call random_band(state, n, kd, a, sparse=is == 1)
+         do in = 1, 3*m
+            kind = (in - 1)/m + 1
+            n = order(in - (kind - 1)*m, kd)
+            call random_band(state, n, kd, a, top, sparse=kind == 2, envelope=kind == 3)
             f = a
             recip = spread(0.0_dp, 1, n)
-            call band_ldlt(f, n, kd, info, recip)
+            call band_ldlt(f, n, kd, top, info, recip)
             g = a
             call dpbtrf('U', n, kd, g, kd + 1, info_lapack)
             g = ldlt_of_cholesky(g, kd)
-            write (label, '(a,i0,a,i0,a)') 'n = ', n, ', kd = ', kd, trim(merge(', sparse', '        ', is == 1))
+            write (label, '(a,i0,a,i0,a)') 'n = ', n, ', kd = ', kd, trim(kinds(kind))
             call check(error, info, 0, 'info, '//trim(label))
             call check(error, info_lapack, 0, 'LAPACK info, '//trim(label))
             call check(error, maxval(abs(f - g))/maxval(abs(g)), 0.0_dp, 'factor vs dpbtrf, '//trim(label), &
@@ -165,16 +199,17 @@ contains
    subroutine test_not_positive_definite(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: a(:, :), f(:, :), recip(:)
+      integer, allocatable :: top(:)
       integer :: state, kd, n, bad, info, info_lapack
       character(len=64) :: label
       state = 99
       do kd = 0, narrow_band + 2, 3
          n = kd + 12
          do bad = 1, n, 5
-            call random_band(state, n, kd, a, indefinite=bad)
+            call random_band(state, n, kd, a, top, indefinite=bad, envelope=mod(bad, 2) == 0)
             f = a
             recip = spread(0.0_dp, 1, n)
-            call band_ldlt(f, n, kd, info, recip)
+            call band_ldlt(f, n, kd, top, info, recip)
             write (label, '(a,i0,a,i0,a,i0)') 'n = ', n, ', kd = ', kd, ', negative pivot at ', bad
             call check(error, info, bad, trim(label))
             f = a
@@ -184,37 +219,42 @@ contains
          end do
       end do
       ! A zero pivot is not positive either.
-      call random_band(state, 5, 2, a)
+      call random_band(state, 5, 2, a, top)
       a(3, 1) = 0
       recip = spread(0.0_dp, 1, 5)
-      call band_ldlt(a, 5, 2, info, recip)
+      call band_ldlt(a, 5, 2, top, info, recip)
       call check(error, info, 1, 'zero pivot')
    end subroutine test_not_positive_definite
 
-   !> band_ldlt_solve with 1 and 3 right-hand sides: A x = b to round-off,
-   !> and the same x as dpbtrs with dpbtrf's factor.
+   !> band_ldlt_solve with 1 and 3 right-hand sides, over full bands and
+   !> random envelopes: A x = b to round-off, and the same x as dpbtrs with
+   !> dpbtrf's factor.
    subroutine test_ldlt_solve(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: a(:, :), f(:, :), g(:, :), b(:, :), x(:, :), xl(:, :), recip(:)
+      integer, allocatable :: top(:)
       integer :: state, kd, in, n, nrhs, info
-      character(len=64) :: label
+      logical :: envelope
+      character(len=80) :: label
       state = 7
       do kd = 0, narrow_band + 2
          do in = 1, size(orders) + 2
             n = order(in, kd)
-            do nrhs = 1, 3, 2
-               call random_band(state, n, kd, a)
+            do nrhs = 1, 3
+               envelope = nrhs == 2
+               call random_band(state, n, kd, a, top, envelope=envelope)
                f = a
                recip = spread(0.0_dp, 1, n)
-               call band_ldlt(f, n, kd, info, recip)
+               call band_ldlt(f, n, kd, top, info, recip)
                b = random_columns(state, n, nrhs)
                x = b
-               call band_ldlt_solve(f, recip, n, kd, x)
+               call band_ldlt_solve(f, recip, top, n, kd, x)
                g = a
                call dpbtrf('U', n, kd, g, kd + 1, info)
                xl = b
                call dpbtrs('U', n, kd, nrhs, g, kd + 1, xl, n, info)
-               write (label, '(a,i0,a,i0,a,i0)') 'n = ', n, ', kd = ', kd, ', columns ', nrhs
+               write (label, '(a,i0,a,i0,a,i0,a)') 'n = ', n, ', kd = ', kd, ', columns ', nrhs, &
+                  & trim(merge(', envelope', '          ', envelope))
                call check(error, maxval(abs(band_times(a, kd, x) - b))/(maxval(abs(a))*maxval(abs(x))), 0.0_dp, &
                   & 'residual, '//trim(label), abs=1.0e-14_dp)
                call check(error, maxval(abs(x - xl))/maxval(abs(xl)), 0.0_dp, 'vs dpbtrs, '//trim(label), &
@@ -233,14 +273,15 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(band_matrix_type) :: mat
       real(dp), allocatable :: a(:, :), g(:, :)
+      integer, allocatable :: top(:)
       integer :: state, kd, n, info, info_lapack
       character(len=64) :: label
       state = 555
       do kd = max(0, narrow_band - 2), narrow_band + 2
          n = 3*kd + 5
          write (label, '(a,i0,a,i0)') 'n = ', n, ', kd = ', kd
-         call random_band(state, n, kd, a)
-         call band_from(a, kd, mat, dense=.false.)
+         call random_band(state, n, kd, a, top, envelope=mod(kd, 2) == 0)
+         call band_from(a, kd, top, mat, dense=.false.)
          call mat%factor(info)
          g = a
          call dpbtrf('U', n, kd, g, kd + 1, info_lapack)
@@ -250,12 +291,12 @@ contains
          call check(error, maxval(abs(mat%f(1:kd + 1, :) - g))/maxval(abs(g)), 0.0_dp, &
             & 'factor vs dpbtrf, '//trim(label), abs=1.0e-13_dp)
          call check(error, mat%pivot_ratio() > 0, 'pivot ratio, '//trim(label))
-         call random_band(state, n, kd, a, indefinite=n/2)
-         call band_from(a, kd, mat, dense=.false.)
+         call random_band(state, n, kd, a, top, indefinite=n/2, envelope=mod(kd, 2) == 0)
+         call band_from(a, kd, top, mat, dense=.false.)
          call mat%factor(info)
          call check(error, info, 0, 'LU info, '//trim(label))
          call check(error, mat%is_lu, 'LU fallback, '//trim(label))
-         call band_from(a, kd, mat, dense=.true.)
+         call band_from(a, kd, top, mat, dense=.true.)
          call mat%factor(info)
          call check(error, info, 0, 'dense info, '//trim(label))
          call check(error, mat%is_lu, 'dense LU, '//trim(label))
@@ -269,6 +310,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(band_matrix_type) :: mat
       real(dp), allocatable :: a(:, :), b(:, :), x(:, :)
+      integer, allocatable :: top(:)
       integer :: state, kd, n, info, nrhs, path
       character(len=80) :: label
       character(len=8), parameter :: paths(3) = [character(len=8) :: 'Cholesky', 'band LU', 'dense LU']
@@ -278,11 +320,11 @@ contains
          do path = 1, 3
             do nrhs = 1, 3, 2
                if (path == 1) then
-                  call random_band(state, n, kd, a)
+                  call random_band(state, n, kd, a, top, envelope=nrhs == 3)
                else
-                  call random_band(state, n, kd, a, indefinite=n/2)
+                  call random_band(state, n, kd, a, top, indefinite=n/2, envelope=nrhs == 3)
                end if
-               call band_from(a, kd, mat, dense=path == 3)
+               call band_from(a, kd, top, mat, dense=path == 3)
                call mat%factor(info)
                b = random_columns(state, n, nrhs)
                x = b

@@ -6,19 +6,24 @@
 !> Half-bandwidths up to `narrow_band` are factored by the in-house loops
 !> band_ldlt and band_ldlt_solve below, the square-root-free Cholesky
 !> A = U^T D U (U unit upper triangular, in the upper band storage, D on its
-!> diagonal); wider bands by LAPACK dpbtrf/dpbtrs (A = U^T U). The loops exist
-!> because LAPACK makes BLAS calls per column (dscal and dsyr in dpbtf2, two
-!> dtbsv per right-hand side), and for a small model (Example 1: 9 equations,
-!> kd = 5) that overhead costs as much as the arithmetic. Such a narrow
-!> factorisation or solve is a chain of dependent operations, row after row;
-!> without the square root and with a unit diagonal the chain is shorter:
-!> on a 2.1 GHz Xeon with the reference BLAS, factor 0.31 us (dpbtrf), 0.22
-!> (dpbtf2's loops), 0.16-0.18 (U^T D U); solve 0.20 (dpbtrs), 0.11-0.13
-!> (dpbtrs's sweeps as loops). With the reference BLAS the loops stay faster up
-!> to kd of about 100, but above kd = 32 dpbtrf switches to its blocked
-!> algorithm, whose level-3 BLAS an optimised BLAS makes much faster. So
-!> narrow_band = 32: every model in decks/ and the scissor lifts (kd = 12)
-!> take the loops.
+!> diagonal) in Crout's form within each column's envelope (profile, as
+!> FEAP's datri); wider bands by LAPACK dpbtrf/dpbtrs (A = U^T U). The loops
+!> exist because LAPACK makes BLAS calls per column (dscal and dsyr in
+!> dpbtf2, two dtbsv per right-hand side), and for a small model (Example 1:
+!> 9 equations, kd = 5) that overhead costs as much as the arithmetic. Such a
+!> narrow factorisation or solve is a chain of dependent operations, row
+!> after row; without the square root, with a unit diagonal, with the sums of
+!> Crout's form and within the envelope (21 entries above the diagonal in
+!> Example 1 instead of the band's 30) the chain is shorter. On a 2.1 GHz
+!> Xeon with the reference BLAS, Example 1's tangent, per call in loops of
+!> 2 million: factor 0.31 us (dpbtrf), 0.22 (dpbtf2's loops), 0.22-0.26
+!> (U^T D U in dpbtf2's right-looking order over the band), 0.12-0.18 (Crout
+!> within the envelope); solve 0.20 (dpbtrs), 0.15 (over the band), 0.06-0.10
+!> (within the envelope). With the reference BLAS the
+!> loops stay faster up to kd of about 100, but above kd = 32 dpbtrf switches
+!> to its blocked algorithm, whose level-3 BLAS an optimised BLAS makes much
+!> faster. So narrow_band = 32: every model in decks/ and the scissor lifts
+!> (kd = 12) take the loops.
 !>
 !> A matrix made with `dense=.true.` keeps the same band assembly storage but
 !> factors and solves the matrix as a full n x n array with dgetrf/dgetrs: a
@@ -56,6 +61,9 @@ module fekap_assembly_band
       real(dp), allocatable :: diag(:)
       !> 1 / D(j) of an in-house factor (band_ldlt_solve).
       real(dp), allocatable :: recip(:)
+      !> Envelope: the first row of column j that may be nonzero (j - kd by
+      !> default). Entries above it must stay zero; the in-house loops skip them.
+      integer, allocatable :: top(:)
    contains
       procedure :: zero => band_zero
       procedure :: add => band_add
@@ -67,11 +75,15 @@ module fekap_assembly_band
 contains
 
    !> Allocate an n x n band matrix of half-bandwidth kd (all storage, once).
-   pure subroutine new_band_matrix(self, n, kd, dense)
+   pure subroutine new_band_matrix(self, n, kd, dense, top)
       type(band_matrix_type), intent(out) :: self
       integer, intent(in) :: n, kd
       !> Factor as a full matrix with dgetrf/dgetrs (default .false.).
       logical, intent(in), optional :: dense
+      !> The envelope (first row of each column that the assembly may fill),
+      !> within the band; default the band itself, max(1, j - kd).
+      integer, intent(in), optional :: top(:)
+      integer :: j
       self%n = n
       self%kd = kd
       if (present(dense)) self%dense = dense
@@ -82,6 +94,11 @@ contains
       end if
       allocate (self%ipiv(n), source=0)
       allocate (self%diag(n), self%recip(n), source=0.0_dp)
+      allocate (self%top(n))
+      do j = 1, n
+         self%top(j) = max(1, j - kd)
+         if (present(top)) self%top(j) = min(j, max(self%top(j), top(j)))
+      end do
    end subroutine new_band_matrix
 
    pure subroutine band_zero(self)
@@ -115,7 +132,7 @@ contains
       self%f(1:kd + 1, :) = self%a
       self%is_lu = .false.
       if (kd <= narrow_band) then
-         call band_ldlt(self%f, self%n, kd, info, self%recip)
+         call band_ldlt(self%f, self%n, kd, self%top, info, self%recip)
       else
          call dpbtrf('U', self%n, kd, self%f, ld, info)
       end if
@@ -165,7 +182,7 @@ contains
          call dgbtrs('N', self%n, self%kd, self%kd, size(b, 2), self%f, size(self%f, 1), self%ipiv, &
             & b, size(b, 1), info)
       else if (self%kd <= narrow_band) then
-         call band_ldlt_solve(self%f, self%recip, self%n, self%kd, b)
+         call band_ldlt_solve(self%f, self%recip, self%top, self%n, self%kd, b)
       else
          call dpbtrs('U', self%n, self%kd, size(b, 2), self%f, size(self%f, 1), b, size(b, 1), info)
       end if
@@ -173,73 +190,92 @@ contains
 
    !> Square-root-free Cholesky factorisation A = U^T D U of the symmetric
    !> positive definite band matrix in f(1:kd+1, 1:n) (upper band, A(i, j) at
-   !> f(kd + 1 + i - j, j)), in place: U(j, j+q) (unit diagonal) at
-   !> f(kd + 1 - q, j + q), D(j) at f(kd + 1, j), and 1/D(j) in recip. The
-   !> operations of LAPACK's dpbtf2 without its square roots (D(j) is
-   !> U_Cholesky(j, j)**2). info = 0, or the first j at which the pivot D(j)
-   !> is not positive (f is then partly factored), as from dpbtrf.
-   pure subroutine band_ldlt(f, n, kd, info, recip)
+   !> f(kd + 1 + i - j, j)) whose column j is zero above row top(j), its
+   !> envelope (j - kd <= top(j) <= j); in place: U(i, j) (unit diagonal) at
+   !> f(kd + 1 + i - j, j), D(j) at f(kd + 1, j), and 1/D(j) in recip. U keeps
+   !> A's envelope (fill-in stays below the first nonzero of each column).
+   !> Crout's column-by-column form, as FEAP's datri and Bathe's COLSOL: with
+   !> G = D U, G(i, j) = A(i, j) - sum_k U(k, i) G(k, j), U(i, j) = G(i, j) /
+   !> D(i) and D(j) = A(j, j) - sum_i G(i, j) U(i, j), sums over the envelopes:
+   !> each sum runs down two columns in memory order, and its products are
+   !> independent, so a narrow factorisation is fewer dependent operations in
+   !> a row than in dpbtf2's right-looking form. info = 0, or the first j at
+   !> which the pivot D(j) is not positive (f is then partly factored), as from dpbtrf.
+   pure subroutine band_ldlt(f, n, kd, top, info, recip)
       !> The band on entry (leading dimension at least kd + 1), U and D on return.
       real(dp), contiguous, intent(inout) :: f(:, :)
       integer, intent(in) :: n, kd
+      !> First row of each column's envelope.
+      integer, intent(in) :: top(:)
       integer, intent(out) :: info
       !> 1 / D(j), for band_ldlt_solve.
       real(dp), intent(out) :: recip(:)
-      real(dp) :: rd, t, row(kd)
-      integer :: j, kn, p, q
+      real(dp) :: d, g, s
+      integer :: i, j, k, oi, oj
       info = 0
       do j = 1, n
-         if (.not. f(kd + 1, j) > 0) then
+         ! Column j of A at f(oj + i, j), of column i at f(oi + k, i).
+         oj = kd + 1 - j
+         do i = top(j) + 1, j - 1
+            oi = kd + 1 - i
+            s = 0
+            ! The loops of this module run a few times each (kd = 5 in Example 1):
+            ! vectorised, their set-up costs more than it saves (factor and solve
+            ! 25-40 % slower, measured).
+            !GCC$ novector
+            do k = max(top(i), top(j)), i - 1
+               s = s + f(oi + k, i)*f(oj + k, j)
+            end do
+            f(oj + i, j) = f(oj + i, j) - s
+         end do
+         d = f(kd + 1, j)
+         !GCC$ novector
+         do i = top(j), j - 1
+            g = f(oj + i, j)
+            f(oj + i, j) = g*recip(i)
+            d = d - g*f(oj + i, j)
+         end do
+         if (.not. d > 0) then
             info = j
             return
          end if
-         rd = 1/f(kd + 1, j)
-         recip(j) = rd
-         kn = min(kd, n - j)
-         ! Row j of A right of the diagonal, kept, and row j of U = it / D(j).
-         do q = 1, kn
-            row(q) = f(kd + 1 - q, j + q)
-            f(kd + 1 - q, j + q) = rd*row(q)
-         end do
-         ! Trailing block A(j+p, j+q) -= A(j, j+p) U(j, j+q), p <= q, skipping
-         ! the zeros of row j (a band is often sparse inside).
-         do q = 1, kn
-            t = -f(kd + 1 - q, j + q)
-            if (t == 0) cycle
-            do p = 1, q
-               f(kd + 1 + p - q, j + q) = f(kd + 1 + p - q, j + q) + row(p)*t
-            end do
-         end do
+         f(kd + 1, j) = d
+         recip(j) = 1/d
       end do
    end subroutine band_ldlt
 
    !> Solve U^T D U x = b in place with the factor of band_ldlt, column by
-   !> column of b: U^T y = b and U x = D^-1 y by columns of U. With U's unit
-   !> diagonal each sweep is a chain of one multiply-add per row, and D^-1 is
-   !> a product by the kept reciprocals, off the chain.
-   pure subroutine band_ldlt_solve(f, recip, n, kd, b)
+   !> column of b: U^T y = b by dot products down the columns of U, then
+   !> U x = D^-1 y by columns of U, both within the envelope top. With U's
+   !> unit diagonal D^-1 is a product by the kept reciprocals, off the chain.
+   pure subroutine band_ldlt_solve(f, recip, top, n, kd, b)
       real(dp), contiguous, intent(in) :: f(:, :)
       !> 1 / D(j), from band_ldlt.
       real(dp), intent(in) :: recip(:)
+      !> First row of each column's envelope, as given to band_ldlt.
+      integer, intent(in) :: top(:)
       integer, intent(in) :: n, kd
       !> Right-hand sides on entry (columns), solutions on return.
       real(dp), contiguous, intent(inout) :: b(:, :)
-      real(dp) :: t
-      integer :: j, i, k
+      real(dp) :: s, t
+      integer :: i, j, k, oj
       do k = 1, size(b, 2)
-         ! U^T y = b: y(j) final, then taken off b(j+1:j+kd) with row j of U.
          do j = 1, n
-            t = b(j, k)
-            do i = j + 1, min(n, j + kd)
-               b(i, k) = b(i, k) - f(kd + 1 + j - i, i)*t
+            oj = kd + 1 - j
+            s = 0
+            !GCC$ novector
+            do i = top(j), j - 1
+               s = s + f(oj + i, j)*b(i, k)
             end do
+            b(j, k) = b(j, k) - s
          end do
          b(1:n, k) = b(1:n, k)*recip(1:n)
-         ! U x = z: x(j) final, then taken off z(j-kd:j-1) with column j of U.
          do j = n, 1, -1
+            oj = kd + 1 - j
             t = b(j, k)
-            do i = max(1, j - kd), j - 1
-               b(i, k) = b(i, k) - f(kd + 1 + i - j, j)*t
+            !GCC$ novector
+            do i = top(j), j - 1
+               b(i, k) = b(i, k) - f(oj + i, j)*t
             end do
          end do
       end do

@@ -48,6 +48,9 @@ module fekap_assembly_mesh
       integer :: ndriven = 0
       !> Half-bandwidth of the free-free tangent in equation order.
       integer :: kd = 0
+      !> (nfree): envelope of the free-free tangent, the least equation that
+      !> column j couples to (j - kd <= envelope(j) <= j); see new_band_matrix.
+      integer, allocatable :: envelope(:)
       !> (2, npoint): initial coordinates of each point.
       real(dp), allocatable :: x0(:, :)
       !> (2, npoint): x and y dof of each point.
@@ -305,7 +308,7 @@ contains
    end subroutine set_status
 
    !> Equation numbers of the free dofs in reverse Cuthill-McKee order, and the
-   !> half-bandwidth that results.
+   !> half-bandwidth and envelope that result.
    subroutine number_equations(self)
       type(mesh_type), intent(inout) :: self
       integer, allocatable :: free_index(:), deg(:), adj_start(:), adj(:), fill(:), order(:), level(:)
@@ -408,10 +411,16 @@ contains
       end do
 
       self%kd = 0
+      self%envelope = [(k, k = 1, nf)]
       do e = 1, size(group_start) - 1
          associate (g => group_dof(group_start(e):group_start(e + 1) - 1))
             associate (eqs => pack(self%eq(g), self%eq(g) > 0))
-               if (size(eqs) > 1) self%kd = max(self%kd, maxval(eqs) - minval(eqs))
+               if (size(eqs) > 1) then
+                  self%kd = max(self%kd, maxval(eqs) - minval(eqs))
+                  do k = 1, size(eqs)
+                     self%envelope(eqs(k)) = min(self%envelope(eqs(k)), minval(eqs))
+                  end do
+               end if
             end associate
          end associate
       end do

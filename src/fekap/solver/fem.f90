@@ -208,7 +208,8 @@ contains
       self%model = model
       call new_mesh(self%mesh, model)
       associate (n => self%mesh%ndof, nf => self%mesh%nfree, nd => self%mesh%ndriven)
-         call new_band_matrix(self%kff, nf, self%mesh%kd, dense=model%analysis%solver == solver_dense)
+         call new_band_matrix(self%kff, nf, self%mesh%kd, dense=model%analysis%solver == solver_dense, &
+            & top=self%mesh%envelope)
          allocate (self%kfd(nf, nd), self%rhs(nf, 1), self%law0(nd), self%drive_work(nd, 4))
          allocate (self%q(n), self%v(n), self%a(n), self%r(n), self%qt(n), self%work(n), source=0.0_dp)
          allocate (self%hist(n, history), self%thist(history), self%hist_velocity(n, history), source=0.0_dp)
