@@ -5,6 +5,7 @@ program tester
    use test_element_beam, only: collect_element_beam
    use test_assembly_band, only: collect_assembly_band
    use test_assembly_mesh, only: collect_assembly_mesh
+   use test_assembly_assemble, only: collect_assembly_assemble
    use test_solver_fem, only: collect_solver_fem
    use test_solver_convergence, only: collect_solver_convergence
    use test_solver_stepper, only: collect_solver_stepper
@@ -40,6 +41,7 @@ program tester
    call run('element_beam', collect_element_beam)
    call run('assembly_band', collect_assembly_band)
    call run('assembly_mesh', collect_assembly_mesh)
+   call run('assembly_assemble', collect_assembly_assemble)
    call run('solver_convergence', collect_solver_convergence)
    call run('solver_stepper', collect_solver_stepper)
    call run('solver_fem', collect_solver_fem)

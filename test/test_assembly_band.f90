@@ -160,9 +160,11 @@ contains
             kind = (in - 1)/m + 1
             n = order(in - (kind - 1)*m, kd)
             call random_band(state, n, kd, a, top, sparse=kind == 2, envelope=kind == 3)
-            f = a
+            ! Nonzero above the envelope, where band_ldlt leaves f as it is.
+            f = spread(spread(7.0_dp, 1, kd + 1), 2, n)
             recip = spread(0.0_dp, 1, n)
-            call band_ldlt(f, n, kd, top, info, recip)
+            call band_ldlt(a, f, n, kd, top, info, recip)
+            call clear_above(f, kd, top)
             g = a
             call dpbtrf('U', n, kd, g, kd + 1, info_lapack)
             g = ldlt_of_cholesky(g, kd)
@@ -177,6 +179,16 @@ contains
          end do
       end do
    end subroutine test_ldlt
+
+   !> Zero the entries of f above the envelope top (band storage).
+   pure subroutine clear_above(f, kd, top)
+      real(dp), intent(inout) :: f(:, :)
+      integer, intent(in) :: kd, top(:)
+      integer :: j
+      do j = 1, size(f, 2)
+         f(1:kd + top(j) - j, j) = 0
+      end do
+   end subroutine clear_above
 
    !> The U^T D U factor (band storage) of a Cholesky factor U_c^T U_c:
    !> D(j) = U_c(j, j)**2, U(j, j+q) = U_c(j, j+q) / U_c(j, j).
@@ -209,7 +221,7 @@ contains
             call random_band(state, n, kd, a, top, indefinite=bad, envelope=mod(bad, 2) == 0)
             f = a
             recip = spread(0.0_dp, 1, n)
-            call band_ldlt(f, n, kd, top, info, recip)
+            call band_ldlt(a, f, n, kd, top, info, recip)
             write (label, '(a,i0,a,i0,a,i0)') 'n = ', n, ', kd = ', kd, ', negative pivot at ', bad
             call check(error, info, bad, trim(label))
             f = a
@@ -221,8 +233,9 @@ contains
       ! A zero pivot is not positive either.
       call random_band(state, 5, 2, a, top)
       a(3, 1) = 0
+      f = a
       recip = spread(0.0_dp, 1, 5)
-      call band_ldlt(a, 5, 2, top, info, recip)
+      call band_ldlt(a, f, 5, 2, top, info, recip)
       call check(error, info, 1, 'zero pivot')
    end subroutine test_not_positive_definite
 
@@ -243,9 +256,9 @@ contains
             do nrhs = 1, 3
                envelope = nrhs == 2
                call random_band(state, n, kd, a, top, envelope=envelope)
-               f = a
+               f = spread(spread(7.0_dp, 1, kd + 1), 2, n)
                recip = spread(0.0_dp, 1, n)
-               call band_ldlt(f, n, kd, top, info, recip)
+               call band_ldlt(a, f, n, kd, top, info, recip)
                b = random_columns(state, n, nrhs)
                x = b
                call band_ldlt_solve(f, recip, top, n, kd, x)

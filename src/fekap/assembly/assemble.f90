@@ -51,7 +51,7 @@ contains
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
       type(band_matrix_type), intent(inout) :: kff
-      real(dp), intent(out) :: kfd(:, :)
+      real(dp), contiguous, intent(out) :: kfd(:, :)
       real(dp), intent(in), optional :: geometric_above
       real(dp), intent(out) :: strain
       integer, intent(out) :: element
@@ -75,24 +75,26 @@ contains
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do
          call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), mesh%scatter_count(2, e), ke, &
-            & kff, kfd)
+            & kff%a, kfd)
       end do
       call add_contact(mesh, q, seg, r, kff, kfd)
    end subroutine assemble_tangent
 
    !> Add an element tangent through its precomputed lists of destinations
-   !> (see mesh_type%scatter_map): nb entries into the band, then nd into kfd.
-   pure subroutine scatter_element(map, nb, nd, ke, kff, kfd)
-      integer, intent(in) :: map(3, 36), nb, nd
+   !> (see mesh_type%scatter_map): nb entries into the band storage, then nd
+   !> into the free-driven block, each array taken in memory order (one index
+   !> per entry instead of a row and a column).
+   pure subroutine scatter_element(map, nb, nd, ke, band, driven)
+      integer, intent(in) :: map(2, 36), nb, nd
       real(dp), intent(in) :: ke(36)
-      type(band_matrix_type), intent(inout) :: kff
-      real(dp), intent(inout) :: kfd(:, :)
+      !> The band storage, (kd + 1) * nfree, and the free-driven block, nfree * ndriven.
+      real(dp), intent(inout) :: band(*), driven(*)
       integer :: m
       do m = 1, nb
-         kff%a(map(2, m), map(3, m)) = kff%a(map(2, m), map(3, m)) + ke(map(1, m))
+         band(map(2, m)) = band(map(2, m)) + ke(map(1, m))
       end do
       do m = nb + 1, nb + nd
-         kfd(map(2, m), map(3, m)) = kfd(map(2, m), map(3, m)) + ke(map(1, m))
+         driven(map(2, m)) = driven(map(2, m)) + ke(map(1, m))
       end do
    end subroutine scatter_element
 

@@ -129,11 +129,11 @@ contains
          call dense_factor(self, info)
          return
       end if
-      self%f(1:kd + 1, :) = self%a
       self%is_lu = .false.
       if (kd <= narrow_band) then
-         call band_ldlt(self%f, self%n, kd, self%top, info, self%recip)
+         call band_ldlt(self%a, self%f, self%n, kd, self%top, info, self%recip)
       else
+         self%f(1:kd + 1, :) = self%a
          call dpbtrf('U', self%n, kd, self%f, ld, info)
       end if
       if (info == 0) return
@@ -189,20 +189,24 @@ contains
    end subroutine band_solve
 
    !> Square-root-free Cholesky factorisation A = U^T D U of the symmetric
-   !> positive definite band matrix in f(1:kd+1, 1:n) (upper band, A(i, j) at
-   !> f(kd + 1 + i - j, j)) whose column j is zero above row top(j), its
-   !> envelope (j - kd <= top(j) <= j); in place: U(i, j) (unit diagonal) at
-   !> f(kd + 1 + i - j, j), D(j) at f(kd + 1, j), and 1/D(j) in recip. U keeps
-   !> A's envelope (fill-in stays below the first nonzero of each column).
-   !> Crout's column-by-column form, as FEAP's datri and Bathe's COLSOL: with
-   !> G = D U, G(i, j) = A(i, j) - sum_k U(k, i) G(k, j), U(i, j) = G(i, j) /
-   !> D(i) and D(j) = A(j, j) - sum_i G(i, j) U(i, j), sums over the envelopes:
-   !> each sum runs down two columns in memory order, and its products are
-   !> independent, so a narrow factorisation is fewer dependent operations in
-   !> a row than in dpbtf2's right-looking form. info = 0, or the first j at
-   !> which the pivot D(j) is not positive (f is then partly factored), as from dpbtrf.
-   pure subroutine band_ldlt(f, n, kd, top, info, recip)
-      !> The band on entry (leading dimension at least kd + 1), U and D on return.
+   !> positive definite band matrix in a (upper band, A(i, j) at
+   !> a(kd + 1 + i - j, j)) whose column j is zero above row top(j), its
+   !> envelope (j - kd <= top(j) <= j): U(i, j) (unit diagonal) into
+   !> f(kd + 1 + i - j, j), D(j) into f(kd + 1, j), and 1/D(j) into recip; f
+   !> above the envelope is not referenced (U keeps A's envelope: fill-in stays
+   !> below the first nonzero of each column). Crout's column-by-column form,
+   !> as FEAP's datri and Bathe's COLSOL: with G = D U, G(i, j) = A(i, j) -
+   !> sum_k U(k, i) G(k, j), U(i, j) = G(i, j) / D(i) and D(j) = A(j, j) -
+   !> sum_i G(i, j) U(i, j), sums over the envelopes: each sum runs down two
+   !> columns in memory order, and its products are independent, so a narrow
+   !> factorisation is fewer dependent operations in a row than in dpbtf2's
+   !> right-looking form; and A is read where it is, without a copy into f
+   !> first. info = 0, or the first j at which the pivot D(j) is not positive
+   !> (f is then partly factored), as from dpbtrf.
+   pure subroutine band_ldlt(a, f, n, kd, top, info, recip)
+      !> The band (leading dimension kd + 1).
+      real(dp), contiguous, intent(in) :: a(:, :)
+      !> U and D on return (leading dimension at least kd + 1).
       real(dp), contiguous, intent(inout) :: f(:, :)
       integer, intent(in) :: n, kd
       !> First row of each column's envelope.
@@ -214,9 +218,9 @@ contains
       integer :: i, j, k, oi, oj
       info = 0
       do j = 1, n
-         ! Column j of A at f(oj + i, j), of column i at f(oi + k, i).
+         ! A(i, j) at a(oj + i, j) and f(oj + i, j); U(k, i) at f(oi + k, i).
          oj = kd + 1 - j
-         do i = top(j) + 1, j - 1
+         do i = top(j), j - 1
             oi = kd + 1 - i
             s = 0
             ! The loops of this module run a few times each (kd = 5 in Example 1):
@@ -226,9 +230,9 @@ contains
             do k = max(top(i), top(j)), i - 1
                s = s + f(oi + k, i)*f(oj + k, j)
             end do
-            f(oj + i, j) = f(oj + i, j) - s
+            f(oj + i, j) = a(oj + i, j) - s
          end do
-         d = f(kd + 1, j)
+         d = a(kd + 1, j)
          !GCC$ novector
          do i = top(j), j - 1
             g = f(oj + i, j)

@@ -81,11 +81,13 @@ module fekap_assembly_mesh
       !> (ndof): external nodal loads at unit load factor.
       real(dp), allocatable :: f_ext(:)
       type(slide_type), allocatable :: slides(:)
-      !> (3, 36, nelem): where the entries of element e's tangent go, as lists
-      !> of (k, row, column), k = i + 6 (j - 1) the entry of the 6 x 6 tangent:
-      !> first scatter_count(1, e) entries into the band storage (row, column),
-      !> then scatter_count(2, e) into the free-driven block (equation, drive).
-      !> Entries on fixed dofs and in the band's lower triangle are not listed.
+      !> (2, 36, nelem): where the entries of element e's tangent go, as lists
+      !> of (k, position), k = i + 6 (j - 1) the entry of the 6 x 6 tangent and
+      !> position its place in the band storage (kd + 1, nfree) or in the
+      !> free-driven block (nfree, ndriven), both counted in memory order: first
+      !> scatter_count(1, e) entries into the band, then scatter_count(2, e)
+      !> into the free-driven block. Entries on fixed dofs and in the band's
+      !> lower triangle are not listed.
       integer, allocatable :: scatter_map(:, :, :)
       !> (2, nelem): the lengths of the band and free-driven lists of scatter_map.
       integer, allocatable :: scatter_count(:, :)
@@ -476,8 +478,8 @@ contains
    !> entries that go nowhere.
    pure subroutine build_scatter_map(self)
       type(mesh_type), intent(inout) :: self
-      integer :: e, i, j, ei, ej, dj, nb, nd, band(3, 36), driven(3, 36)
-      allocate (self%scatter_map(3, 36, size(self%elements)), source=0)
+      integer :: e, i, j, ei, ej, dj, nb, nd, band(2, 36), driven(2, 36)
+      allocate (self%scatter_map(2, 36, size(self%elements)), source=0)
       allocate (self%scatter_count(2, size(self%elements)), source=0)
       do e = 1, size(self%elements)
          nb = 0
@@ -491,11 +493,12 @@ contains
                if (ej > 0) then
                   if (ei <= ej) then
                      nb = nb + 1
-                     band(:, nb) = [i + 6*(j - 1), self%kd + 1 + ei - ej, ej]
+                     ! A(ei, ej) at (kd + 1 + ei - ej, ej) of the band storage.
+                     band(:, nb) = [i + 6*(j - 1), self%kd + 1 + ei - ej + (self%kd + 1)*(ej - 1)]
                   end if
                else if (self%drive_col(dj) > 0) then
                   nd = nd + 1
-                  driven(:, nd) = [i + 6*(j - 1), ei, self%drive_col(dj)]
+                  driven(:, nd) = [i + 6*(j - 1), ei + self%nfree*(self%drive_col(dj) - 1)]
                end if
             end do
          end do

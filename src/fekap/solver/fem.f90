@@ -625,19 +625,33 @@ contains
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t, qt(:)
       real(dp), intent(out) :: scale
-      real(dp) :: f
-      integer :: i
       associate (dqd => self%drive_work(:, 4), dd => self%mesh%driven_dof)
          dqd = qt(dd) - self%q(dd)
-         scale = 0
-         do i = 1, self%mesh%nfree
-            f = -dot_product(self%kfd(i, :), dqd)
-            if (self%loaded) f = f + (t - self%t)*self%mesh%f_ext(self%mesh%eq_dof(i))
-            scale = scale + f**2
+         call drive_load_rhs(self, dqd, merge(t - self%t, 0.0_dp, self%loaded))
+      end associate
+      scale = sqrt(sum(self%rhs(:, 1)**2))
+   end subroutine drive_increment_residual
+
+   !> rhs(:, 1) = -K_fd x + lambda f_ext over the free equations: the
+   !> right-hand side of a drive (and load) change x (lambda), by columns of
+   !> the free-driven block.
+   subroutine drive_load_rhs(self, x, lambda)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: x(:), lambda
+      integer :: j, k
+      associate (rhs => self%rhs(:, 1), eqd => self%mesh%eq_dof)
+         if (lambda /= 0) then
+            do k = 1, self%mesh%nfree
+               rhs(k) = lambda*self%mesh%f_ext(eqd(k))
+            end do
+         else
+            rhs = 0
+         end if
+         do j = 1, self%mesh%ndriven
+            rhs = rhs - x(j)*self%kfd(:, j)
          end do
       end associate
-      scale = sqrt(scale)
-   end subroutine drive_increment_residual
+   end subroutine drive_load_rhs
 
    !> Initial guess at time t: the paper's last configuration, extrapolation
    !> of the last ones (Hermite through their positions and velocities when the
@@ -885,6 +899,7 @@ contains
       !> Whether kff holds the factor of the material tangent at qt.
       logical, intent(in) :: factored
       type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: swap(:, :)
       real(dp) :: floor, bound, ratio, worst, turn, pivot
       integer :: i, j, worst_dof, flip_link(2), flip_node, crossing(3)
       logical :: has_response
@@ -962,9 +977,12 @@ contains
             self%before(self%verify_depth)%turn = turn
             self%verify_pending = .true.
          end if
-         self%jump_response = resp
          self%has_jump_response = has_response
       end associate
+      ! The new response becomes the accepted one (a swap of the two arrays, no copy).
+      call move_alloc(self%jump_response, swap)
+      call move_alloc(self%jump_response_new, self%jump_response)
+      call move_alloc(swap, self%jump_response_new)
    end subroutine branch_jump
 
    !> Step-doubling verification of a step to time t that branch_jump found
@@ -1408,18 +1426,18 @@ contains
       associate (mesh => self%mesh, eqd => self%mesh%eq_dof, f => self%drive_work(:, 1), &
          & vd => self%drive_work(:, 2), ad => self%drive_work(:, 3))
          call self%model%drives%law%eval(self%t, f, vd, ad)
-         if (self%has_jump_response .and. .not. self%loaded) then
-            ! (47) is R vd with the drive response R of this factor, known already.
+         if (self%has_hist_velocity(1)) then
+            ! (47) is R vd with the drive response R of this factor: record_velocity
+            ! made it already, for the predictor.
+            self%v = self%hist_velocity(:, 1)
+         else if (self%has_jump_response .and. .not. self%loaded) then
             call apply_response(self%jump_response, vd, self%v)
          else
             self%v = 0
             do i = 1, mesh%ndriven
                self%v(mesh%driven_dof(i)) = vd(i)
             end do
-            do k = 1, mesh%nfree
-               self%rhs(k, 1) = -dot_product(self%kfd(k, :), vd)
-               if (self%loaded) self%rhs(k, 1) = self%rhs(k, 1) + mesh%f_ext(eqd(k))
-            end do
+            call drive_load_rhs(self, vd, merge(1.0_dp, 0.0_dp, self%loaded))
             clock = phase_start(self)
             call self%kff%solve(self%rhs)
             call phase_end(self, clock, self%counts%seconds_solves)
@@ -1438,8 +1456,9 @@ contains
          do i = 1, mesh%ndriven
             self%a(mesh%driven_dof(i)) = ad(i)
          end do
+         call drive_load_rhs(self, ad, 0.0_dp)
          do k = 1, mesh%nfree
-            self%rhs(k, 1) = -dot_product(self%kfd(k, :), ad) - self%work(eqd(k))
+            self%rhs(k, 1) = self%rhs(k, 1) - self%work(eqd(k))
          end do
          clock = phase_start(self)
          call self%kff%solve(self%rhs)
