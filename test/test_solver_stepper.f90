@@ -1,9 +1,11 @@
 !> Tests of fekap_solver_stepper: the phase times of a sample of the steps
-!> scaled to the whole analysis.
+!> scaled to the whole analysis, the loop's time split as in its sample, and
+!> the coarse clock.
 module test_solver_stepper
    use fekap_kinds, only: dp
    use fekap_testing, only: unittest_type, new_unittest, check, error_type
-   use fekap_solver_stepper, only: work_counts_type, phase_seconds
+   use fekap_solver_stepper, only: work_counts_type, phase_seconds, split_seconds, clock_seconds, &
+      & coarse_clock_seconds
    implicit none
    private
    public :: collect_solver_stepper
@@ -13,7 +15,9 @@ contains
    subroutine collect_solver_stepper(tests)
       type(unittest_type), allocatable, intent(out) :: tests(:)
       tests = [ &
-         & new_unittest('phase_seconds', test_phase_seconds) &
+         & new_unittest('phase_seconds', test_phase_seconds), &
+         & new_unittest('split_seconds', test_split_seconds), &
+         & new_unittest('coarse_clock_seconds', test_coarse_clock) &
          & ]
    end subroutine collect_solver_stepper
 
@@ -37,5 +41,44 @@ contains
       if (allocated(error)) return
       call check(error, seconds(3), 0.2_dp, 'solves scaled', rel=1.0e-14_dp)
    end subroutine test_phase_seconds
+
+   !> Without a sample the loop counts as analysis; with one, the loop's time
+   !> is shared as in the sample.
+   subroutine test_split_seconds(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: seconds(2)
+      seconds = split_seconds([0.0_dp, 0.0_dp], 3.0_dp)
+      call check(error, seconds(1), 3.0_dp, 'no sample: analysis', rel=1.0e-15_dp)
+      if (allocated(error)) return
+      call check(error, seconds(2), 0.0_dp, 'no sample: no output')
+      if (allocated(error)) return
+      seconds = split_seconds([0.03_dp, 0.01_dp], 2.0_dp)
+      call check(error, seconds(1), 1.5_dp, 'analysis scaled', rel=1.0e-14_dp)
+      if (allocated(error)) return
+      call check(error, seconds(2), 0.5_dp, 'output scaled', rel=1.0e-14_dp)
+   end subroutine test_split_seconds
+
+   !> The coarse clock keeps time with the precise one, to its resolution
+   !> (a few milliseconds), and never runs backwards.
+   subroutine test_coarse_clock(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: coarse0, coarse1, precise0, precise1, x
+      integer :: i
+      coarse0 = coarse_clock_seconds()
+      precise0 = clock_seconds()
+      x = 0
+      do while (clock_seconds() - precise0 < 0.05_dp)
+         do i = 1, 1000
+            x = x + sqrt(real(i, dp))
+         end do
+      end do
+      coarse1 = coarse_clock_seconds()
+      precise1 = clock_seconds()
+      call check(error, coarse1 >= coarse0, 'monotonic')
+      if (allocated(error)) return
+      call check(error, coarse1 - coarse0, precise1 - precise0, 'same elapsed time to 20 ms', abs=0.02_dp)
+      if (allocated(error)) return
+      call check(error, x > 0, 'work done')
+   end subroutine test_coarse_clock
 
 end module test_solver_stepper

@@ -103,8 +103,16 @@ contains
 
    pure subroutine band_zero(self)
       class(band_matrix_type), intent(inout) :: self
-      self%a = 0
+      ! As one block: `self%a = 0` on the polymorphic self clears it column by column.
+      call zero(self%a, size(self%a))
    end subroutine band_zero
+
+   !> x(1:n) = 0.
+   pure subroutine zero(x, n)
+      integer, intent(in) :: n
+      real(dp), intent(out) :: x(n)
+      x = 0
+   end subroutine zero
 
    !> A(i, j) += value, for the upper triangle (i <= j); entries with i > j
    !> are ignored, since the lower triangle is their mirror image.

@@ -271,7 +271,7 @@ contains
       self%has_jump_response = .false.
       result%iterations = 0
       call assemble_force(self, self%q, self%t)
-      result%residual = free_norm(self, self%r)
+      result%residual = residual_norm(self)
       if (self%loaded .and. result%residual > self%conv%floor) then
          ! Loads at t_start /= 0: find the loaded configuration first.
          call solve_step(self, self%t, result%iterations, result%residual, error)
@@ -464,7 +464,7 @@ contains
                      self%guard_pending = .false.
                      if (guard_extrapolation(self, t, qt)) call assemble(self, qt, t, kg_above)
                   end if
-                  residual = free_norm(self, self%r)
+                  residual = residual_norm(self)
                   if (i == 0) then
                      r0 = residual
                      if (self%model%analysis%predictor == predictor_previous) scale = r0
@@ -485,6 +485,7 @@ contains
                      ! carry Newton there (full Newton from here on in this step).
                      kg_above = 0
                      call assemble(self, qt, t, kg_above)
+                     residual = residual_norm(self)
                      call factor(self, info)
                   end if
                   if (info > 0) then
@@ -534,7 +535,7 @@ contains
             ! accelerations of Example 1 at dt = 1e-3, 3e-6 at EA/EI = 1e8).
             call assemble(self, qt, t, huge(1.0_dp))
             ! The residual reported for the step is the one at the accepted configuration.
-            residual = free_norm(self, self%r)
+            residual = residual_norm(self)
             call factor(self, info)
             if (.not. by_estimate .or. info /= 0) exit verification
             ! A stop on the estimate is checked with this factor (one back
@@ -927,8 +928,11 @@ contains
          end if
          call note_response_pivot(self, merge(pivot, 0.0_dp, has_response))
          call apply_response(resp, dd, dq_new)
-         dq_old = 0
-         if (self%has_jump_response) call apply_response(self%jump_response, dd, dq_old)
+         if (self%has_jump_response) then
+            call apply_response(self%jump_response, dd, dq_old)
+         else
+            dq_old = 0
+         end if
          worst = 0
          worst_dof = 0
          do i = 1, mesh%ndof
@@ -1139,21 +1143,25 @@ contains
       real(dp), intent(in) :: resp(:, :), x(:)
       real(dp), intent(out) :: y(:)
       integer :: j
-      y = 0
-      do j = 1, size(x)
+      if (size(x) == 0) then
+         y = 0
+         return
+      end if
+      y = x(1)*resp(:, 1)
+      do j = 2, size(x)
          y = y + x(j)*resp(:, j)
       end do
    end subroutine apply_response
 
    !> Linear response of every dof to unit changes of the drives, (ndof,
    !> ndriven): R_f = -K_ff^-1 K_fd with the current factor, 1 on the drive's
-   !> own dof, 0 on fixed ones.
+   !> own dof; the other driven and the fixed dofs keep their zeros (resp is
+   !> one of the stepper's response arrays, zero there from the start).
    subroutine drive_response(self, resp)
       type(fem_stepper_type), intent(inout) :: self
-      real(dp), intent(out) :: resp(:, :)
+      real(dp), intent(inout) :: resp(:, :)
       integer :: j, k
       real(dp) :: clock
-      resp = 0
       do j = 1, self%mesh%ndriven
          self%rhs(:, 1) = -self%kfd(:, j)
          clock = phase_start(self)
@@ -1325,16 +1333,14 @@ contains
       self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
    end subroutine assemble_force
 
-   !> The Newton correction for the assembled residual with the current
-   !> factor, into rhs, and its length (rotations weighted by the model size).
+   !> The Newton correction for the residual that residual_norm gathered into
+   !> rhs, with the current factor, into rhs, and its length (rotations
+   !> weighted by the model size).
    subroutine newton_correction(self, correction)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(out) :: correction
       real(dp) :: clock
       integer :: k
-      do k = 1, self%mesh%nfree
-         self%rhs(k, 1) = -self%r(self%mesh%eq_dof(k))
-      end do
       clock = phase_start(self)
       call self%kff%solve(self%rhs)
       call phase_end(self, clock, self%counts%seconds_solves)
@@ -1544,24 +1550,29 @@ contains
       if (self%timing) seconds = seconds + (clock_seconds() - clock)
    end subroutine phase_end
 
-   !> Euclidean norm of a residual over the free dofs, scaled by its largest
-   !> entry so that the squares cannot overflow.
-   pure real(dp) function free_norm(self, r) result(norm)
-      type(fem_stepper_type), intent(in) :: self
-      real(dp), intent(in) :: r(:)
+   !> The assembled residual over the free equations, negated, into rhs (the
+   !> right-hand side of a Newton correction), and its Euclidean norm, scaled
+   !> by its largest entry so that the squares cannot overflow.
+   real(dp) function residual_norm(self) result(norm)
+      type(fem_stepper_type), intent(inout) :: self
       real(dp) :: biggest, scale
       integer :: k
-      biggest = 0
-      do k = 1, self%mesh%nfree
-         biggest = max(biggest, abs(r(self%mesh%eq_dof(k))))
-      end do
-      norm = 0
-      if (.not. biggest > 0) return
-      scale = 1/biggest
-      do k = 1, self%mesh%nfree
-         norm = norm + (r(self%mesh%eq_dof(k))*scale)**2
-      end do
-      norm = biggest*sqrt(norm)
-   end function free_norm
+      associate (r => self%rhs(:, 1))
+         do k = 1, self%mesh%nfree
+            r(k) = -self%r(self%mesh%eq_dof(k))
+         end do
+         biggest = 0
+         do k = 1, self%mesh%nfree
+            biggest = max(biggest, abs(r(k)))
+         end do
+         norm = 0
+         if (.not. biggest > 0) return
+         scale = 1/biggest
+         do k = 1, self%mesh%nfree
+            norm = norm + (r(k)*scale)**2
+         end do
+         norm = biggest*sqrt(norm)
+      end associate
+   end function residual_norm
 
 end module fekap_solver_fem

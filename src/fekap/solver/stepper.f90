@@ -2,13 +2,32 @@
 !> initial configuration, then advance to each new time. The finite element
 !> method and both constraint-equation methods extend `stepper_type`.
 module fekap_solver_stepper
+   use, intrinsic :: iso_c_binding, only: c_int, c_long
    use fekap_kinds, only: dp
    use fekap_error, only: error_type
    use fekap_model_results, only: step_result_type
    implicit none
    private
 
-   public :: stepper_type, work_counts_type, clock_seconds, phase_seconds
+   public :: stepper_type, work_counts_type, clock_seconds, coarse_clock_seconds, phase_seconds, split_seconds
+
+   !> Linux's CLOCK_MONOTONIC_COARSE (<linux/time.h>).
+   integer(c_int), parameter :: clock_monotonic_coarse = 6
+
+   !> struct timespec of the C library (time_t and long are both long on Linux).
+   type, bind(C) :: timespec_type
+      integer(c_long) :: seconds = 0
+      integer(c_long) :: nanoseconds = 0
+   end type timespec_type
+
+   interface
+      !> clock_gettime(2) of the C library.
+      integer(c_int) function clock_gettime(clock, time) bind(C, name='clock_gettime')
+         import :: c_int, timespec_type
+         integer(c_int), value :: clock
+         type(timespec_type), intent(out) :: time
+      end function clock_gettime
+   end interface
 
    !> Counts of the work done, for the listing's closing summary.
    type :: work_counts_type
@@ -76,11 +95,35 @@ contains
          & counts%seconds_solves]*(analysis/counts%seconds_sampled)
    end function phase_seconds
 
-   !> Wall-clock time in seconds, for the phase timers.
+   !> Seconds in analysis and in output of a loop that took `total` seconds,
+   !> split as in the sampled steps, which spent sampled(1) seconds in
+   !> analysis and sampled(2) in output (all of it analysis without a sample).
+   pure function split_seconds(sampled, total) result(seconds)
+      real(dp), intent(in) :: sampled(2), total
+      real(dp) :: seconds(2)
+      seconds = [total, 0.0_dp]
+      if (sum(sampled) > 0) seconds = sampled*(total/sum(sampled))
+   end function split_seconds
+
+   !> Wall-clock time in seconds, for the phase timers (30-60 ns a read here).
    real(dp) function clock_seconds() result(seconds)
       integer(8) :: count, rate
       call system_clock(count, rate)
       seconds = real(count, dp)/real(rate, dp)
    end function clock_seconds
+
+   !> Wall-clock time in seconds to a few milliseconds (the kernel's tick),
+   !> for decisions on the scale of a tenth of a second, such as when to flush
+   !> output: Linux's coarse monotonic clock costs about 6 ns a read, against
+   !> about 32 for clock_seconds (measured on this project's 2.1 GHz Xeon).
+   !> Without it, clock_seconds.
+   real(dp) function coarse_clock_seconds() result(seconds)
+      type(timespec_type) :: time
+      if (clock_gettime(clock_monotonic_coarse, time) /= 0) then
+         seconds = clock_seconds()
+         return
+      end if
+      seconds = real(time%seconds, dp) + 1.0e-9_dp*real(time%nanoseconds, dp)
+   end function coarse_clock_seconds
 
 end module fekap_solver_stepper
