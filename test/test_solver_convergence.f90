@@ -63,35 +63,50 @@ contains
       call check(error, .not. is_converged(conv, 1.0e-9_dp, 1.0_dp, 0.0_dp, 0.0_dp), 'paper: ratio large')
    end subroutine test_is_converged
 
-   !> Lagrange extrapolation through n points reproduces a polynomial of degree n - 1.
+   !> Lagrange extrapolation through n points reproduces a polynomial of
+   !> degree n - 1, whichever columns hold them and in whatever order.
    subroutine test_extrapolate(error)
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: tk(3), q(1, 3), qpred(1)
+      real(dp) :: tk(4), q(1, 4), qpred(1)
       integer :: n, k
-      tk = [0.3_dp, 0.2_dp, 0.05_dp]
+      ! Column 2 is a stale entry, never used.
+      tk = [0.3_dp, 9.0_dp, 0.2_dp, 0.05_dp]
+      q = 7
       do n = 1, 3
-         do k = 1, n
-            q(1, k) = poly(tk(k), n - 1)
+         do k = 1, 4
+            if (k /= 2) q(1, k) = poly(tk(k), n - 1)
          end do
-         call extrapolate(q(:, 1:n), tk(1:n), 0.45_dp, qpred)
+         call extrapolate(q, tk, columns(n), 0.45_dp, qpred)
          call check(error, qpred(1), poly(0.45_dp, n - 1), 'exact for degree n - 1', rel=1.0e-13_dp)
          if (allocated(error)) return
       end do
    end subroutine test_extrapolate
 
+   !> The first n of the columns 4, 1, 3 (column 2 unused): a ring buffer's order.
+   pure function columns(n)
+      integer, intent(in) :: n
+      integer :: columns(n)
+      integer, parameter :: ring(3) = [4, 1, 3]
+      columns = ring(1:n)
+   end function columns
+
    !> Hermite extrapolation from n positions and velocities reproduces a
-   !> polynomial of degree 2n - 1 (unequal steps), and misses one of degree 2n.
+   !> polynomial of degree 2n - 1 (unequal steps), and misses one of degree
+   !> 2n, with the nodes in the columns of a ring buffer (the rest stale).
    subroutine test_hermite_extrapolate(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: tk(4), q(2, 4), v(2, 4), qpred(2)
       integer :: n, k
-      tk = [0.3_dp, 0.2_dp, 0.05_dp, 0.0_dp]
+      integer, parameter :: ring(4) = [3, 4, 1, 2]
+      tk = [0.05_dp, 0.0_dp, 0.3_dp, 0.2_dp]
       do n = 2, 4
+         q = 7
+         v = 7
          do k = 1, n
-            q(:, k) = [poly(tk(k), 2*n - 1), poly(tk(k), 2*n)]
-            v(:, k) = [dpoly(tk(k), 2*n - 1), dpoly(tk(k), 2*n)]
+            q(:, ring(k)) = [poly(tk(ring(k)), 2*n - 1), poly(tk(ring(k)), 2*n)]
+            v(:, ring(k)) = [dpoly(tk(ring(k)), 2*n - 1), dpoly(tk(ring(k)), 2*n)]
          end do
-         call hermite_extrapolate(q(:, 1:n), v(:, 1:n), tk(1:n), 0.45_dp, qpred)
+         call hermite_extrapolate(q, v, tk, ring(1:n), 0.45_dp, qpred)
          call check(error, qpred(1), poly(0.45_dp, 2*n - 1), 'exact for degree 2n - 1', rel=1.0e-12_dp)
          if (allocated(error)) return
          call check(error, abs(qpred(2) - poly(0.45_dp, 2*n)) > 1.0e-6_dp, 'not exact for degree 2n')

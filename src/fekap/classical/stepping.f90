@@ -220,6 +220,8 @@ contains
       integer, intent(in) :: kind
       real(dp), intent(in) :: t
       real(dp), intent(out) :: q(:)
+      ! The history's columns, newest first.
+      integer, parameter :: columns(3) = [1, 2, 3]
       real(dp) :: h
       integer :: k
       k = max(1, self%count)
@@ -231,10 +233,10 @@ contains
             h = t - self%t(1)
             q = self%q(:, 1) + h*self%qd + h**2/2*self%qdd
          else
-            call extrapolate(self%q(:, 1:k), self%t(1:k), t, q)
+            call extrapolate(self%q, self%t, columns(1:k), t, q)
          end if
       case default
-         call extrapolate(self%q(:, 1:k), self%t(1:k), t, q)
+         call extrapolate(self%q, self%t, columns(1:k), t, q)
       end select
    end subroutine history_predict
 

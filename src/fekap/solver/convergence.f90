@@ -41,62 +41,64 @@ contains
       end if
    end function is_converged
 
-   !> Lagrange extrapolation to time t of the history q(:, k) at times tk(k)
-   !> (k = 1 the newest); uses as many points as given (1: constant,
-   !> 2: linear, 3: quadratic).
-   pure subroutine extrapolate(q, tk, t, qpred)
+   !> Lagrange extrapolation to time t through the configurations
+   !> q(:, columns(k)) at times tk(columns(k)): as many points as columns
+   !> (1: constant, 2: linear, 3: quadratic), in any order.
+   pure subroutine extrapolate(q, tk, columns, t, qpred)
       real(dp), intent(in) :: q(:, :), tk(:), t
+      integer, intent(in) :: columns(:)
       real(dp), intent(out) :: qpred(:)
-      integer :: j, m, n
+      integer :: j, m
       real(dp) :: w
-      n = size(tk)
       qpred = 0
-      do j = 1, n
+      do j = 1, size(columns)
          w = 1
-         do m = 1, n
-            if (m /= j) w = w*(t - tk(m))/(tk(j) - tk(m))
+         do m = 1, size(columns)
+            if (m /= j) w = w*(t - tk(columns(m)))/(tk(columns(j)) - tk(columns(m)))
          end do
-         qpred = qpred + w*q(:, j)
+         qpred = qpred + w*q(:, columns(j))
       end do
    end subroutine extrapolate
 
-   !> Hermite extrapolation to time t from configurations q(:, k) at times
-   !> tk(k) (k = 1 the newest) and their velocities v(:, k): the polynomial of
-   !> degree 2n - 1 through the n positions and velocities. With two (three,
-   !> four) configurations its error is of order h**4 (h**6, h**8), against
-   !> h**3 for quadratic extrapolation of positions.
-   pure subroutine hermite_extrapolate(q, v, tk, t, qpred)
+   !> Hermite extrapolation to time t from the configurations q(:, columns(k))
+   !> at times tk(columns(k)) and their velocities v(:, columns(k)), in any
+   !> order: the polynomial of degree 2n - 1 through the n positions and
+   !> velocities. With two (three, four) configurations its error is of order
+   !> h**4 (h**6, h**8), against h**3 for quadratic extrapolation of positions.
+   pure subroutine hermite_extrapolate(q, v, tk, columns, t, qpred)
       real(dp), intent(in) :: q(:, :), v(:, :), tk(:), t
+      integer, intent(in) :: columns(:)
       real(dp), intent(out) :: qpred(:)
       real(dp) :: wq, wv
       integer :: k
       qpred = 0
-      do k = 1, size(tk)
-         call hermite_weights(tk, k, t, wq, wv)
-         qpred = qpred + wq*q(:, k) + wv*v(:, k)
+      do k = 1, size(columns)
+         call hermite_weights(tk, columns, k, t, wq, wv)
+         qpred = qpred + wq*q(:, columns(k)) + wv*v(:, columns(k))
       end do
    end subroutine hermite_extrapolate
 
    !> Weights of the k-th position and velocity in the Hermite polynomial
-   !> through the nodes tk, at t: with the Lagrange basis polynomial l_k,
+   !> through the nodes tk(columns), at t: with the Lagrange basis polynomial l_k,
    !>   wq = (1 - 2 l_k'(t_k) (t - t_k)) l_k(t)**2,  wv = (t - t_k) l_k(t)**2,
    !>   l_k'(t_k) = sum over m /= k of 1 / (t_k - t_m).
-   pure subroutine hermite_weights(tk, k, t, wq, wv)
+   pure subroutine hermite_weights(tk, columns, k, t, wq, wv)
       real(dp), intent(in) :: tk(:), t
-      integer, intent(in) :: k
+      integer, intent(in) :: columns(:), k
       real(dp), intent(out) :: wq, wv
-      real(dp) :: l, slope, r
+      real(dp) :: l, slope, r, t_k
       integer :: m
+      t_k = tk(columns(k))
       l = 1
       slope = 0
-      do m = 1, size(tk)
+      do m = 1, size(columns)
          if (m == k) cycle
-         r = 1/(tk(k) - tk(m))
-         l = l*(t - tk(m))*r
+         r = 1/(t_k - tk(columns(m)))
+         l = l*(t - tk(columns(m)))*r
          slope = slope + r
       end do
-      wq = (1 - 2*slope*(t - tk(k)))*l**2
-      wv = (t - tk(k))*l**2
+      wq = (1 - 2*slope*(t - t_k))*l**2
+      wv = (t - t_k)*l**2
    end subroutine hermite_weights
 
 end module fekap_solver_convergence

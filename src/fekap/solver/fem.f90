@@ -94,7 +94,7 @@ module fekap_solver_fem
       integer, allocatable :: seg_accepted(:)
       logical, allocatable :: has_hist_velocity(:)
       real(dp) :: t = 0, reference_pivot = 0
-      integer :: nhist = 0
+      integer :: nhist = 0, newest = history
       logical :: has_velocity = .false., has_acceleration = .false., has_jump_response = .false.
       character(len=note_length) :: note = ''
       !> The step that follows: the hinged pair that crossed collinear
@@ -121,9 +121,11 @@ module fekap_solver_fem
       !> Quadratic-convergence constant M of Newton (c(k+1) = M c(k)**2) measured
       !> in the last step that showed it, for the estimated stop.
       real(dp) :: newton_constant = 0
-      !> Last accepted configurations (newest first) and their times, for the predictor.
+      !> Last accepted configurations and their times, for the predictor: a
+      !> ring of `history` columns, the newest in column `newest`, the k-th
+      !> newest in history_column(self, k); nhist of them filled.
       real(dp), allocatable :: hist(:, :), thist(:)
-      integer :: nhist = 0
+      integer :: nhist = 0, newest = history
       !> Their velocities, from the linear response to the drives that the
       !> branch-jump check computes whatever rates the run asks for (so that
       !> positions do not depend on them), and whether they are known.
@@ -667,9 +669,13 @@ contains
       real(dp), intent(in) :: t
       real(dp), intent(out) :: qt(:)
       real(dp) :: h
-      integer :: i, n, nl
+      integer :: i, n, nl, columns(history)
       h = t - self%t
       nl = min(self%nhist, lagrange_points)
+      ! The history's columns, newest first.
+      do i = 1, self%nhist
+         columns(i) = history_column(self, i)
+      end do
       self%hermite_prediction = .false.
       self%guard_pending = .false.
       select case (self%model%analysis%predictor)
@@ -679,22 +685,23 @@ contains
          if (self%has_acceleration) then
             qt = self%q + h*self%v + h**2/2*self%a
          else if (self%nhist > 1) then
-            call extrapolate(self%hist(:, 1:nl), self%thist(1:nl), t, qt)
+            call extrapolate(self%hist, self%thist, columns(1:nl), t, qt)
          else
             call tangent_predictor(self, t, qt)
          end if
       case default
-         if (self%nhist > 1 .and. all(self%has_hist_velocity(1:2))) then
-            n = 2
-            do while (n < self%nhist)
-               if (.not. self%has_hist_velocity(n + 1)) exit
-               n = n + 1
-            end do
-            call hermite_extrapolate(self%hist(:, 1:n), self%hist_velocity(:, 1:n), self%thist(1:n), t, qt)
+         n = 0
+         ! The newest configurations whose velocities are known, at least two.
+         do while (n < self%nhist)
+            if (.not. self%has_hist_velocity(columns(n + 1))) exit
+            n = n + 1
+         end do
+         if (n > 1) then
+            call hermite_extrapolate(self%hist, self%hist_velocity, self%thist, columns(1:n), t, qt)
             self%hermite_prediction = .true.
             self%guard_pending = .true.
          else if (self%nhist > 1) then
-            call extrapolate(self%hist(:, 1:nl), self%thist(1:nl), t, qt)
+            call extrapolate(self%hist, self%thist, columns(1:nl), t, qt)
             self%guard_pending = .true.
          else
             call tangent_predictor(self, t, qt)
@@ -1080,6 +1087,7 @@ contains
       state%t = self%t
       state%reference_pivot = self%reference_pivot
       state%nhist = self%nhist
+      state%newest = self%newest
       state%has_velocity = self%has_velocity
       state%has_acceleration = self%has_acceleration
       state%has_jump_response = self%has_jump_response
@@ -1105,6 +1113,7 @@ contains
       self%t = state%t
       self%reference_pivot = state%reference_pivot
       self%nhist = state%nhist
+      self%newest = state%newest
       self%has_velocity = state%has_velocity
       self%has_acceleration = state%has_acceleration
       self%has_jump_response = state%has_jump_response
@@ -1128,12 +1137,12 @@ contains
    !> and not near a stationary configuration.
    subroutine record_velocity(self)
       type(fem_stepper_type), intent(inout) :: self
-      self%has_hist_velocity(1) = self%has_jump_response .and. &
+      self%has_hist_velocity(self%newest) = self%has_jump_response .and. &
          & self%response_pivot >= near_singular_drop*self%reference_pivot
-      if (.not. self%has_hist_velocity(1)) return
+      if (.not. self%has_hist_velocity(self%newest)) return
       associate (law => self%drive_work(:, 1), rate => self%drive_work(:, 2), rate2 => self%drive_work(:, 3))
          call self%model%drives%law%eval(self%t, law, rate, rate2)
-         call apply_response(self%jump_response, rate, self%hist_velocity(:, 1))
+         call apply_response(self%jump_response, rate, self%hist_velocity(:, self%newest))
       end associate
    end subroutine record_velocity
 
@@ -1282,20 +1291,15 @@ contains
       end function welded
    end subroutine find_hinge_pairs
 
-   !> Make q at time t the accepted configuration and push it on the history.
+   !> Make q at time t the accepted configuration and push it on the history
+   !> (over the oldest column of the ring).
    subroutine accept(self, t, q)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t, q(:)
-      integer :: k
-      do k = history, 2, -1
-         self%hist(:, k) = self%hist(:, k - 1)
-         self%thist(k) = self%thist(k - 1)
-         self%hist_velocity(:, k) = self%hist_velocity(:, k - 1)
-         self%has_hist_velocity(k) = self%has_hist_velocity(k - 1)
-      end do
-      self%hist(:, 1) = q
-      self%thist(1) = t
-      self%has_hist_velocity(1) = .false.
+      self%newest = modulo(self%newest, history) + 1
+      self%hist(:, self%newest) = q
+      self%thist(self%newest) = t
+      self%has_hist_velocity(self%newest) = .false.
       self%nhist = min(self%nhist + 1, history)
       self%q = q
       self%t = t
@@ -1305,6 +1309,13 @@ contains
       self%has_acceleration = .false.
       self%counts%steps = self%counts%steps + 1
    end subroutine accept
+
+   !> The column of the history's k-th newest configuration.
+   pure integer function history_column(self, k) result(column)
+      type(fem_stepper_type), intent(in) :: self
+      integer, intent(in) :: k
+      column = modulo(self%newest - k, history) + 1
+   end function history_column
 
    !> Residual and tangent at q (geometric stiffness where strained above
    !> geometric_above, see beam_residual) into r, kff and kfd, and the largest
@@ -1432,10 +1443,10 @@ contains
       associate (mesh => self%mesh, eqd => self%mesh%eq_dof, f => self%drive_work(:, 1), &
          & vd => self%drive_work(:, 2), ad => self%drive_work(:, 3))
          call self%model%drives%law%eval(self%t, f, vd, ad)
-         if (self%has_hist_velocity(1)) then
+         if (self%has_hist_velocity(self%newest)) then
             ! (47) is R vd with the drive response R of this factor: record_velocity
             ! made it already, for the predictor.
-            self%v = self%hist_velocity(:, 1)
+            self%v = self%hist_velocity(:, self%newest)
          else if (self%has_jump_response .and. .not. self%loaded) then
             call apply_response(self%jump_response, vd, self%v)
          else
