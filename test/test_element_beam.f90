@@ -4,7 +4,8 @@
 module test_element_beam
    use fekap_kinds, only: dp
    use fekap_testing, only: unittest_type, new_unittest, check, error_type, next_random
-   use fekap_element_beam, only: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain
+   use fekap_element_beam, only: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain, &
+      & max_gauss
    implicit none
    private
    public :: collect_element_beam
@@ -146,11 +147,12 @@ contains
       call check(error, maxval(abs(k - km)) > 1.0e-3_dp, 'strain below the threshold: kg left out')
    end subroutine test_material_part
 
-   !> d2p[v, v] equals the central second difference of p along v.
+   !> d2p[v, v] equals the central second difference of p along v; given
+   !> the section angles that beam_residual found at xe, the same to the bit.
    subroutine test_second_derivative(error)
       type(error_type), allocatable, intent(out) :: error
       type(beam_type) :: beam
-      real(dp) :: xe(6), v(6), d2p(6), pp(6), pm(6), p0(6), fd(6)
+      real(dp) :: xe(6), v(6), d2p(6), pp(6), pm(6), p0(6), fd(6), d2s(6), section(2, max_gauss)
       real(dp), parameter :: h = 1.0e-4_dp
       integer :: state, icase, j
       state = 999
@@ -166,6 +168,11 @@ contains
          fd = (pp - 2*p0 + pm)/h**2
          call check(error, maxval(abs(d2p - fd))/max(1.0_dp, maxval(abs(d2p))), 0.0_dp, &
             & 'second derivative vs second differences', abs=1.0e-5_dp)
+         if (allocated(error)) return
+         section = 7
+         call beam_residual(beam, xe, p0, section=section)
+         call beam_second_derivative(beam, xe, v, d2s, section)
+         call check(error, all(d2s == d2p), 'with the section angles of beam_residual: the same')
          if (allocated(error)) return
       end do
    end subroutine test_second_derivative

@@ -8,7 +8,7 @@ module fekap_assembly_assemble
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type, slide_type
    use fekap_assembly_band, only: band_matrix_type
-   use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain
+   use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain, max_gauss
    use fekap_contact_slideline, only: slide_force, slide_second_derivative, slide_tie_force, &
       & slide_tie_second_derivative
    implicit none
@@ -45,7 +45,9 @@ contains
    !> `geometric_above` leaves out the beams' geometric stiffness where they are
    !> strained less (see beam_residual; huge: the material tangent only, (46)).
    !> `strain` and `element` are max_strain's, found on the way.
-   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd, geometric_above, strain, element)
+   !> `section` keeps each element's section cosines and sines for
+   !> assemble_second_derivative at the same q.
+   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd, geometric_above, strain, element, section)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:), lambda
       integer, intent(in) :: seg(:)
@@ -55,6 +57,7 @@ contains
       real(dp), intent(in), optional :: geometric_above
       real(dp), intent(out) :: strain
       integer, intent(out) :: element
+      real(dp), intent(out), optional :: section(2, max_gauss, size(mesh%elements))
       real(dp) :: pe(6), ke(6, 6), xe(6), s
       integer :: e, i
       r = -lambda*mesh%f_ext
@@ -66,7 +69,11 @@ contains
          do i = 1, 6
             xe(i) = q(mesh%edof(i, e))
          end do
-         call beam_residual(mesh%elements(e), xe, pe, ke, geometric_above, s)
+         if (present(section)) then
+            call beam_residual(mesh%elements(e), xe, pe, ke, geometric_above, s, section(:, :, e))
+         else
+            call beam_residual(mesh%elements(e), xe, pe, ke, geometric_above, s)
+         end if
          if (s > strain .or. element == 0) then
             strain = s
             element = e
@@ -193,12 +200,14 @@ contains
       end do
    end subroutine subtract
 
-   !> d2 = d^2 R / dq^2 [v, v] over all dofs.
-   pure subroutine assemble_second_derivative(mesh, q, v, seg, d2)
+   !> d2 = d^2 R / dq^2 [v, v] over all dofs; with `section`, the sections'
+   !> cosines and sines that assemble_tangent found at the same q.
+   pure subroutine assemble_second_derivative(mesh, q, v, seg, d2, section)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:), v(:)
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: d2(:)
+      real(dp), intent(in), optional :: section(2, max_gauss, size(mesh%elements))
       real(dp) :: de(6), xs(2), x1(2), x2(2), ve(6), vt(5), dt(5), xe(6)
       integer :: e, i, dofs(6), tdofs(5)
       d2 = 0
@@ -207,7 +216,11 @@ contains
             xe(i) = q(mesh%edof(i, e))
             ve(i) = v(mesh%edof(i, e))
          end do
-         call beam_second_derivative(mesh%elements(e), xe, ve, de)
+         if (present(section)) then
+            call beam_second_derivative(mesh%elements(e), xe, ve, de, section(:, :, e))
+         else
+            call beam_second_derivative(mesh%elements(e), xe, ve, de)
+         end if
          do i = 1, 6
             d2(mesh%edof(i, e)) = d2(mesh%edof(i, e)) + de(i)
          end do

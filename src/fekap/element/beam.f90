@@ -17,6 +17,9 @@ module fekap_element_beam
 
    public :: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain, beam_resultants
 
+   !> Most Gauss points of an element (see beam_type%ngauss).
+   integer, parameter, public :: max_gauss = 2
+
    !> Immutable definition of one element.
    type :: beam_type
       !> Reference length and initial angle (from +x, radians).
@@ -60,16 +63,25 @@ contains
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6), n1, n2, rl
       real(dp), intent(out) :: c, s, g1, g2
-      real(dp) :: phi, a1, a2
-      a1 = (xe(4) - xe(1))*rl
-      a2 = (xe(5) - xe(2))*rl
+      real(dp) :: phi
       phi = self%angle + n1*xe(3) + n2*xe(6)
       ! One sincos call: the compiler pairs cos and sin of the same argument.
       c = cos(phi)
       s = sin(phi)
+      call section_strain(xe, rl, c, s, g1, g2)
+   end subroutine point_strain
+
+   !> The strains Gamma1, Gamma2 (27) of a section whose angle has cosine c
+   !> and sine s (known from an earlier evaluation at the same xe).
+   pure subroutine section_strain(xe, rl, c, s, g1, g2)
+      real(dp), intent(in) :: xe(6), rl, c, s
+      real(dp), intent(out) :: g1, g2
+      real(dp) :: a1, a2
+      a1 = (xe(4) - xe(1))*rl
+      a2 = (xe(5) - xe(2))*rl
       g1 = c*a1 + s*a2 - 1
       g2 = -s*a1 + c*a2
-   end subroutine point_strain
+   end subroutine section_strain
 
    !> Internal force p (38) and, if asked, the tangent k = km + kg (43)-(44);
    !> kg is left out at Gauss points whose largest strain (|Gamma1|, |Gamma2|,
@@ -89,7 +101,7 @@ contains
    !>   translation-rotation     -/+ h n_b,  h = (wl/L) (EA Gamma2 e1 - kGA (1 + Gamma1) e2 + (g13, g23)),
    !>   rotation-rotation        r n_a n_b + wl EI/L^2 (-/+ 1),  r = wl (EA Gamma2^2 + kGA (1 + Gamma1)^2 + g33),
    !> (wl = w L / 2 the Gauss weight times the Jacobian; -/+: minus for unlike nodes).
-   pure subroutine beam_residual(self, xe, p, k, geometric_above, strain)
+   pure subroutine beam_residual(self, xe, p, k, geometric_above, strain, section)
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6)
       real(dp), intent(out) :: p(6)
@@ -97,6 +109,9 @@ contains
       real(dp), intent(in), optional :: geometric_above
       !> The largest strain, as beam_max_strain (a by-product of the Gauss points).
       real(dp), intent(out), optional :: strain
+      !> cos and sin of the section angle at each Gauss point, for
+      !> beam_second_derivative at the same xe.
+      real(dp), intent(out), optional :: section(2, max_gauss)
       real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, fx, fy, fm, fk
       real(dp) :: g13, g23, g33, kg_strain, ea, ga, ca, cb, m11, m12, m22, hx, hy, r
       real(dp) :: th(2, 2), rr(3), ei
@@ -122,6 +137,7 @@ contains
          n2 = (1 + xi)/2
          call point_strain(self, xe, n1, n2, rl, c, s, g1, g2)     ! (27)
          if (present(strain)) strain = max(strain, abs(g1), abs(g2))
+         if (present(section)) section(:, ig) = [c, s]
          sp = ea*g1                                                ! (30)
          sv = ga*g2
          sm = self%c(3)*kap
@@ -199,10 +215,13 @@ contains
    !> first, second and (contracted twice with vw) third derivatives of
    !> Gamma_m in w. kappa is linear in the dofs: no term. Bw^T y is
    !> (1/L) (-y1, -y2, 0, y1, y2, 0) + y3 (0, 0, n1, 0, 0, n2).
-   pure subroutine beam_second_derivative(self, xe, v, d2p)
+   pure subroutine beam_second_derivative(self, xe, v, d2p, section)
       type(beam_type), intent(in) :: self
       real(dp), intent(in) :: xe(6), v(6)
       real(dp), intent(out) :: d2p(6)
+      !> cos and sin of the section angles at xe, from beam_residual: spares
+      !> their evaluation (a third of the sincos calls of a step).
+      real(dp), intent(in), optional :: section(2, max_gauss)
       real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, rl, vw1, vw2, vp, d1, d2, vp2
       real(dp) :: sp, sv, gv1, gv2, q1, q2, y(3)
       integer :: ig
@@ -215,7 +234,13 @@ contains
          wl = w*self%length/2
          n1 = (1 - xi)/2
          n2 = (1 + xi)/2
-         call point_strain(self, xe, n1, n2, rl, c, s, g1, g2)
+         if (present(section)) then
+            c = section(1, ig)
+            s = section(2, ig)
+            call section_strain(xe, rl, c, s, g1, g2)
+         else
+            call point_strain(self, xe, n1, n2, rl, c, s, g1, g2)
+         end if
          sp = self%c(1)*g1
          sv = self%c(2)*g2
          vp = n1*v(3) + n2*v(6)

@@ -12,7 +12,7 @@ module fekap_solver_fem
    use fekap_model_results, only: step_result_type, note_length, has_note
    use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
-   use fekap_element_beam, only: beam_resultants
+   use fekap_element_beam, only: beam_resultants, max_gauss
    use fekap_assembly_assemble, only: assemble_residual, assemble_tangent, assemble_second_derivative, &
       & max_strain, slide_position
    use fekap_contact_slideline, only: slide_geometry, slide_locate, slide_on_element, slide_off_end
@@ -187,6 +187,11 @@ module fekap_solver_fem
       !> assembly, and its element.
       real(dp) :: assembled_strain = 0
       integer :: assembled_element = 0
+      !> (2, max_gauss, nelem): cos and sin of the elements' section angles at
+      !> the configuration of the last tangent assembly, which is the accepted
+      !> one whenever kff holds its factor (factor_current): the second
+      !> derivative of the rates reuses them.
+      real(dp), allocatable :: section(:, :, :)
       !> Whether the predictor extrapolated: guard_extrapolation then checks it
       !> with the strains of the step's first assembly.
       logical :: guard_pending = .false.
@@ -218,6 +223,7 @@ contains
          allocate (self%has_hist_velocity(history), source=.false.)
          allocate (self%q_predicted(n), source=0.0_dp)
          allocate (self%jump_response(n, nd), self%jump_response_new(n, nd), source=0.0_dp)
+         allocate (self%section(2, max_gauss, size(self%mesh%elements)), source=0.0_dp)
       end associate
       do i = 1, self%mesh%ndriven
          call model%drives(i)%law%eval(model%analysis%t_start, f, df, ddf)
@@ -1326,7 +1332,7 @@ contains
       real(dp) :: clock
       clock = phase_start(self)
       call assemble_tangent(self%mesh, q, t, self%seg, self%r, self%kff, self%kfd, geometric_above, &
-         & self%assembled_strain, self%assembled_element)
+         & self%assembled_strain, self%assembled_element, self%section)
       call phase_end(self, clock, self%counts%seconds_assembly)
       self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
       self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(self%mesh%slides)
@@ -1466,7 +1472,9 @@ contains
          self%has_velocity = .true.
          if (.not. self%model%analysis%accelerations) return
          clock = phase_start(self)
-         call assemble_second_derivative(mesh, self%q, self%v, self%seg, self%work)
+         ! kff holds the factor of the tangent at q (factor_current), so the
+         ! last tangent assembly, whose section angles are kept, was at q.
+         call assemble_second_derivative(mesh, self%q, self%v, self%seg, self%work, self%section)
          call phase_end(self, clock, self%counts%seconds_assembly)
          self%counts%slideline_evaluations = self%counts%slideline_evaluations + size(mesh%slides)
          self%a = 0
