@@ -3,10 +3,10 @@
 !> over the example decks.
 module test_assembly_assemble
    use fekap_kinds, only: dp
-   use fekap_testing, only: unittest_type, new_unittest, check, error_type, test_failed, next_random
+   use fekap_testing, only: unittest_type, new_unittest, check, error_type, next_random
+   use test_example_decks, only: example_decks, example_mesh
    use fekap_model, only: model_type, model_size
-   use fekap_deck, only: read_deck
-   use fekap_assembly_mesh, only: mesh_type, new_mesh
+   use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
    use fekap_assembly_assemble, only: assemble_tangent, assemble_residual
    implicit none
@@ -28,26 +28,18 @@ contains
    !> the residual over the free dofs, to 1e-6 of the tangent's largest entry.
    subroutine test_tangent(error)
       type(error_type), allocatable, intent(out) :: error
-      character(len=32), parameter :: names(9) = [character(len=32) :: 'fourbar', 'fourbar-quarter-turn', &
-         & 'fourbar-half-turn', 'fourbar-appendage', 'double-crank', 'peaucellier', 'quick-return', &
-         & 'slider-crank', 'cantilever-rollup']
       type(model_type) :: model
       type(mesh_type) :: mesh
       type(band_matrix_type) :: kff
-      type(error_type), allocatable :: failure
       real(dp), allocatable :: q(:), r(:), rp(:), rm(:), kfd(:, :), column(:)
       integer, allocatable :: seg(:)
       real(dp) :: strain, h, scale, worst
       integer :: d, i, j, k, state, element, col
       character(len=80) :: label
       state = 77
-      do d = 1, size(names)
-         call read_deck(model, 'decks/'//trim(names(d))//'.deck', failure)
-         if (allocated(failure)) then
-            call test_failed(error, trim(names(d))//': '//failure%message)
-            return
-         end if
-         call new_mesh(mesh, model)
+      do d = 1, size(example_decks)
+         call example_mesh(example_decks(d), model, mesh, error)
+         if (allocated(error)) return
          call new_band_matrix(kff, mesh%nfree, mesh%kd)
          allocate (r(mesh%ndof), rp(mesh%ndof), rm(mesh%ndof), kfd(mesh%nfree, mesh%ndriven), &
             & column(mesh%nfree), source=0.0_dp)
@@ -87,10 +79,10 @@ contains
                worst = max(worst, abs(column(k) - (rp(mesh%eq_dof(k)) - rm(mesh%eq_dof(k)))/(2*h)))
             end do
          end do
-         write (label, '(a,a)') trim(names(d)), ': tangent vs central differences'
+         write (label, '(a,a)') trim(example_decks(d)), ': tangent vs central differences'
          call check(error, worst/scale, 0.0_dp, trim(label), abs=1.0e-6_dp)
          if (allocated(error)) return
-         call check(error, scale > 0, trim(names(d))//': a tangent at all')
+         call check(error, scale > 0, trim(example_decks(d))//': a tangent at all')
          if (allocated(error)) return
          deallocate (r, rp, rm, kfd, column, seg)
       end do

@@ -2,10 +2,10 @@
 !> the band solver skips above, over the example decks.
 module test_assembly_mesh
    use fekap_kinds, only: dp
-   use fekap_testing, only: unittest_type, new_unittest, check, error_type, test_failed, next_random
+   use fekap_testing, only: unittest_type, new_unittest, check, error_type, next_random
+   use test_example_decks, only: example_decks, example_mesh
    use fekap_model, only: model_type
-   use fekap_deck, only: read_deck
-   use fekap_assembly_mesh, only: mesh_type, new_mesh
+   use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
    use fekap_assembly_assemble, only: assemble_tangent
    implicit none
@@ -27,13 +27,9 @@ contains
    !> first entry of each column's envelope is nonzero in one of them.
    subroutine test_envelope(error)
       type(error_type), allocatable, intent(out) :: error
-      character(len=32), parameter :: names(9) = [character(len=32) :: 'fourbar', 'fourbar-quarter-turn', &
-         & 'fourbar-half-turn', 'fourbar-appendage', 'double-crank', 'peaucellier', 'quick-return', &
-         & 'slider-crank', 'cantilever-rollup']
       type(model_type) :: model
       type(mesh_type) :: mesh
       type(band_matrix_type) :: kff
-      type(error_type), allocatable :: failure
       real(dp), allocatable :: q(:), r(:), kfd(:, :), reached(:, :)
       integer, allocatable :: seg(:)
       real(dp) :: strain
@@ -41,18 +37,14 @@ contains
       character(len=80) :: label
       state = 31
       narrower = 0
-      do d = 1, size(names)
-         call read_deck(model, 'decks/'//trim(names(d))//'.deck', failure)
-         if (allocated(failure)) then
-            call test_failed(error, trim(names(d))//': '//failure%message)
-            return
-         end if
-         call new_mesh(mesh, model)
+      do d = 1, size(example_decks)
+         call example_mesh(example_decks(d), model, mesh, error)
+         if (allocated(error)) return
          kd = mesh%kd
-         call check(error, size(mesh%envelope), mesh%nfree, trim(names(d))//': envelope size')
+         call check(error, size(mesh%envelope), mesh%nfree, trim(example_decks(d))//': envelope size')
          if (allocated(error)) return
          do j = 1, mesh%nfree
-            write (label, '(a,a,i0)') trim(names(d)), ': envelope inside the band, column ', j
+            write (label, '(a,a,i0)') trim(example_decks(d)), ': envelope inside the band, column ', j
             call check(error, mesh%envelope(j) >= max(1, j - kd) .and. mesh%envelope(j) <= j, trim(label))
             if (allocated(error)) return
          end do
@@ -74,10 +66,10 @@ contains
             end do
          end do
          do j = 1, mesh%nfree
-            write (label, '(a,a,i0)') trim(names(d)), ': zero above the envelope, column ', j
+            write (label, '(a,a,i0)') trim(example_decks(d)), ': zero above the envelope, column ', j
             call check(error, all(reached(1:kd + mesh%envelope(j) - j, j) == 0), trim(label))
             if (allocated(error)) return
-            write (label, '(a,a,i0)') trim(names(d)), ': the envelope''s first entry reached, column ', j
+            write (label, '(a,a,i0)') trim(example_decks(d)), ': the envelope''s first entry reached, column ', j
             call check(error, reached(kd + 1 + mesh%envelope(j) - j, j) > 0, trim(label))
             if (allocated(error)) return
             if (mesh%envelope(j) > max(1, j - kd)) narrower = narrower + 1

@@ -9,6 +9,7 @@ module test_deck
       & predictor_taylor, convergence_paper, joint_pin_in_slot, joint_prismatic
    use fekap_model_drive_law, only: law_rate, law_harmonic, law_polynomial, law_table
    use fekap_deck, only: read_deck, read_deck_string
+   use test_example_decks, only: example_decks
    implicit none
    private
    public :: collect_deck
@@ -331,16 +332,13 @@ contains
 
    subroutine test_example_decks(error)
       type(error_type), allocatable, intent(out) :: error
-      character(len=32), parameter :: names(9) = [character(len=32) :: 'fourbar', 'fourbar-quarter-turn', &
-         & 'fourbar-half-turn', 'fourbar-appendage', 'double-crank', 'peaucellier', 'quick-return', &
-         & 'slider-crank', 'cantilever-rollup']
       type(model_type) :: model
       type(error_type), allocatable :: failure
       integer :: i, o, a, b, d, p
-      do i = 1, size(names)
-         call read_deck(model, 'decks/'//trim(names(i))//'.deck', failure)
+      do i = 1, size(example_decks)
+         call read_deck(model, 'decks/'//trim(example_decks(i))//'.deck', failure)
          if (allocated(failure)) then
-            call test_failed(error, trim(names(i))//':'//nl//failure%message)
+            call test_failed(error, trim(example_decks(i))//':'//nl//failure%message)
             return
          end if
       end do
