@@ -230,6 +230,30 @@ def test_double_crank_exactly_collinear():
     check(len(t) == 6 and abs(t[-1] - 0.25) < 1e-12, f"rows of steps 0-5 kept, got t = {t}")
 
 
+def test_double_crank_small_steps():
+    """dt = 2e-4 lands on the collinear configurations with steps small enough
+    for the Adams predictor: no step ends at its predictor near them (the
+    residual hardly sees an error along the near-singular direction), so none
+    is rejected as a jump or cut; positions exact to 1e-9 away from them."""
+    def f_exact(t):
+        phi = angle(t, math.pi / 2, 2 * math.pi)
+        return (4 + cos(phi), sin(phi))
+    out, _ = run_case("decks/double-crank.deck", "--dt", "2e-4", "--compute", "positions")
+    text = listing(out)
+    check("jump" not in text and "step cut" not in text, "a jump rejection or a step cut in the listing")
+    iterations, cuts = work(out)
+    check(cuts == 0 and iterations < 5001, f"{iterations} iterations, {cuts} cuts: want fewer than one a step")
+    for r in read_rows(out / "points.csv"):
+        if r["point"] != "F":
+            continue
+        t = float(r["t"])
+        if min(abs(t - 0.25), abs(t - 0.75)) < 1e-3:
+            continue
+        fx, fy = f_exact(t)
+        err = max(abs(float(r["x"]) - fx.f), abs(float(r["y"]) - fy.f))
+        check(err < 1e-9, f"t = {t}: position error {err:.2e}")
+
+
 def test_double_crank_near_collinear():
     """dt = 0.0499 passes within 0.0005 of the collinear configurations: every
     row exact (positions 1e-9, velocities 1e-7 of their scale)."""
@@ -491,7 +515,7 @@ if __name__ == "__main__":
         test_fourbar_large_steps_every_predictor, test_legitimate_large_steps_not_rejected,
         test_branch_jumps_caught, test_classical_large_steps_every_predictor, test_classical_branch_jumps_caught,
         test_classical_redundant_double_crank, test_peaucellier_fold_caught, test_double_crank_exactly_collinear,
-        test_double_crank_near_collinear, test_grashof_limit, test_grashof_limit_jumps_caught,
+        test_double_crank_small_steps, test_double_crank_near_collinear, test_grashof_limit, test_grashof_limit_jumps_caught,
         test_peaucellier_near_flat, test_section_ratios,
         test_penalty_range, test_thousand_revolutions, test_slider_across_master_elements,
         test_signals_keep_rows, test_nonconvergence_stop, test_no_nan_or_inf_anywhere]))
