@@ -5,7 +5,7 @@ module test_solver_stepper
    use fekap_kinds, only: dp
    use fekap_testing, only: unittest_type, new_unittest, check, error_type
    use fekap_solver_stepper, only: work_counts_type, phase_seconds, split_seconds, clock_seconds, &
-      & coarse_clock_seconds
+      & coarse_clock_seconds, phase_timed, split_timed
    implicit none
    private
    public :: collect_solver_stepper
@@ -17,6 +17,8 @@ contains
       tests = [ &
          & new_unittest('phase_seconds', test_phase_seconds), &
          & new_unittest('split_seconds', test_split_seconds), &
+         & new_unittest('phase_timed', test_phase_timed), &
+         & new_unittest('split_timed', test_split_timed), &
          & new_unittest('coarse_clock_seconds', test_coarse_clock) &
          & ]
    end subroutine collect_solver_stepper
@@ -57,6 +59,37 @@ contains
       if (allocated(error)) return
       call check(error, seconds(2), 0.5_dp, 'output scaled', rel=1.0e-14_dp)
    end subroutine test_split_seconds
+
+   !> The phases are timed on the first 16 steps and on one in 16 after them.
+   subroutine test_phase_timed(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: n, count
+      call check(error, all([(phase_timed(n), n = 1, 16)]), 'the first 16 steps')
+      if (allocated(error)) return
+      count = 0
+      do n = 17, 16016
+         if (phase_timed(n)) count = count + 1
+      end do
+      call check(error, count, 1000, 'one step in 16 after them')
+   end subroutine test_phase_timed
+
+   !> The loop's split is sampled on every step of a short run; in a long one
+   !> on one step in 16, never one on which the phases are timed (after the
+   !> first 16).
+   subroutine test_split_timed(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: n, count
+      call check(error, all([(split_timed(n, 256), n = 0, 256)]), 'every step of a run of 256')
+      if (allocated(error)) return
+      count = 0
+      do n = 1, 16000
+         if (.not. split_timed(n, 16000)) cycle
+         count = count + 1
+         if (n > 16) call check(error, .not. phase_timed(n), 'apart from the phase-timed steps')
+         if (allocated(error)) return
+      end do
+      call check(error, count, 1000, 'one step in 16 of a long run')
+   end subroutine test_split_timed
 
    !> The coarse clock keeps time with the precise one, to its resolution
    !> (a few milliseconds), and never runs backwards.

@@ -16,7 +16,7 @@ module fekap_solver_fem
    use fekap_assembly_assemble, only: assemble_residual, assemble_tangent, assemble_second_derivative, &
       & max_strain, slide_position
    use fekap_contact_slideline, only: slide_geometry, slide_locate, slide_on_element, slide_off_end
-   use fekap_solver_stepper, only: stepper_type, clock_seconds
+   use fekap_solver_stepper, only: stepper_type, clock_seconds, phase_timed
    use fekap_solver_convergence, only: convergence_type, is_converged, extrapolate, hermite_extrapolate, &
       & adams_weights
    implicit none
@@ -90,10 +90,6 @@ module fekap_solver_fem
    !> less than this share of the crossing turn away from the Hermite predictor.
    real(dp), parameter :: verify_predicted = 1.0e-3_dp
    integer, parameter :: max_verify_depth = 10
-   !> The phases (assembly, factorisation, solves) of the start, of the first
-   !> phase_sample steps and of every phase_sample-th step after them are
-   !> timed; the summary scales them to the run (see phase_seconds).
-   integer, parameter :: phase_sample = 16
 
    !> The accepted state of a stepper that a step changes: what step-doubling
    !> verification restores to solve the same step again in two halves.
@@ -325,7 +321,9 @@ contains
       character(:), allocatable :: cut_reason, last_reason
       real(dp) :: clock
       self%advances = self%advances + 1
-      self%timing = self%advances <= phase_sample .or. mod(self%advances, phase_sample) == 0
+      ! The phases are timed on a sample of the steps (and at the start); the
+      ! summary scales them to the run (see phase_seconds).
+      self%timing = phase_timed(self%advances)
       if (self%timing) clock = clock_seconds()
       call advance_to(self, t, 0, result%iterations, result%residual, self%last_cuts, cut_reason, last_reason, error)
       if (allocated(error)) return

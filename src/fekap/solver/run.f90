@@ -12,7 +12,7 @@ module fekap_solver_run
    use fekap_solver_interrupt, only: interrupt_signal
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes, has_note
-   use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds
+   use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
       & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
@@ -32,17 +32,6 @@ module fekap_solver_run
    !> stretch (those not yet handed to the system); every other stop
    !> flushes all rows.
    real(dp), parameter, public :: flush_interval = 0.1_dp
-
-   !> The start (step 0) is timed whole, and the time of the steps after it
-   !> split into analysis and output as in a sample of them: the steps n with
-   !> mod(n, split_sample) = split_offset, or every step of a run of at most
-   !> split_all steps. A precise clock read costs 30-60 ns, and a step of
-   !> Example 1 about 2 us. The sample is uniform (the first steps, with their
-   !> short predictors, are no more typical of a run than the start) and
-   !> misses the steps on which the FEM times its phases (every 16th from 0):
-   !> their clock reads slow what follows them too, and on Example 1 a sample
-   !> on those steps put the output at 1.8 times its time measured on every step.
-   integer, parameter :: split_sample = 16, split_offset = 8, split_all = 256
 
    !> Open units of the output files; no_unit for a file that is not written.
    !> The CSV files are open for unformatted stream access, the listing for
@@ -143,9 +132,13 @@ contains
          end do
       end if
 
+      ! The start is timed whole; the time of the steps after it is split into
+      ! analysis and output as on a sample of them (see split_timed). The
+      ! sample is uniform: the first steps, with their short predictors, are
+      ! no more typical of a run than the start.
       c_loop = clock_seconds()
       do n = 0, nsteps
-         timed = n == 0 .or. nsteps <= split_all .or. mod(n, split_sample) == split_offset
+         timed = n == 0 .or. split_timed(n, nsteps)
          if (timed) c0 = clock_seconds()
          result%step = n
          result%cuts = 0
