@@ -5,7 +5,7 @@ module test_solver_convergence
    use fekap_testing, only: unittest_type, new_unittest, check, error_type
    use fekap_model, only: convergence_paper
    use fekap_solver_convergence, only: convergence_type, is_converged, extrapolate, hermite_extrapolate, &
-      & adams_extrapolate, adams_weights
+      & adams_weights
    implicit none
    private
    public :: collect_solver_convergence
@@ -18,7 +18,7 @@ contains
          & new_unittest('is_converged', test_is_converged), &
          & new_unittest('extrapolate', test_extrapolate), &
          & new_unittest('hermite_extrapolate', test_hermite_extrapolate), &
-         & new_unittest('adams_extrapolate', test_adams_extrapolate) &
+         & new_unittest('adams_weights', test_adams_weights) &
          & ]
    end subroutine collect_solver_convergence
 
@@ -116,14 +116,14 @@ contains
       end do
    end subroutine test_hermite_extrapolate
 
-   !> Adams-Bashforth extrapolation from one position and n velocities
-   !> reproduces a polynomial of degree n (unequal steps, n = 1 to 5), and
-   !> misses one of degree n + 1, with the nodes in the columns of a ring
-   !> buffer (the rest stale); the `drop` weights of adams_weights give its
-   !> difference from the extrapolation without the oldest velocity.
-   subroutine test_adams_extrapolate(error)
+   !> Adams-Bashforth extrapolation with these weights, from one position and
+   !> n velocities, reproduces a polynomial of degree n (unequal steps, n = 1
+   !> to 5) and misses one of degree n + 1, with the nodes in the columns of a
+   !> ring buffer (the rest stale); the `drop` weights give its difference
+   !> from the extrapolation without the oldest velocity.
+   subroutine test_adams_weights(error)
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: tk(6), q(2, 6), v(2, 6), qpred(2), qfewer(2), beta(5), drop(5), difference(2)
+      real(dp) :: tk(6), q(2, 6), v(2, 6), qpred(2), qfewer(2), difference(2), unused(2)
       integer :: n, k
       integer, parameter :: ring(5) = [4, 5, 6, 1, 2]
       tk = [0.05_dp, 0.0_dp, 9.0_dp, 0.3_dp, 0.2_dp, 0.12_dp]
@@ -135,23 +135,33 @@ contains
             q(:, ring(k)) = poly(tk(ring(k)), n) + [0.0_dp, tk(ring(k))**(n + 1)]
             v(:, ring(k)) = dpoly(tk(ring(k)), n) + [0.0_dp, (n + 1)*tk(ring(k))**n]
          end do
-         call adams_extrapolate(q, v, tk, ring(1:n), 0.45_dp, qpred)
+         call adams(ring(1:n), qpred, difference)
          call check(error, qpred(1), poly(0.45_dp, n), 'exact for degree n', rel=1.0e-12_dp)
          if (allocated(error)) return
          call check(error, abs(qpred(2) - poly(0.45_dp, n) - 0.45_dp**(n + 1)) > 1.0e-6_dp, &
             & 'not exact for degree n + 1')
          if (allocated(error)) return
          if (n < 2) cycle
-         call adams_weights(tk, ring(1:n), 0.45_dp, beta(1:n), drop(1:n))
-         call adams_extrapolate(q, v, tk, ring(1:n - 1), 0.45_dp, qfewer)
-         difference = 0
-         do k = 1, n
-            difference = difference + drop(k)*v(:, ring(k))
-         end do
+         call adams(ring(1:n - 1), qfewer, unused)
          call check(error, maxval(abs(difference - (qpred - qfewer))), 0.0_dp, 'drop weights: the difference', &
             & abs=1.0e-13_dp)
          if (allocated(error)) return
       end do
-   end subroutine test_adams_extrapolate
+   contains
+      !> The extrapolation to 0.45 through the columns, and its drop-weighted sum.
+      subroutine adams(columns, prediction, dropped)
+         integer, intent(in) :: columns(:)
+         real(dp), intent(out) :: prediction(2), dropped(2)
+         real(dp) :: beta(size(columns)), drop(size(columns))
+         integer :: j
+         call adams_weights(tk, columns, 0.45_dp, beta, drop)
+         prediction = q(:, columns(1))
+         dropped = 0
+         do j = 1, size(columns)
+            prediction = prediction + beta(j)*v(:, columns(j))
+            dropped = dropped + drop(j)*v(:, columns(j))
+         end do
+      end subroutine adams
+   end subroutine test_adams_weights
 
 end module test_solver_convergence

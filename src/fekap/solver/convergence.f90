@@ -6,7 +6,7 @@ module fekap_solver_convergence
    implicit none
    private
 
-   public :: convergence_type, is_converged, extrapolate, hermite_extrapolate, adams_extrapolate, adams_weights
+   public :: convergence_type, is_converged, extrapolate, hermite_extrapolate, adams_weights
 
    !> Settings of the test; see docs/theory.md, "Convergence".
    type :: convergence_type
@@ -78,44 +78,28 @@ contains
       end do
    end subroutine hermite_extrapolate
 
-   !> Adams-Bashforth extrapolation to time t: the configuration
-   !> q(:, columns(1)) plus the integral from its time to t of the polynomial
-   !> through the velocities v(:, columns(k)) at the times tk(columns(k))
-   !> (degree n - 1 for n columns; exact for configurations that are
-   !> polynomials of degree n; error of order h**(n+1)). Against Hermite
-   !> extrapolation it has one configuration in it, with weight 1, where
-   !> Hermite's weights amplify the round-off of all of them (the position
-   !> weights of degree 7 at equal steps add up to 158): at small steps its
-   !> prediction is the more accurate. The integral by 2-point Gauss, exact
-   !> for the polynomial through up to 4 velocities, and by 3-point Gauss
-   !> through 5 or 6.
-   pure subroutine adams_extrapolate(q, v, tk, columns, t, qpred)
-      real(dp), intent(in) :: q(:, :), v(:, :), tk(:), t
-      integer, intent(in) :: columns(:)
-      real(dp), intent(out) :: qpred(:)
-      real(dp) :: beta(size(columns))
-      integer :: k
-      call adams_weights(tk, columns, t, beta)
-      qpred = q(:, columns(1))
-      do k = 1, size(columns)
-         qpred = qpred + beta(k)*v(:, columns(k))
-      end do
-   end subroutine adams_extrapolate
-
-   !> The weights beta(k) of the velocities v(:, columns(k)) in
-   !> adams_extrapolate to a time t after every node: the integrals from
-   !> t_1 = tk(columns(1)) to t of the Lagrange basis polynomials l_k through
-   !> the nodes t_k = tk(columns(k)), k = 1..n (n up to 6), by Gauss
-   !> quadrature, with l_k = w / ((tau - t_k) w'(t_k)), w = prod (tau - t_m).
+   !> Adams-Bashforth extrapolation to time t is the configuration at t_1 =
+   !> tk(columns(1)) plus sum_k beta(k) v_k, the integral from t_1 to t of the
+   !> polynomial through the velocities v_k at the times t_k = tk(columns(k)),
+   !> k = 1..n (n up to 6, in any order; degree n - 1, so exact for
+   !> configurations that are polynomials of degree n, error of order
+   !> h**(n+1)). Against Hermite extrapolation it has one configuration in
+   !> it, with weight 1, where Hermite's weights amplify the round-off of all
+   !> of them (the position weights of degree 7 at equal steps add up to
+   !> 158): at small steps its prediction is the more accurate. These are the
+   !> weights beta(k), for t after every node: the integrals of the Lagrange
+   !> basis polynomials l_k = w / ((tau - t_k) w'(t_k)), w = prod (tau - t_m),
+   !> by Gauss quadrature (2 points, exact through 4 nodes; 3 through 5 or 6).
    !> And `drop`: the weights of the difference between this prediction and
-   !> the one through all nodes but the oldest, the next term of Newton's
-   !> form: the integral of prod_{m < n} (tau - t_m) times the divided
-   !> difference, whose weights are 1 / w'(t_k).
+   !> the one through all nodes but the oldest (an estimate of the latter's
+   !> error), the next term of Newton's form: the integral of
+   !> prod_{m < n} (tau - t_m) times the divided difference, whose weights
+   !> are 1 / w'(t_k). (The sums are the caller's: the FEM forms both in one
+   !> pass over the unknowns.)
    pure subroutine adams_weights(tk, columns, t, beta, drop)
       real(dp), intent(in) :: tk(:), t
       integer, intent(in) :: columns(:)
-      real(dp), intent(out) :: beta(:)
-      real(dp), intent(out), optional :: drop(:)
+      real(dp), intent(out) :: beta(:), drop(:)
       ! Gauss points on [-1, 1] and weights: 2 points in 1:2, 3 in 3:5.
       real(dp), parameter :: xg(5) = [-1/sqrt(3.0_dp), 1/sqrt(3.0_dp), -sqrt(0.6_dp), 0.0_dp, sqrt(0.6_dp)]
       real(dp), parameter :: wg(5) = [1.0_dp, 1.0_dp, 5.0_dp/9, 8.0_dp/9, 5.0_dp/9]
@@ -151,7 +135,7 @@ contains
             quadrature = quadrature + wg(g)*w_all(g)/(tau(g) - nodes(k))
          end do
          beta(k) = half*quadrature/derivative
-         if (present(drop)) drop(k) = integral/derivative
+         drop(k) = integral/derivative
       end do
    end subroutine adams_weights
 

@@ -761,7 +761,7 @@ contains
    end subroutine predict
 
    !> The Adams-Bashforth prediction at t through the `history` newest
-   !> velocities into qt (as adams_extrapolate), if all of them are known
+   !> velocities into qt (see adams_weights), if all of them are known
    !> (columns) and its error, estimated as its distance from the prediction
    !> through one velocity fewer (lengths, rotations times the model size),
    !> is at most predictor_margin times the length tolerance.
@@ -1001,7 +1001,7 @@ contains
          ! Response at the new configuration (unless its tangent is singular).
          pivot = 0
          if (factored) call factor_pivot(self, pivot)
-         has_response = pivot >= singular_floor .and. factored
+         has_response = pivot >= singular_floor
          if (has_response) then
             call drive_response(self, resp)
          else
