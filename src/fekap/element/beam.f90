@@ -129,7 +129,8 @@ contains
       th = 0
       rr = 0
       ei = 0
-      if (present(strain)) strain = abs((xe(6) - xe(3))/self%length)*self%length
+      ! |kappa| L = |theta2 - theta1|, the same along the element.
+      if (present(strain)) strain = abs(xe(6) - xe(3))
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
          wl = w*self%length/2
@@ -278,8 +279,8 @@ contains
       real(dp) :: xi, w, rl, c, s, g1, g2
       integer :: ig
       rl = 1/self%length
-      ! kappa is constant along the element.
-      strain = abs((xe(6) - xe(3))/self%length)*self%length
+      ! |kappa| L = |theta2 - theta1|, the same along the element.
+      strain = abs(xe(6) - xe(3))
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
          call point_strain(self, xe, (1 - xi)/2, (1 + xi)/2, rl, c, s, g1, g2)
