@@ -12,7 +12,7 @@ program fekap_main
       & new_cartesian_stepper
    use fekap_solver_interrupt, only: catch_interrupts
    use fekap_solver_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
-   use fekap_output_csv, only: write_mesh_csv
+   use fekap_output_csv, only: write_mesh_csv, write_mechanism_csv
    use fekap_output_listing, only: write_listing_model, write_listing_plan, plan_text
    use fekap_app_cli, only: cli_type, parse_command_line, apply_overrides, usage_text, fekap_version
    implicit none
@@ -132,9 +132,14 @@ contains
          call open_replace(outdir//'/points.csv', units%points, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/links.csv', units%links, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error, stream=.true.)
+         if (.not. allocated(error)) call open_replace(outdir//'/nodes.csv', units%nodes, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)
+         close (mesh_unit)
+         call open_replace(outdir//'/mechanism.csv', mesh_unit, error, stream=.true.)
+         if (allocated(error)) return
+         call write_mechanism_csv(mesh_unit, model)
          close (mesh_unit)
       end if
       ! Formatted stream: the run writes the listing's step lines many at a time.

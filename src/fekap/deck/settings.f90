@@ -218,13 +218,14 @@ contains
 
    end subroutine read_analysis
 
-   !> OUTPut: `track NODE ...`, `angles LINK ...`, `every K`, `files csv|listing|vtk ...`.
+   !> OUTPut: `track NODE ...`, `angles LINK ...`, `every K`, `files csv|listing|vtk ...`,
+   !> `units length=NAME time=NAME`.
    !> Without track every node is tracked; without angles every link is reported.
    subroutine read_output(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
-      character(*), parameter :: keys = 'track angles every files'
+      character(*), parameter :: keys = 'track angles every files units'
       integer :: i, iline, k, idx, every, which
       logical :: ok, tracked, angled
       character(:), allocatable :: key
@@ -285,6 +286,11 @@ contains
                      & label='allowed: csv listing vtk')
                end select
             end do
+         else if (is_word_of(key, 'units', 4)) then
+            if (.not. ctx%require(iline, 'units length=NAME [time=NAME]', 'a units line')) cycle
+            do k = 2, ctx%nfields(iline)
+               call read_unit(ctx, iline, k, model)
+            end do
          else
             call ctx%error(iline, 1, "unknown OUTPut parameter '"//ctx%field(iline, 1)//"'", label='allowed: '//keys)
          end if
@@ -294,6 +300,42 @@ contains
       model%output%points = points
       model%output%links = links
    end subroutine read_output
+
+   !> One `length=NAME` or `time=NAME` field of a units line: the name of the
+   !> unit in which the deck's numbers are given, for the plots' labels.
+   subroutine read_unit(ctx, iline, k, model)
+      type(context_type), intent(inout) :: ctx
+      integer, intent(in) :: iline, k
+      type(model_type), intent(inout) :: model
+      character(:), allocatable :: field, name
+      integer :: eq, i
+      field = ctx%field(iline, k)
+      eq = index(field, '=')
+      if (eq == 0) then
+         call ctx%error(iline, k, "expected length=NAME or time=NAME, not '"//field//"'", &
+            & label='e.g. units length=mm time=s')
+         return
+      end if
+      name = field(eq + 1:)
+      if (len(name) == 0 .or. len(name) > len(model%output%length_unit)) then
+         call ctx%error(iline, k, 'a unit name of 1 to 16 characters is needed after =', label='e.g. length=mm')
+         return
+      end if
+      do i = 1, len(name)
+         if (index(',"', name(i:i)) > 0) then
+            call ctx%error(iline, k, 'a unit name cannot hold a comma or a double quote', label='e.g. length=mm')
+            return
+         end if
+      end do
+      select case (word_index(field(:eq - 1), 'length time'))
+      case (1)
+         model%output%length_unit = name
+      case (2)
+         model%output%time_unit = name
+      case default
+         call ctx%error(iline, k, "unknown unit '"//field(:eq - 1)//"'", label='allowed: length time')
+      end select
+   end subroutine read_unit
 
    !> Position (1, 2, ...) of field among the blank-separated `words`; a word may be
    !> shortened to 4 letters. 0 if it is none of them.

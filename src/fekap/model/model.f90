@@ -163,6 +163,10 @@ module fekap_model
       logical :: csv = .true.
       logical :: listing = .true.
       logical :: vtk = .false.
+      !> Names of the deck's length and time units, for the plots' axis labels
+      !> (the numbers are used as given; angles are always radians).
+      character(len=16) :: length_unit = 'm'
+      character(len=16) :: time_unit = 's'
    end type output_type
 
    !> The whole model of one deck.

@@ -1,4 +1,5 @@
-!> CSV tables of a run: points.csv, links.csv, steps.csv and mesh.csv.
+!> CSV tables of a run: points.csv, links.csv, steps.csv, nodes.csv, and
+!> mesh.csv and mechanism.csv (written once).
 !> The per-step rows are built with the exact number texts of
 !> fekap_output_format (no format to interpret, no allocation) and appended
 !> to the file's text buffer, which writes them in large pieces; mesh.csv,
@@ -7,15 +8,16 @@
 !> significant digits, enough to round-trip.
 module fekap_output_csv
    use fekap_kinds, only: dp
-   use fekap_model, only: model_type
+   use fekap_model, only: model_type, dof_x, dof_y, dof_rot
    use fekap_model_results, only: step_result_type
-   use fekap_output_format, only: append_real, append_integer, append_text
+   use fekap_output_format, only: append_real, append_integer, append_text, real_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
    implicit none
    private
 
    public :: write_points_header, write_points_rows, write_links_header, write_links_rows
    public :: write_steps_header, write_steps_row, write_mesh_csv, new_row_prefix
+   public :: write_nodes_header, write_nodes_row, write_mechanism_csv
 
    !> Longest text of a real (es25.16e3 without its leading blank) and of an
    !> integer, and of the prefix `step,t,` of a row.
@@ -183,6 +185,134 @@ contains
       call append_integer(out%text, out%n, result%cuts)
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_steps_row
+
+   !> `step,t,A.x,A.y,B.x,...`: the header of nodes.csv, two columns per node
+   !> of the model, in the deck's order.
+   subroutine write_nodes_header(out, model)
+      type(text_buffer_type), intent(inout) :: out
+      type(model_type), intent(in) :: model
+      integer :: i
+      call reserve_text(out, 7)
+      call append_text(out%text, out%n, 'step,t')
+      do i = 1, size(model%nodes)
+         call reserve_text(out, 2*len(model%nodes(i)%name) + 7)
+         call append_text(out%text, out%n, ','//model%nodes(i)%name//'.x,'//model%nodes(i)%name//'.y')
+      end do
+      call append_text(out%text, out%n, new_line('a'))
+   end subroutine write_nodes_header
+
+   !> `step,t,x,y,x,y,...`: the positions of every node of the model at one
+   !> step, so that the whole mechanism can be drawn whatever is tracked.
+   subroutine write_nodes_row(out, result, prefix)
+      type(text_buffer_type), intent(inout) :: out
+      type(step_result_type), intent(in) :: result
+      !> new_row_prefix of the result.
+      type(row_prefix_type), intent(in) :: prefix
+      integer :: i
+      call reserve_text(out, prefix_length + 2*size(result%pos, 2)*(real_width + 1) + 1)
+      call append_text(out%text, out%n, prefix%text(1:prefix%n - 1))
+      do i = 1, size(result%pos, 2)
+         call append_values(out%text, out%n, result%pos(:, i))
+      end do
+      call append_char(out%text, out%n, new_line('a'))
+   end subroutine write_nodes_row
+
+   !> mechanism.csv: what the plots need to draw the mechanism and label it,
+   !> one record per line, the kind first: `title,TEXT`; `units,length,NAME`
+   !> and `units,time,NAME`; `support,NODE,FIXED` (FIXED: the fixed
+   !> freedoms among x, y, rotation, blank-separated); `guide,NAME,SLAVE,x1,y1,x2,y2`
+   !> (a ground guide) or `slot,NAME,SLAVE,LINK...` (a slideline on links);
+   !> `drive,x|y,NODE` or `drive,rotation,LINK,NODE`; `load,NODE`;
+   !> `track,NODE...`. To a unit open for unformatted stream access.
+   subroutine write_mechanism_csv(unit, model)
+      integer, intent(in) :: unit
+      type(model_type), intent(in) :: model
+      character(:), allocatable :: line
+      integer :: i, j
+      call emit(unit, 'record,fields')
+      if (allocated(model%title)) call emit(unit, 'title,'//quoted(model%title))
+      call emit(unit, 'units,length,'//trim(model%output%length_unit))
+      call emit(unit, 'units,time,'//trim(model%output%time_unit))
+      if (allocated(model%supports)) then
+         do i = 1, size(model%supports)
+            associate (s => model%supports(i))
+               line = trim(merge('x ', '  ', s%fix(dof_x)))//' '//trim(merge('y ', '  ', s%fix(dof_y)))//' '// &
+                  & trim(merge('rotation', '        ', s%fix(dof_rot)))
+               call emit(unit, 'support,'//model%nodes(s%node)%name//','//trim(adjustl(squeeze(line))))
+            end associate
+         end do
+      end if
+      if (allocated(model%slidelines)) then
+         do i = 1, size(model%slidelines)
+            associate (s => model%slidelines(i))
+               if (s%ground) then
+                  call emit(unit, 'guide,'//s%name//','//model%nodes(s%slave)%name//','//real_text(s%guide(1, 1))//','// &
+                     & real_text(s%guide(2, 1))//','//real_text(s%guide(1, 2))//','//real_text(s%guide(2, 2)))
+               else
+                  line = 'slot,'//s%name//','//model%nodes(s%slave)%name
+                  do j = 1, size(s%master_links)
+                     line = line//','//model%links(s%master_links(j))%name
+                  end do
+                  call emit(unit, line)
+               end if
+            end associate
+         end do
+      end if
+      if (allocated(model%drives)) then
+         do i = 1, size(model%drives)
+            associate (d => model%drives(i))
+               select case (d%dof)
+               case (dof_x)
+                  call emit(unit, 'drive,x,'//model%nodes(d%node)%name)
+               case (dof_y)
+                  call emit(unit, 'drive,y,'//model%nodes(d%node)%name)
+               case default
+                  call emit(unit, 'drive,rotation,'//model%links(d%link)%name//','//model%nodes(d%node)%name)
+               end select
+            end associate
+         end do
+      end if
+      if (allocated(model%loads)) then
+         do i = 1, size(model%loads)
+            call emit(unit, 'load,'//model%nodes(model%loads(i)%node)%name)
+         end do
+      end if
+      line = 'track'
+      do i = 1, size(model%output%points)
+         line = line//','//model%nodes(model%output%points(i))%name
+      end do
+      call emit(unit, line)
+   end subroutine write_mechanism_csv
+
+   !> A CSV field in double quotes, its double quotes doubled.
+   pure function quoted(text) result(field)
+      character(*), intent(in) :: text
+      character(:), allocatable :: field
+      integer :: i
+      field = '"'
+      do i = 1, len(text)
+         if (text(i:i) == '"') then
+            field = field//'""'
+         else
+            field = field//text(i:i)
+         end if
+      end do
+      field = field//'"'
+   end function quoted
+
+   !> The text with runs of blanks made single blanks.
+   pure function squeeze(text) result(out)
+      character(*), intent(in) :: text
+      character(:), allocatable :: out
+      integer :: i
+      out = ''
+      do i = 1, len_trim(text)
+         if (text(i:i) == ' ' .and. len(out) > 0) then
+            if (out(len(out):len(out)) == ' ') cycle
+         end if
+         out = out//text(i:i)
+      end do
+   end function squeeze
 
    !> `link,node1,node2`: the end points of every link, for drawing the
    !> mechanism; to a unit open for unformatted stream access.

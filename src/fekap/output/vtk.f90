@@ -3,11 +3,15 @@
 !> Writers take an open unit and never open files themselves. Reals are
 !> written with 17 significant digits, enough to round-trip.
 !>
-!> A .vtu file holds the analysis mesh at one step: its points (z = 0), its
-!> line cells (VTK_LINE, type 3), the point data `displacement` (position
-!> minus initial position), `velocity` and `acceleration` (when computed at
-!> that step), and the cell data `link` (1-based link index) and `N`, `V`,
-!> `M` (the stress resultants of each cell).
+!> A .vtu file holds the analysis mesh at one step in ParaView's convention
+!> for displacements: its points at their reference (first-step) positions
+!> (z = 0), its line cells (VTK_LINE, type 3), the point data `displacement`
+!> (current position minus reference position: Warp By Vector with scale 1
+!> shows the mechanism where it is), `velocity` and `acceleration` (when
+!> computed at that step), the cell data `link` (1-based link index) and
+!> `N`, `V`, `M` (the stress resultants of each cell), and the field data
+!> `TimeValue` and `node_names` (the names of the model's nodes, which are
+!> the first points, in the deck's order).
 module fekap_output_vtk
    use fekap_kinds, only: dp
    use fekap_model, only: model_type
@@ -48,6 +52,7 @@ contains
       write (unit, '(a)') '      <DataArray type="Float64" Name="TimeValue" NumberOfTuples="1" format="ascii">'
       write (unit, '(8x,a)') real_text(result%t)
       write (unit, '(a)') '      </DataArray>'
+      call write_names(unit, 'node_names', model)
       write (unit, '(a)') '    </FieldData>'
       write (unit, '(a)') '    <Piece NumberOfPoints="'//integer_text(npoint)//'" NumberOfCells="'//integer_text(ncell)//'">'
 
@@ -69,7 +74,7 @@ contains
       write (unit, '(a)') '      </CellData>'
 
       write (unit, '(a)') '      <Points>'
-      call write_vectors(unit, '', result%mesh_pos)
+      call write_vectors(unit, '', initial_pos)
       write (unit, '(a)') '      </Points>'
 
       write (unit, '(a)') '      <Cells>'
@@ -134,6 +139,27 @@ contains
       end do
       call close_array(unit)
    end subroutine write_vectors
+
+   !> The names of the model's nodes as a VTK string array: each name as its
+   !> character codes, ended by a 0 (VTK's ASCII form of a vtkStringArray).
+   subroutine write_names(unit, name, model)
+      integer, intent(in) :: unit
+      character(*), intent(in) :: name
+      type(model_type), intent(in) :: model
+      integer :: i, j
+      character(len=4) :: code
+      write (unit, '(a)') '      <Array type="String" Name="'//name//'" NumberOfTuples="'// &
+         & integer_text(size(model%nodes))//'" format="ascii">'
+      do i = 1, size(model%nodes)
+         write (unit, '(8x)', advance='no')
+         do j = 1, len(model%nodes(i)%name)
+            write (code, '(i0)') iachar(model%nodes(i)%name(j:j))
+            write (unit, '(a,1x)', advance='no') trim(code)
+         end do
+         write (unit, '(a)') '0'
+      end do
+      write (unit, '(a)') '      </Array>'
+   end subroutine write_names
 
    !> A Float64 array of scalars.
    subroutine write_scalars(unit, name, values)

@@ -14,10 +14,11 @@ module fekap_solver_run
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes, has_note
    use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
-      & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix
+      & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix, write_nodes_header, write_nodes_row
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop, write_listing_note
-   use fekap_output_vtk, only: write_vtu, write_pvd
+   use fekap_output_vtk, only: write_vtu
+   use fekap_output_pvd, only: pvd_type, add_pvd_entry, pvd_due, write_pvd_file
    use fekap_output_buffer, only: text_buffer_type, new_text_buffer, write_buffered
    implicit none
    private
@@ -38,11 +39,14 @@ module fekap_solver_run
    !> formatted stream access (see open_replace).
    !> VTK output is many files, opened by the loop: with `vtk`, each written
    !> step goes to `<outdir>/vtk/<stem>_<step>.vtu` (the directory must exist)
-   !> and the collection `<outdir>/<stem>.pvd` is rewritten after each of them.
+   !> and the collection `<outdir>/<stem>.pvd` is rewritten at the flushes
+   !> when it has grown enough (fekap_output_pvd) and at the end.
    type :: run_units_type
       integer :: points = no_unit
       integer :: links = no_unit
       integer :: steps = no_unit
+      !> nodes.csv: every node's position at the written steps.
+      integer :: nodes = no_unit
       integer :: listing = no_unit
       logical :: vtk = .false.
       !> The output directory and the deck's stem, for the VTK file names.
@@ -57,14 +61,13 @@ module fekap_solver_run
       integer, allocatable :: links_nodes(:, :)
       !> (2, npoint): point positions at the first step.
       real(dp), allocatable :: initial_pos(:, :)
-      !> Time and step number of every file written so far.
-      real(dp), allocatable :: times(:)
-      integer, allocatable :: steps(:)
+      !> The collection of the files written so far.
+      type(pvd_type) :: pvd
    end type vtk_state_type
 
    !> The text of the files written step by step, held between flushes.
    type :: run_buffers_type
-      type(text_buffer_type) :: points, links, steps, listing
+      type(text_buffer_type) :: points, links, steps, nodes, listing
    end type run_buffers_type
 
 contains
@@ -124,9 +127,10 @@ contains
       if (units%points /= no_unit) call write_points_header(out%points, vel, acc)
       if (units%links /= no_unit) call write_links_header(out%links, vel, acc)
       if (units%steps /= no_unit) call write_steps_header(out%steps)
+      if (units%nodes /= no_unit) call write_nodes_header(out%nodes, model)
       if (units%listing /= no_unit) call write_listing_step_header(units%listing)
       if (units%vtk) then
-         allocate (vtk%links_nodes(2, size(model%links)), vtk%times(0), vtk%steps(0))
+         allocate (vtk%links_nodes(2, size(model%links)))
          do l = 1, size(model%links)
             vtk%links_nodes(:, l) = model%links(l)%node
          end do
@@ -149,7 +153,12 @@ contains
          end if
          if (timed) c1 = clock_seconds()
          if (allocated(step_error)) then
-            write (where_, '(a,i0,a,es12.5,a)') 'step ', n, ' (t = ', step_time(model, n, nsteps), '): '
+            ! A message that names its own time (where the step was cut) gives the only time.
+            if (index(step_error%message, 't = ') == 1) then
+               write (where_, '(a,i0,a)') 'step ', n, ':'
+            else
+               write (where_, '(a,i0,a,es12.5,a)') 'step ', n, ' (t = ', step_time(model, n, nsteps), '):'
+            end if
             call analysis_error(error, trim(where_)//' '//step_error%message)
             exit
          end if
@@ -160,7 +169,8 @@ contains
             if (n == 0) vtk%initial_pos = result%mesh_pos
          end if
          if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
-            if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit) then
+            if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit .or. &
+               & units%nodes /= no_unit) then
                call new_row_prefix(prefix, result)
             end if
             if (units%points /= no_unit) then
@@ -175,6 +185,7 @@ contains
                call write_steps_row(out%steps, result, prefix)
                rows = rows + 1
             end if
+            if (units%nodes /= no_unit) call write_nodes_row(out%nodes, result, prefix)
             if (units%listing /= no_unit) call write_listing_step(out%listing, result)
             if (units%vtk) then
                call write_vtk_step(units, model, result, vtk, error)
@@ -187,6 +198,10 @@ contains
          now = coarse_clock_seconds()
          if (now - last_flush >= flush_interval) then
             call flush_all(units, out)
+            if (units%vtk) then
+               if (pvd_due(vtk%pvd)) call write_pvd_file(vtk%pvd, units%outdir//'/'//units%stem//'.pvd', error)
+               if (allocated(error)) exit
+            end if
             last_flush = now
          end if
          if (timed) then
@@ -211,6 +226,7 @@ contains
       c0 = clock_seconds()
       seconds(1:2) = start + split_seconds(sampled, c0 - c_loop)
       call flush_all(units, out)
+      if (units%vtk) call finish_pvd(units, vtk, error)
       c1 = clock_seconds()
       seconds(2) = seconds(2) + (c1 - c0)
       seconds(3) = c1 - c_start
@@ -219,7 +235,7 @@ contains
          ! told before the summary.
          if (allocated(error)) call write_listing_stop(units%listing, error%message)
          if (units%vtk) then
-            call write_listing_summary(units%listing, stepper%counts, rows, seconds, vtk_files=size(vtk%steps))
+            call write_listing_summary(units%listing, stepper%counts, rows, seconds, vtk_files=vtk%pvd%entries)
          else
             call write_listing_summary(units%listing, stepper%counts, rows, seconds)
          end if
@@ -227,30 +243,32 @@ contains
       end if
    end subroutine run_analysis
 
-   !> Write the step's .vtu file and rewrite the .pvd collection with it added.
+   !> Write the step's .vtu file and add it to the collection.
    subroutine write_vtk_step(units, model, result, vtk, error)
       type(run_units_type), intent(in) :: units
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       type(vtk_state_type), intent(inout) :: vtk
       type(error_type), allocatable, intent(out) :: error
-      character(len=len(units%stem) + 24), allocatable :: files(:)
-      integer :: unit, i
-      vtk%times = [vtk%times, result%t]
-      vtk%steps = [vtk%steps, result%step]
-      allocate (files(size(vtk%steps)))
-      do i = 1, size(vtk%steps)
-         files(i) = vtu_name(units%stem, vtk%steps(i))
-      end do
-      call open_replace(units%outdir//'/'//trim(files(size(files))), unit, error)
+      integer :: unit
+      call open_replace(units%outdir//'/'//vtu_name(units%stem, result%step), unit, error)
       if (allocated(error)) return
       call write_vtu(unit, model, result, vtk%initial_pos)
       close (unit)
-      call open_replace(units%outdir//'/'//units%stem//'.pvd', unit, error)
-      if (allocated(error)) return
-      call write_pvd(unit, vtk%times, files)
-      close (unit)
+      call add_pvd_entry(vtk%pvd, result%t, vtu_name(units%stem, result%step))
    end subroutine write_vtk_step
+
+   !> Write the complete collection at the end of a run, however it ended
+   !> (the error of a run that already failed is kept).
+   subroutine finish_pvd(units, vtk, error)
+      type(run_units_type), intent(in) :: units
+      type(vtk_state_type), intent(inout) :: vtk
+      type(error_type), allocatable, intent(inout) :: error
+      type(error_type), allocatable :: pvd_error
+      if (vtk%pvd%entries == 0) return
+      call write_pvd_file(vtk%pvd, units%outdir//'/'//units%stem//'.pvd', pvd_error)
+      if (allocated(pvd_error) .and. .not. allocated(error)) call move_alloc(pvd_error, error)
+   end subroutine finish_pvd
 
    !> `vtk/<stem>_<step, at least 6 digits>.vtu`, relative to the output directory.
    pure function vtu_name(stem, step) result(name)
@@ -300,6 +318,7 @@ contains
       if (units%points /= no_unit) call new_text_buffer(out%points, units%points, formatted=.false.)
       if (units%links /= no_unit) call new_text_buffer(out%links, units%links, formatted=.false.)
       if (units%steps /= no_unit) call new_text_buffer(out%steps, units%steps, formatted=.false.)
+      if (units%nodes /= no_unit) call new_text_buffer(out%nodes, units%nodes, formatted=.false.)
       if (units%listing /= no_unit) call new_text_buffer(out%listing, units%listing, formatted=.true.)
    end subroutine new_run_buffers
 
@@ -310,6 +329,7 @@ contains
       if (units%points /= no_unit) call flush_buffer(out%points)
       if (units%links /= no_unit) call flush_buffer(out%links)
       if (units%steps /= no_unit) call flush_buffer(out%steps)
+      if (units%nodes /= no_unit) call flush_buffer(out%nodes)
       if (units%listing /= no_unit) call flush_buffer(out%listing)
    end subroutine flush_all
 

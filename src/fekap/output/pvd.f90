@@ -1,0 +1,94 @@
+!> The ParaView collection `<stem>.pvd` of a run's .vtu files, listing each
+!> with its time. Its lines are formatted once, as each .vtu is written, and
+!> held in memory; the file is written whole to a temporary name and renamed
+!> over the collection, so that it is never seen cut short, not even after a
+!> SIGKILL. Rewriting it after every step made a run quadratic in its steps
+!> (16,000 steps: 107 s, of which 0.19 s analysis); it is rewritten only when
+!> it has grown by an eighth since the last write (pvd_due) and at the end,
+!> so that all the rewrites together write at most about nine times its
+!> final size: linear in the steps.
+module fekap_output_pvd
+   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, fatal_error
+   use fekap_output_format, only: real_text
+   implicit none
+   private
+
+   public :: pvd_type, add_pvd_entry, pvd_due, write_pvd_file
+
+   type :: pvd_type
+      !> text(1:n): one DataSet line per .vtu file, each ending in a newline.
+      character(:), allocatable :: text
+      integer :: n = 0
+      !> DataSet lines held, and how many of them the file on disk lists.
+      integer :: entries = 0
+      integer :: written = 0
+   end type pvd_type
+
+   interface
+      !> C's rename: atomic replacement of `to` by `from` on one file system.
+      integer(c_int) function c_rename(from, to) bind(C, name='rename')
+         import :: c_int, c_char
+         character(kind=c_char), intent(in) :: from(*), to(*)
+      end function c_rename
+   end interface
+
+contains
+
+   !> Add the .vtu file `file` (relative to the .pvd) at time t.
+   pure subroutine add_pvd_entry(self, t, file)
+      type(pvd_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      character(*), intent(in) :: file
+      character(:), allocatable :: line, grown
+      line = '    <DataSet timestep="'//real_text(t)//'" part="0" file="'//file//'"/>'//new_line('a')
+      if (.not. allocated(self%text)) allocate (character(len=4096) :: self%text)
+      if (self%n + len(line) > len(self%text)) then
+         ! Doubling: appending stays linear in the number of lines.
+         allocate (character(len=2*(len(self%text) + len(line))) :: grown)
+         grown(1:self%n) = self%text(1:self%n)
+         call move_alloc(grown, self%text)
+      end if
+      self%text(self%n + 1:self%n + len(line)) = line
+      self%n = self%n + len(line)
+      self%entries = self%entries + 1
+   end subroutine add_pvd_entry
+
+   !> Whether the collection has grown enough since it was last written to
+   !> be written again (by an eighth, and by at least one file).
+   pure logical function pvd_due(self)
+      type(pvd_type), intent(in) :: self
+      pvd_due = self%entries - self%written >= max(1, self%written/8)
+   end function pvd_due
+
+   !> Write the collection to `path`: to `path.part` first, then renamed.
+   subroutine write_pvd_file(self, path, error)
+      type(pvd_type), intent(inout) :: self
+      character(*), intent(in) :: path
+      type(error_type), allocatable, intent(out) :: error
+      character(*), parameter :: nl = new_line('a')
+      integer :: unit, ios
+      open (newunit=unit, file=path//'.part', status='replace', action='write', access='stream', &
+         & form='unformatted', iostat=ios)
+      if (ios /= 0) then
+         call fatal_error(error, path//'.part: cannot write this file')
+         return
+      end if
+      write (unit, iostat=ios) '<?xml version="1.0"?>'//nl// &
+         & '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">'//nl//'  <Collection>'//nl
+      if (ios == 0 .and. self%n > 0) write (unit, iostat=ios) self%text(1:self%n)
+      if (ios == 0) write (unit, iostat=ios) '  </Collection>'//nl//'</VTKFile>'//nl
+      close (unit)
+      if (ios /= 0) then
+         call fatal_error(error, path//'.part: cannot write this file')
+         return
+      end if
+      if (c_rename(path//'.part'//c_null_char, path//c_null_char) /= 0) then
+         call fatal_error(error, path//': cannot replace this file by '//path//'.part')
+         return
+      end if
+      self%written = self%entries
+   end subroutine write_pvd_file
+
+end module fekap_output_pvd
