@@ -42,8 +42,11 @@ contains
          & '  --print-outdir      print the output directory and exit'//nl// &
          & '  --version           print the version and exit'//nl// &
          & '  --help              print this help and exit'//nl//nl// &
-         & 'exit codes: 0 success, 2 input error, 3 analysis did not converge or hit a'//nl// &
-         & 'singular configuration, 1 anything else.'
+         & 'exit codes:'//nl// &
+         & '  0  success'//nl// &
+         & '  1  anything else, including a run stopped by SIGINT or SIGTERM'//nl// &
+         & '  2  input error (bad deck or command line)'//nl// &
+         & '  3  the analysis did not converge (the rows of the completed steps are kept)'
    end function usage_text
 
    !> Read the command line into `cli`.

@@ -342,8 +342,10 @@ contains
       type(error_type), allocatable, intent(out) :: error
       self%cuts = self%cuts + 1
       if (self%cuts > max_cuts) then
-         call analysis_error(error, reason%message//' (after '//int_text(max_cuts)// &
-            & ' step cuts; try a smaller time step or another predictor)')
+         call analysis_error(error, reason%message//' (after '//int_text(max_cuts)//' step cuts, down to 1/'// &
+            & int_text(2**max_cuts)//' of the time step: the mechanism cannot follow its drive past this point, '// &
+            & 'as at a dead point, where the driven link reaches a limit; a smaller time step will not help: '// &
+            & 'drive another link, end the run before this point, or try another predictor)')
          return
       end if
       if (allocated(self%first)) then

@@ -5,6 +5,7 @@ module fekap_output_listing
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, method_fem, method_cartesian, &
       & predictor_previous, predictor_extrapolate, convergence_paper, joint_prismatic
    use fekap_model_results, only: step_result_type
+   use fekap_model_drive_law, only: law_type, law_rate, law_harmonic, law_polynomial, law_table
    use fekap_solver_stepper, only: work_counts_type, phase_seconds
    use fekap_output_format, only: append_es, append_i, append_integer, append_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
@@ -76,12 +77,12 @@ contains
             associate (dr => model%drives(i))
                select case (dr%dof)
                case (dof_x)
-                  write (unit, '(2x,a)') 'x of node '//model%nodes(dr%node)%name
+                  write (unit, '(2x,a)') 'x of node '//model%nodes(dr%node)%name//': '//law_text(dr%law, 'x')
                case (dof_y)
-                  write (unit, '(2x,a)') 'y of node '//model%nodes(dr%node)%name
+                  write (unit, '(2x,a)') 'y of node '//model%nodes(dr%node)%name//': '//law_text(dr%law, 'y')
                case default
                   write (unit, '(2x,a)') 'angle of link '//model%links(dr%link)%name//' at node '// &
-                     & model%nodes(dr%node)%name
+                     & model%nodes(dr%node)%name//': '//law_text(dr%law, 'angle')
                end select
             end associate
          end do
@@ -97,12 +98,88 @@ contains
          if (size(model%slidelines) > 0) write (unit, '(/,a)') 'SLIDELINES'
          do i = 1, size(model%slidelines)
             associate (s => model%slidelines(i))
-               write (unit, '(2x,a12,a)') s%name, 'slave '//model%nodes(s%slave)%name// &
-                  & trim(merge(' prismatic  ', ' pin-in-slot', s%kind == joint_prismatic))
+               if (s%ground) then
+                  write (unit, '(2x,a)') s%name//': node '//model%nodes(s%slave)%name//' on the ground guide from ('// &
+                     & short_text(s%guide(1, 1))//', '//short_text(s%guide(2, 1))//') to ('//short_text(s%guide(1, 2))// &
+                     & ', '//short_text(s%guide(2, 2))//'), '//trim(merge('prismatic  ', 'pin-in-slot', &
+                     & s%kind == joint_prismatic))
+               else
+                  write (unit, '(2x,a)') s%name//': node '//model%nodes(s%slave)%name//' on '// &
+                     & trim(master_text(model, s%master_links))//', '// &
+                     & trim(merge('prismatic  ', 'pin-in-slot', s%kind == joint_prismatic))
+               end if
             end associate
          end do
       end if
    end subroutine write_listing_model
+
+   !> The time law of a drive as a formula in t, e.g. `angle = angle0 + 6.28...*t`.
+   function law_text(law, what) result(text)
+      type(law_type), intent(in) :: law
+      character(*), intent(in) :: what
+      character(:), allocatable :: text
+      integer :: k
+      select case (law%kind)
+      case (law_rate)
+         if (law%absolute) then
+            text = what//' = '//short_text(law%c(2))//' + '//short_text(law%c(1))//'*t'
+         else
+            text = what//' = (initial '//what//') + '//short_text(law%c(1))//'*t'
+         end if
+      case (law_harmonic)
+         text = what//' = '//short_text(law%c(1))//' + '//short_text(law%c(2))//'*cos('//short_text(law%c(3))// &
+            & '*t + '//short_text(law%c(4))//')'
+      case (law_polynomial)
+         text = what//' = '//short_text(law%c(1))
+         do k = 2, size(law%c)
+            if (k == 2) then
+               text = text//' + '//short_text(law%c(k))//'*t'
+            else
+               text = text//' + '//short_text(law%c(k))//'*t^'//trim(int_text(k - 1))
+            end if
+         end do
+      case (law_table)
+         text = what//' from a table of '//trim(int_text(size(law%tt)))//' points, t = '//short_text(law%tt(1))// &
+            & ' to '//short_text(law%tt(size(law%tt)))//' (natural cubic spline)'
+      case default
+         text = what
+      end select
+   end function law_text
+
+   !> The master links of a slideline: `link O4B` or `links L1 L2 ...`.
+   function master_text(model, links) result(text)
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: links(:)
+      character(:), allocatable :: text
+      integer :: j
+      text = trim(merge('link ', 'links', size(links) == 1))
+      do j = 1, size(links)
+         text = text//' '//model%links(links(j))%name
+      end do
+   end function master_text
+
+   !> A real in at most 9 significant digits, without blanks (listing text).
+   pure function short_text(x) result(text)
+      real(dp), intent(in) :: x
+      character(:), allocatable :: text
+      character(len=32) :: buf
+      integer :: k
+      write (buf, '(g0.9)') x
+      text = trim(adjustl(buf))
+      if (index(text, '.') == 0 .or. scan(text, 'Ee') > 0) return
+      k = len(text)
+      do while (text(k:k) == '0')
+         k = k - 1
+      end do
+      if (text(k:k) == '.') k = k - 1
+      text = text(:k)
+   end function short_text
+
+   pure function int_text(n) result(text)
+      integer, intent(in) :: n
+      character(len=12) :: text
+      write (text, '(i0)') n
+   end function int_text
 
    !> One line saying what the run computes, e.g. "computing positions and
    !> velocities; 40 steps; output every 10th step".

@@ -26,6 +26,11 @@ module fekap_solver_fem
 
    !> Step cuts (halvings) allowed within one step before it is given up.
    integer, parameter :: max_cuts = 8
+   !> What a run that cannot go on after its step cuts is told: the usual
+   !> cause is a dead point, where a smaller time step cannot help.
+   character(*), parameter :: dead_point_hint = ' of the time step: the mechanism cannot follow its drive past '// &
+      & 'this point, as at a dead point, where the driven link reaches a limit; a smaller time step will not help: '// &
+      & 'drive another link, end the run before this point, or try another predictor)'
    !> Element strain above which a converged configuration is not a mechanism
    !> configuration but a self-stressed equilibrium.
    !> It follows the Newton tolerance (a loose paper-style test leaves strains
@@ -363,7 +368,7 @@ contains
       character(:), allocatable :: rejection
       real(dp) :: h, h_full, t_try, step_residual
       integer :: it
-      character(len=80) :: note
+      character(len=400) :: note
       h_full = t - self%t
       h = h_full
       cuts = 0
@@ -398,7 +403,7 @@ contains
             self%verify_failed = .false.
             cuts = cuts + 1
             if (cuts > max_cuts) then
-               write (note, '(a,i0,a)') ' (after ', max_cuts, ' step cuts; try a smaller time step or another predictor)'
+               write (note, '(a,i0,a,i0,a)') ' (after ', max_cuts, ' step cuts, down to 1/', 2**max_cuts, dead_point_hint
                call analysis_error(error, step_error%message//trim(note))
                return
             end if
