@@ -233,9 +233,9 @@ def test_only_and_instants(tmp_path: Path) -> None:
 
 
 def test_animate(tmp_path: Path) -> None:
-    """--animate writes a GIF of the mechanism."""
+    """--animate gif writes a GIF of the mechanism (an MP4 by default where ffmpeg is)."""
     out = write_run(tmp_path / "anim", steps=10)
-    proc = run_script(PLOT, out, "--animate", "--only", "paths")
+    proc = run_script(PLOT, out, "--animate", "gif", "--only", "paths")
     check_ok(proc)
     gif = out / "motion.gif"
     check(gif.is_file() and gif.read_bytes()[:6] in (b"GIF89a", b"GIF87a"), "no valid GIF")

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""The VTK output of the fekap executable, read back with meshio (a
-third-party VTK reader) and xml.etree, and checked against the CSV output of
+"""The VTK output of the fekap executable, read back with VTK's own reader
+(the vtk package) and xml.etree, and checked against the CSV output of
 the same run: one .vtu per written step and a .pvd listing them with their
 times; the model's nodes are the first points; cells connect the right
 points; displacement, velocity and acceleration; stress resultants of a
@@ -18,7 +18,6 @@ import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-import meshio
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -74,6 +73,36 @@ def close(got, want, tol: float = 1e-14) -> bool:
     return got.shape == want.shape and bool(np.all(np.abs(got - want) <= tol * scale))
 
 
+class Mesh:
+    """A .vtu read by VTK, shaped like a meshio mesh: ``points`` are the current positions
+    (the file's reference points plus its displacement, ParaView's convention), ``reference``
+    the file's points; ``point_data``, ``cell_data`` (a list per name), ``cells`` (one block of
+    lines)."""
+
+    def __init__(self, path: Path):
+        import vtk
+        from vtk.util.numpy_support import vtk_to_numpy
+
+        reader = vtk.vtkXMLUnstructuredGridReader()
+        reader.SetFileName(str(path))
+        reader.Update()
+        grid = reader.GetOutput()
+        check(grid.GetNumberOfPoints() > 0, f"{path}: VTK read no points")
+        self.reference = vtk_to_numpy(grid.GetPoints().GetData())
+        self.point_data = {grid.GetPointData().GetArrayName(i): vtk_to_numpy(grid.GetPointData().GetArray(i))
+                           for i in range(grid.GetPointData().GetNumberOfArrays())}
+        self.cell_data = {grid.GetCellData().GetArrayName(i): [vtk_to_numpy(grid.GetCellData().GetArray(i))]
+                          for i in range(grid.GetCellData().GetNumberOfArrays())}
+        self.points = self.reference + self.point_data["displacement"]
+        fields = grid.GetFieldData()
+        self.field_data = {fields.GetArrayName(i): vtk_to_numpy(fields.GetArray(i))
+                           for i in range(fields.GetNumberOfArrays()) if fields.GetArray(i) is not None}
+        types = {int(grid.GetCellType(i)) for i in range(grid.GetNumberOfCells())}
+        check(types <= {3}, f"{path}: cells of VTK types {types}, want lines (3)")
+        connectivity = vtk_to_numpy(grid.GetCells().GetConnectivityArray()).reshape(-1, 2)
+        self.cells = [type("Cells", (), {"type": "line", "data": connectivity})()]
+
+
 class Run:
     """A finished run with VTK output: its CSV tables and its .vtu meshes, all checked."""
 
@@ -88,7 +117,7 @@ class Run:
                 break
             self.node_names.append(row["point"])
         self.collection = read_pvd(out / f"{stem}.pvd")
-        self.meshes = [meshio.read(out / file) for _, file in self.collection]
+        self.meshes = [Mesh(out / file) for _, file in self.collection]
 
     def check_files(self) -> None:
         """One file per written step, named after its step, with the step's time."""
@@ -117,6 +146,7 @@ class Run:
             rows = by_step[row["step"]]
             check([r["point"] for r in rows] == self.node_names, f"{file}: points.csv rows out of order")
             p = mesh.points
+            check(np.array_equal(mesh.reference, self.meshes[0].reference), f"{file}: points are not the reference")
             check(p.shape[0] >= nnode and p.shape[1] == 3, f"{file}: points of shape {p.shape}")
             check(np.all(p[:, 2] == 0), f"{file}: z is not 0")
             xy = [[float(r["x"]), float(r["y"])] for r in rows]
