@@ -464,17 +464,23 @@ def animate(run: Run, directory: Path, wanted: str) -> Path:
 
     frames = [run.frame(target) for target in run.frame_targets]
     frames = list({step: (step, t, where) for step, t, where in frames}.values())
-    fig, ax = plt.subplots(figsize=(8.0, 7.0))
     size = model_size(run)
-    draw_ground(ax, run, size)
     lows = np.nanmin([np.nanmin(s.rows[:, 2:4], axis=0) for s in run.nodes.paths.values()], axis=0)
     highs = np.nanmax([np.nanmax(s.rows[:, 2:4], axis=0) for s in run.nodes.paths.values()], axis=0)
     for guide in run.mech.guides:
         lows = np.minimum(lows, np.minimum(guide[2:4], guide[4:6]))
         highs = np.maximum(highs, np.maximum(guide[2:4], guide[4:6]))
     pad = 0.08 * size
-    ax.set_xlim(lows[0] - pad, highs[0] + pad)
-    ax.set_ylim(lows[1] - 1.5 * pad, highs[1] + pad)
+    xlim = (lows[0] - pad, highs[0] + pad)
+    ylim = (lows[1] - 1.5 * pad, highs[1] + pad)
+    # The frame follows the mechanism's shape: 8 inches wide, 3.6 to 8 high (even pixel counts
+    # for the MP4 encoder).
+    aspect = (ylim[1] - ylim[0]) / (xlim[1] - xlim[0])
+    height = round(float(np.clip(1.2 + 7.0 * aspect, 3.6, 8.0)) * 50) / 50
+    fig, ax = plt.subplots(figsize=(8.0, height))
+    draw_ground(ax, run, size)
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
     mechanism_axes(ax, run)
     ax.set_aspect("equal", adjustable="box")
     tracked = [n for n in run.mech.tracked if n in run.nodes.paths

@@ -1,0 +1,83 @@
+"""scripts/fekap, the main command: many calls at once build once and all run; a signal to the
+script reaches fekap; plots are drawn only for a run that wrote new results.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from apptest import ROOT  # noqa: E402
+
+WRAPPER = ROOT / "scripts" / "fekap"
+
+
+def start(*args: str) -> subprocess.Popen:
+    return subprocess.Popen([str(WRAPPER), *args], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def built():
+    """One build first (a fresh checkout has none): the parallel test then times the runs."""
+    subprocess.run([str(ROOT / "scripts" / "build")], check=True, cwd=ROOT, timeout=1200)
+
+
+def test_sixteen_calls_at_once_all_run(tmp_path):
+    """No "Text file busy" (exit 126): the executable is installed by rename, the build locked."""
+    calls = [start("--no-plots", "-q", "-o", str(tmp_path / f"run{k}"), "decks/fourbar.deck") for k in range(16)]
+    results = [(call.wait(timeout=600), call.stderr.read()) for call in calls]
+    assert all(status == 0 for status, _ in results), results
+    assert all((tmp_path / f"run{k}" / "points.csv").is_file() for k in range(16))
+
+
+def children(pid: int) -> list[int]:
+    found = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        text = (task / "children").read_text().split()
+        found += [int(p) for p in text]
+    return found
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP])
+def test_a_signal_to_the_script_stops_fekap_and_no_plots_follow(tmp_path, sig):
+    out = tmp_path / "long"
+    call = start("-q", "--dt", "1e-6", "-o", str(out), "decks/fourbar.deck")
+    fekap = []
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (out / "points.csv").exists():
+        fekap = [p for p in children(call.pid) if "fekap" in Path(f"/proc/{p}/cmdline").read_text()] or fekap
+        time.sleep(0.05)
+    fekap = fekap or [p for p in children(call.pid)]
+    assert fekap, "fekap did not start"
+    time.sleep(0.3)
+    call.send_signal(sig)
+    status = call.wait(timeout=30)
+    stderr = call.stderr.read()
+    assert status != 0
+    assert f"stopped by SIG{sig.name[3:]}" in stderr, stderr
+    for pid in fekap:
+        assert not Path(f"/proc/{pid}").exists() or "zombie" in Path(f"/proc/{pid}/status").read_text()
+    assert not list(out.glob("*.png")), "plots drawn after a signal"
+
+
+def test_no_plots_after_an_input_error(tmp_path):
+    """Old pictures are not redrawn when the new run fails on its input."""
+    out = tmp_path / "out"
+    assert start("--no-animation", "-q", "-o", str(out), "decks/fourbar-half-turn.deck").wait(timeout=300) == 0
+    paths = out / "paths.png"
+    assert paths.is_file()
+    before = paths.stat().st_mtime_ns
+    bad = tmp_path / "bad.deck"
+    bad.write_text((ROOT / "decks" / "fourbar-half-turn.deck").read_text().replace("ANALysis", "ANALysis\n  bogus 1"))
+    call = start("-q", "-o", str(out), str(bad))
+    assert call.wait(timeout=300) == 2
+    assert paths.stat().st_mtime_ns == before
+    assert "plots in" not in call.stdout.read()
