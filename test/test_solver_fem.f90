@@ -6,7 +6,7 @@ module test_solver_fem
       & convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
-   use fekap_solver_stepper, only: phase_seconds
+   use fekap_model_work, only: phase_seconds
    use test_mechanisms, only: fourbar_model, cantilever_model, slider_crank_model
    use classical_models, only: four_bar_exact, slider_crank_exact
    implicit none

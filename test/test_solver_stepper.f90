@@ -4,7 +4,8 @@
 module test_solver_stepper
    use fekap_kinds, only: dp
    use fekap_testing, only: unittest_type, new_unittest, check, error_type
-   use fekap_solver_stepper, only: work_counts_type, phase_seconds, split_seconds, clock_seconds, &
+   use fekap_model_work, only: work_counts_type, phase_seconds
+   use fekap_solver_stepper, only: split_seconds, clock_seconds, &
       & coarse_clock_seconds, phase_timed, split_timed
    implicit none
    private

@@ -206,6 +206,7 @@ module fekap_solver_fem
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
+      procedure :: plan_text => fem_plan_text
    end type fem_stepper_type
 
 contains
@@ -264,6 +265,23 @@ contains
       self%conv%floor = max(1.0e-13_dp, epsilon(1.0_dp)*self%size/shortest)*force_scale* &
          & sqrt(real(max(1, self%mesh%nfree), dp))
    end subroutine new_fem_stepper
+
+   !> The mesh for the listing's plan: its size, band and slideline penalties.
+   function fem_plan_text(self) result(text)
+      class(fem_stepper_type), intent(in) :: self
+      character(:), allocatable :: text
+      character(len=160) :: line
+      integer :: i
+      write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0)') 'mesh: ', size(self%mesh%elements), ' elements, ', &
+         & self%mesh%ndof, ' dofs, ', self%mesh%nfree, ' equations, ', self%mesh%ndriven, &
+         & ' driven; half-bandwidth ', self%mesh%kd
+      text = trim(line)
+      do i = 1, size(self%mesh%slides)
+         write (line, '(a,es12.5,a,es12.5)') 'slideline '//self%model%slidelines(i)%name//': penalty ', &
+            & self%mesh%slides(i)%kp, ', rotational tie ', self%mesh%slides(i)%kr
+         text = text//new_line('a')//'  '//trim(line)
+      end do
+   end function fem_plan_text
 
    !> The initial configuration (solved for the initial load, if loaded), and
    !> its velocities and accelerations when asked for.

@@ -6,10 +6,13 @@ module fekap_solver_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type
    use fekap_model_results, only: step_result_type
+   use fekap_model_work, only: work_counts_type
    implicit none
    private
 
-   public :: stepper_type, work_counts_type, clock_seconds, coarse_clock_seconds, phase_seconds, split_seconds
+   public :: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds
+   ! The type of stepper_type's counts, for its users.
+   public :: work_counts_type
    public :: phase_timed, split_timed
 
    !> The two samples of steps that the timers read the precise clock on (a
@@ -41,31 +44,6 @@ module fekap_solver_stepper
       end function clock_gettime
    end interface
 
-   !> Counts of the work done, for the listing's closing summary.
-   type :: work_counts_type
-      integer :: steps = 0
-      integer :: iterations = 0
-      integer :: residual_assemblies = 0
-      integer :: tangent_assemblies = 0
-      integer :: cholesky_factorisations = 0
-      integer :: lu_factorisations = 0
-      integer :: velocity_solves = 0
-      integer :: acceleration_solves = 0
-      integer :: slideline_evaluations = 0
-      !> Smallest pivot ratio of the tangents used for velocities (1: none computed),
-      !> a measure of how close the run came to a singular configuration.
-      real(dp) :: min_pivot_ratio = 1
-      !> Wall-clock seconds in residual/tangent assembly, factorisations and
-      !> solves, measured on a sample of the steps (a clock read costs about
-      !> 40 ns, a step of a small mechanism about 2 us), and the analysis
-      !> seconds of those steps (0: no sample, the phases were not timed).
-      !> phase_seconds scales them to the whole run.
-      real(dp) :: seconds_assembly = 0
-      real(dp) :: seconds_factorisation = 0
-      real(dp) :: seconds_solves = 0
-      real(dp) :: seconds_sampled = 0
-   end type work_counts_type
-
    type, abstract :: stepper_type
       type(work_counts_type) :: counts
    contains
@@ -74,6 +52,8 @@ module fekap_solver_stepper
       procedure(start_interface), deferred :: start
       !> Solve for the configuration at time t from the last accepted one.
       procedure(advance_interface), deferred :: advance
+      !> Lines on the method's discretisation for the listing's plan ('' if none).
+      procedure :: plan_text => stepper_plan_text
    end type stepper_type
 
    abstract interface
@@ -95,17 +75,12 @@ module fekap_solver_stepper
 
 contains
 
-   !> Seconds in assembly, factorisation and solves over a run whose analysis
-   !> took `analysis` seconds: the sampled steps' phase times times the ratio
-   !> of the whole analysis time to theirs (zeros without a sample).
-   pure function phase_seconds(counts, analysis) result(seconds)
-      type(work_counts_type), intent(in) :: counts
-      real(dp), intent(in) :: analysis
-      real(dp) :: seconds(3)
-      seconds = 0
-      if (counts%seconds_sampled > 0) seconds = [counts%seconds_assembly, counts%seconds_factorisation, &
-         & counts%seconds_solves]*(analysis/counts%seconds_sampled)
-   end function phase_seconds
+   !> No discretisation to describe: the default of plan_text.
+   function stepper_plan_text(self) result(text)
+      class(stepper_type), intent(in) :: self
+      character(:), allocatable :: text
+      text = ''
+   end function stepper_plan_text
 
    !> Whether the phases of a method's n-th step (n >= 1) are timed.
    pure logical function phase_timed(n)

@@ -6,7 +6,7 @@
 !> cost about 2.3 us a step (docs/performance.md), more than the 2 us the
 !> analysis of a step aims at. The loop's time is measured whole and split
 !> into analysis and output as in a sample of its steps.
-module fekap_solver_run
+module fekap_run
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error, fatal_error
    use fekap_solver_interrupt, only: interrupt_signal
@@ -319,4 +319,4 @@ contains
       flush (buffer%unit)
    end subroutine flush_buffer
 
-end module fekap_solver_run
+end module fekap_run
