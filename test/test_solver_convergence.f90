@@ -4,7 +4,8 @@ module test_solver_convergence
    use fekap_kinds, only: dp
    use fekap_testing, only: unittest_type, new_unittest, check, error_type
    use fekap_model, only: convergence_paper
-   use fekap_solver_convergence, only: convergence_type, is_converged, extrapolate, hermite_extrapolate, &
+   use fekap_solver_convergence, only: convergence_type, is_converged
+   use fekap_solver_predictor, only: extrapolate, hermite_extrapolate, &
       & adams_weights
    implicit none
    private

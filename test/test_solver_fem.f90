@@ -216,7 +216,7 @@ contains
          call fem%advance(n*0.05_dp, res, error)
       end do
       if (allocated(error)) return
-      tip = [res%pos(:, 2), fem%q(fem%mesh%link_rot(2, 1))]
+      tip = [res%pos(:, 2), fem%state%q(fem%mesh%link_rot(2, 1))]
    end subroutine rollup_tip
 
    !> M = 2*pi*EI/L rolls the cantilever into a full circle: the tip returns to

@@ -12,10 +12,9 @@ module fekap_classical_angles
    use fekap_model, only: model_type, model_size, dof_x, dof_y, dof_rot, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_model_results, only: step_result_type, new_step_result
-   use fekap_solver_convergence, only: convergence_type, is_converged
+   use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, divergence_length, &
-      & int_text
+      & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, int_text
    implicit none
    private
 

@@ -18,12 +18,12 @@ module fekap_classical_cartesian
    use fekap_error, only: error_type, input_error, analysis_error
    use fekap_model, only: model_type, model_size, convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
-   use fekap_solver_convergence, only: convergence_type, is_converged
+   use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
    use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
       & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, &
-      & divergence_length, int_text
+      & int_text
    implicit none
    private
 

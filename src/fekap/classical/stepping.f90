@@ -10,50 +10,23 @@ module fekap_classical_stepping
    use fekap_model_drive_law, only: law_type
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_convergence, only: convergence_type, extrapolate
+   use fekap_solver_convergence, only: convergence_type
+   use fekap_solver_predictor, only: extrapolate
+   use fekap_solver_step_control, only: step_cuts_type
+   use fekap_solver_branch, only: jump_ratio, jump_bound_ratio
    implicit none
    private
 
    public :: history_type, new_history, drive_value, new_step_convergence, real_text, no_convergence_text
-   public :: step_cuts_type, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, int_text
+   public :: branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, int_text
    public :: classical_stepper_type
 
-   !> Step cuts (halvings) allowed within one step before it is given up (as in the FEM).
-   integer, parameter, public :: max_cuts = 8
-   !> A step is rejected as an assembly-mode jump when an angle coordinate
-   !> changes by more than this many times what the linear response to the
-   !> drive increment (at either end of the step), or the increment itself, explains.
-   real(dp), parameter, public :: jump_ratio = 2.0_dp
    !> A change of sign of the Jacobian's determinant over a step is a
    !> legitimate passage through a singular configuration only if one end of
    !> the step is this close to singular: its conditioning measure (see
    !> branch_state_type) below this share of the largest one met in the run
    !> (the cuts close in on a singular configuration the step passed over).
    real(dp), parameter, public :: singular_share = 5.0e-2_dp
-   !> A Newton correction longer than this many model sizes is divergence.
-   real(dp), parameter, public :: divergence_length = 1.0e3_dp
-
-   !> The halvings of one step: the sub-step length, its growth back after a
-   !> success, and the first and last reasons for a rejection (for the listing).
-   type :: step_cuts_type
-      !> The end of the step, the full step and the current sub-step length.
-      real(dp) :: t_end = 0, h_full = 0, h = 0
-      !> Cuts so far in this step.
-      integer :: cuts = 0
-      character(:), allocatable :: first, last
-   contains
-      !> Start a step from t_from to t_end.
-      procedure :: begin => cuts_begin
-      !> The time of the next try from the accepted time t_from.
-      procedure :: next => cuts_next
-      !> A try failed: halve the sub-step, or give up after max_cuts.
-      procedure :: reject => cuts_reject
-      !> A try succeeded at an intermediate time: let the sub-step grow back.
-      procedure :: grow => cuts_grow
-      !> The listing note of a cut step ('' if not cut).
-      procedure :: note => cuts_note
-   end type step_cuts_type
-
    !> What the jump check knows about an accepted configuration.
    type :: branch_state_type
       !> Whether the rest is known.
@@ -313,62 +286,6 @@ contains
       end if
    end function real_text
 
-   !> Start cutting a step from t_from to t_end.
-   pure subroutine cuts_begin(self, t_from, t_end)
-      class(step_cuts_type), intent(inout) :: self
-      real(dp), intent(in) :: t_from, t_end
-      self%cuts = 0
-      if (allocated(self%first)) deallocate (self%first)
-      if (allocated(self%last)) deallocate (self%last)
-      self%t_end = t_end
-      self%h_full = t_end - t_from
-      self%h = self%h_full
-   end subroutine cuts_begin
-
-   !> The time of the next try from the accepted time t_from (the end of the
-   !> step when within rounding of it).
-   pure real(dp) function cuts_next(self, t_from) result(t_try)
-      class(step_cuts_type), intent(in) :: self
-      real(dp), intent(in) :: t_from
-      t_try = min(t_from + self%h, self%t_end)
-      if (self%t_end - t_try < 1.0e-12_dp*abs(self%h_full)) t_try = self%t_end
-   end function cuts_next
-
-   !> A try failed with `reason`: halve the sub-step; after max_cuts cuts,
-   !> the reason with what to try becomes the step's analysis error.
-   pure subroutine cuts_reject(self, reason, error)
-      class(step_cuts_type), intent(inout) :: self
-      type(error_type), intent(in) :: reason
-      type(error_type), allocatable, intent(out) :: error
-      self%cuts = self%cuts + 1
-      if (self%cuts > max_cuts) then
-         call analysis_error(error, reason%message//' (after '//int_text(max_cuts)// &
-            & ' step cuts; try a smaller time step or another predictor)')
-         return
-      end if
-      if (allocated(self%first)) then
-         self%last = reason%message
-      else
-         self%first = reason%message
-      end if
-      self%h = self%h/2
-   end subroutine cuts_reject
-
-   pure subroutine cuts_grow(self)
-      class(step_cuts_type), intent(inout) :: self
-      self%h = min(2*self%h, self%h_full)
-   end subroutine cuts_grow
-
-   !> 'step cut k time(s); first rejection: ...; last rejection: ...' as in the FEM.
-   pure function cuts_note(self) result(text)
-      class(step_cuts_type), intent(in) :: self
-      character(:), allocatable :: text
-      text = ''
-      if (.not. allocated(self%first)) return
-      text = 'step cut '//int_text(self%cuts)//' time(s); first rejection: '//self%first
-      if (allocated(self%last)) text = text//'; last rejection: '//self%last
-   end function cuts_note
-
    !> Magnitude part of the jump check: the largest ratio of |change| of an
    !> angle coordinate over the step to max(|dq_old|, |dq_new|, floor), the
    !> linear responses to the drive increment at the two ends and the drive
@@ -380,17 +297,12 @@ contains
       real(dp), intent(in) :: floor
       real(dp), intent(out) :: worst
       integer, intent(out) :: where_
-      real(dp) :: bound, ratio
+      real(dp) :: ratio
       integer :: i
       worst = 0
       where_ = 0
       do i = 1, size(change)
-         bound = max(floor, abs(dq_old(i)), abs(dq_new(i)))
-         if (bound > 0) then
-            ratio = abs(change(i))/bound
-         else
-            ratio = merge(0.0_dp, huge(1.0_dp), abs(change(i)) <= 0)
-         end if
+         ratio = jump_bound_ratio(change(i), dq_old(i), dq_new(i), floor)
          if (ratio > worst) then
             worst = ratio
             where_ = i
