@@ -79,8 +79,9 @@ contains
    subroutine drive_increment(self, mesh, q, qt, dd, floor_)
       type(branch_check_type), intent(in) :: self
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), qt(:)
-      real(dp), intent(out) :: dd(:), floor_
+      real(dp), contiguous, intent(in) :: q(:), qt(:)
+      real(dp), intent(out) :: floor_
+      real(dp), contiguous, intent(out) :: dd(:)
       integer :: j
       floor_ = 0
       do j = 1, mesh%ndriven
@@ -99,6 +100,12 @@ contains
    !> for a change that nothing explains).
    elemental real(dp) function jump_bound_ratio(change, dq_old, dq_new, floor_) result(ratio)
       real(dp), intent(in) :: change, dq_old, dq_new, floor_
+      ratio = bound_ratio(change, dq_old, dq_new, floor_)
+   end function jump_bound_ratio
+
+   !> jump_bound_ratio, private so that branch_verdict's loop inlines it.
+   elemental real(dp) function bound_ratio(change, dq_old, dq_new, floor_) result(ratio)
+      real(dp), intent(in) :: change, dq_old, dq_new, floor_
       real(dp) :: bound
       bound = max(floor_, abs(dq_new), abs(dq_old))
       if (bound > 0) then
@@ -106,7 +113,7 @@ contains
       else
          ratio = merge(0.0_dp, huge(1.0_dp), abs(change) <= 0)
       end if
-   end function jump_bound_ratio
+   end function bound_ratio
 
    !> The verdict on the step at time t from q to qt, given the linear
    !> responses dq_old and dq_new to its drive increment (of size floor_) at
@@ -120,9 +127,10 @@ contains
       type(branch_check_type), intent(in) :: self
       type(mesh_type), intent(in) :: mesh
       type(model_type), intent(in) :: model
-      real(dp), intent(in) :: t, q(:), qt(:), dq_old(:), dq_new(:), floor_
+      real(dp), intent(in) :: t, floor_
+      real(dp), contiguous, intent(in) :: q(:), qt(:), dq_old(:), dq_new(:)
       logical, intent(in) :: smooth
-      real(dp), intent(in) :: q_predicted(:)
+      real(dp), contiguous, intent(in) :: q_predicted(:)
       logical, intent(in) :: can_verify
       integer, intent(out) :: verdict
       type(error_type), allocatable, intent(out) :: error
@@ -135,7 +143,7 @@ contains
       worst_dof = 0
       do i = 1, mesh%ndof
          if (mesh%dof_kind(i) /= dof_rot) cycle
-         ratio = jump_bound_ratio(qt(i) - q(i), dq_old(i), dq_new(i), floor_)
+         ratio = bound_ratio(qt(i) - q(i), dq_old(i), dq_new(i), floor_)
          if (ratio > worst) then
             worst = ratio
             worst_dof = i
@@ -179,7 +187,7 @@ contains
    !> the closest approach to collinear.
    pure logical function predicted_step(mesh, qt, q_predicted, smooth, turn) result(predicted)
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: qt(:), q_predicted(:)
+      real(dp), contiguous, intent(in) :: qt(:), q_predicted(:)
       logical, intent(in) :: smooth
       real(dp), intent(in) :: turn
       integer :: i
@@ -208,7 +216,7 @@ contains
       type(branch_check_type), intent(in) :: self
       type(mesh_type), intent(in) :: mesh
       type(model_type), intent(in) :: model
-      real(dp), intent(in) :: q(:), qt(:), dq_old(:), dq_new(:)
+      real(dp), contiguous, intent(in) :: q(:), qt(:), dq_old(:), dq_new(:)
       integer, intent(out) :: flip_link(2), flip_node
       real(dp), intent(out) :: turn
       integer, intent(out) :: crossing(3)

@@ -497,6 +497,7 @@ contains
                   end if
                   previous = correction
                end do
+               if (size(mesh%slides) == 0) exit relocations
                call relocate(mesh, self%model, t, qt, self%seg, moved, error)
                if (allocated(error)) return
                if (.not. moved) exit relocations
@@ -538,8 +539,10 @@ contains
                   & '), not a mechanism configuration')
                return
             end if
-            call check_gaps(mesh, self%model, t, qt, self%seg, self%admissible_strain*self%model_length, error)
-            if (allocated(error)) return
+            if (size(mesh%slides) > 0) then
+               call check_gaps(mesh, self%model, t, qt, self%seg, self%admissible_strain*self%model_length, error)
+               if (allocated(error)) return
+            end if
             call branch_jump(self, t, qt, info == 0, error)
             if (allocated(error)) return
             self%factor_current = info == 0
@@ -562,7 +565,7 @@ contains
    !> Add the correction in the system's right-hand side to q: one Newton iteration more.
    subroutine take_correction(self, q, iterations)
       type(fem_stepper_type), intent(inout) :: self
-      real(dp), intent(inout) :: q(:)
+      real(dp), contiguous, intent(inout) :: q(:)
       integer, intent(inout) :: iterations
       call apply_correction(self%system, self%mesh, q)
       iterations = iterations + 1
@@ -573,7 +576,8 @@ contains
    !> the driven dofs at t taken from the predictor qt (set_driven's values).
    subroutine drive_increment_residual(self, t, qt, norm)
       type(fem_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t, qt(:)
+      real(dp), intent(in) :: t
+      real(dp), contiguous, intent(in) :: qt(:)
       real(dp), intent(out) :: norm
       associate (dqd => self%drive_step, dd => self%mesh%driven_dof)
          dqd = qt(dd) - self%state%q(dd)
@@ -591,7 +595,7 @@ contains
    subroutine predict(self, t, qt)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
-      real(dp), intent(inout) :: qt(:)
+      real(dp), contiguous, intent(inout) :: qt(:)
       integer :: i, kind
       self%smooth_prediction = .false.
       self%guard_pending = .false.
@@ -629,7 +633,7 @@ contains
    logical function guard_extrapolation(self, t, qt) result(replaced)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
-      real(dp), intent(inout) :: qt(:)
+      real(dp), contiguous, intent(inout) :: qt(:)
       real(dp) :: strain_previous
       integer :: element
       replaced = .false.
@@ -650,7 +654,7 @@ contains
    subroutine tangent_predictor(self, t, qt)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
-      real(dp), intent(inout) :: qt(:)
+      real(dp), contiguous, intent(inout) :: qt(:)
       integer :: info
       qt = self%state%q
       call set_driven(self, t, qt)
@@ -688,7 +692,7 @@ contains
    subroutine set_driven(self, t, q)
       type(fem_stepper_type), intent(in) :: self
       real(dp), intent(in) :: t
-      real(dp), intent(inout) :: q(:)
+      real(dp), contiguous, intent(inout) :: q(:)
       real(dp) :: f, df, ddf
       integer :: i, dof
       do i = 1, self%mesh%ndriven
@@ -706,7 +710,8 @@ contains
    !> verify_step.
    subroutine branch_jump(self, t, qt, factored, error)
       type(fem_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t, qt(:)
+      real(dp), intent(in) :: t
+      real(dp), contiguous, intent(in) :: qt(:)
       !> Whether the system holds the factor of the material tangent at qt.
       logical, intent(in) :: factored
       type(error_type), allocatable, intent(out) :: error
@@ -920,7 +925,8 @@ contains
    !> Make q at time t the accepted configuration and push it on the history.
    subroutine accept(self, t, q)
       type(fem_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t, q(:)
+      real(dp), intent(in) :: t
+      real(dp), contiguous, intent(in) :: q(:)
       associate (state => self%state)
          call state%history%push(q, t)
          state%q = q

@@ -20,7 +20,7 @@ contains
    subroutine fill_nodes_links(mesh, model, q, v, a, result)
       type(mesh_type), intent(in) :: mesh
       type(model_type), intent(in) :: model
-      real(dp), intent(in) :: q(:), v(:), a(:)
+      real(dp), contiguous, intent(in) :: q(:), v(:), a(:)
       type(step_result_type), intent(inout) :: result
       integer :: i, k, dof
       do i = 1, size(model%nodes)
@@ -44,7 +44,7 @@ contains
    !> which do not change, on the first call).
    subroutine fill_fields(mesh, q, v, a, result)
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), v(:), a(:)
+      real(dp), contiguous, intent(in) :: q(:), v(:), a(:)
       type(step_result_type), intent(inout) :: result
       integer :: ip, e, k
       real(dp) :: xe(6)

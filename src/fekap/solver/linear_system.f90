@@ -9,7 +9,7 @@ module fekap_solver_linear_system
    use fekap_model_work, only: work_counts_type
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
-   use fekap_assembly_assemble, only: assemble_residual, assemble_tangent
+   use fekap_assembly_assemble, only: assemble_residual, assemble_tangent, assemble_second_derivative
    use fekap_element_beam, only: max_gauss
    use fekap_solver_stepper, only: clock_seconds
    implicit none
@@ -17,7 +17,7 @@ module fekap_solver_linear_system
 
    public :: linear_system_type, new_linear_system, assemble_system, assemble_system_residual, factor_system
    public :: system_pivot, residual_norm, newton_correction, apply_correction, drive_response, drive_load_rhs
-   public :: solve_system, apply_response, phase_start, phase_end
+   public :: solve_system, apply_response, assemble_second_derivative_at
 
    !> Tangent, residual and right-hand side of the free equations.
    type :: linear_system_type
@@ -63,7 +63,8 @@ contains
    subroutine assemble_system(self, mesh, q, t, seg, geometric_above, counts)
       type(linear_system_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), t, geometric_above
+      real(dp), intent(in) :: t, geometric_above
+      real(dp), contiguous, intent(in) :: q(:)
       !> Master segment of each slideline.
       integer, intent(in) :: seg(:)
       type(work_counts_type), intent(inout) :: counts
@@ -80,7 +81,8 @@ contains
    subroutine assemble_system_residual(self, mesh, q, t, seg, counts)
       type(linear_system_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), t
+      real(dp), intent(in) :: t
+      real(dp), contiguous, intent(in) :: q(:)
       integer, intent(in) :: seg(:)
       type(work_counts_type), intent(inout) :: counts
       real(dp) :: clock
@@ -126,11 +128,36 @@ contains
    subroutine solve_system(self, counts)
       type(linear_system_type), intent(inout) :: self
       type(work_counts_type), intent(inout) :: counts
+      call timed_solve(self, counts)
+   end subroutine solve_system
+
+   !> solve_system, private so that the module's own callers inline it (the
+   !> release build's -fPIC keeps public procedures out of line).
+   subroutine timed_solve(self, counts)
+      type(linear_system_type), intent(inout) :: self
+      type(work_counts_type), intent(inout) :: counts
       real(dp) :: clock
       clock = phase_start(self)
       call self%kff%solve(self%rhs)
       call phase_end(self, clock, counts%seconds_solves)
-   end subroutine solve_system
+   end subroutine timed_solve
+
+   !> The second directional derivative d2P[v, v] at q into `second` (see
+   !> assemble_second_derivative), with the section angles of the last
+   !> tangent assembly, which must have been at q; timed and counted.
+   subroutine assemble_second_derivative_at(self, mesh, q, v, seg, second, counts)
+      type(linear_system_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: q(:), v(:)
+      integer, intent(in) :: seg(:)
+      real(dp), contiguous, intent(out) :: second(:)
+      type(work_counts_type), intent(inout) :: counts
+      real(dp) :: clock
+      clock = phase_start(self)
+      call assemble_second_derivative(mesh, q, v, seg, second, self%section)
+      call phase_end(self, clock, counts%seconds_assembly)
+      counts%slideline_evaluations = counts%slideline_evaluations + size(mesh%slides)
+   end subroutine assemble_second_derivative_at
 
    !> The assembled residual over the free equations, negated, into rhs (the
    !> right-hand side of a Newton correction), and its Euclidean norm, scaled
@@ -164,11 +191,11 @@ contains
    subroutine newton_correction(self, mesh, dof_length, correction, counts)
       type(linear_system_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: dof_length(:)
+      real(dp), contiguous, intent(in) :: dof_length(:)
       real(dp), intent(out) :: correction
       type(work_counts_type), intent(inout) :: counts
       integer :: k
-      call solve_system(self, counts)
+      call timed_solve(self, counts)
       correction = 0
       do k = 1, mesh%nfree
          correction = max(correction, abs(self%rhs(k, 1))*dof_length(mesh%eq_dof(k)))
@@ -179,7 +206,7 @@ contains
    subroutine apply_correction(self, mesh, q)
       type(linear_system_type), intent(in) :: self
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(inout) :: q(:)
+      real(dp), contiguous, intent(inout) :: q(:)
       integer :: k
       do k = 1, mesh%nfree
          q(mesh%eq_dof(k)) = q(mesh%eq_dof(k)) + self%rhs(k, 1)
@@ -192,7 +219,8 @@ contains
    subroutine drive_load_rhs(self, mesh, x, lambda)
       type(linear_system_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: x(:), lambda
+      real(dp), intent(in) :: lambda
+      real(dp), contiguous, intent(in) :: x(:)
       integer :: j, k
       associate (rhs => self%rhs(:, 1), eqd => mesh%eq_dof)
          if (lambda /= 0) then
@@ -215,12 +243,12 @@ contains
    subroutine drive_response(self, mesh, resp, counts)
       type(linear_system_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(inout) :: resp(:, :)
+      real(dp), contiguous, intent(inout) :: resp(:, :)
       type(work_counts_type), intent(inout) :: counts
       integer :: j, k
       do j = 1, mesh%ndriven
          self%rhs(:, 1) = -self%kfd(:, j)
-         call solve_system(self, counts)
+         call timed_solve(self, counts)
          do k = 1, mesh%nfree
             resp(mesh%eq_dof(k), j) = self%rhs(k, 1)
          end do
@@ -231,8 +259,8 @@ contains
    !> y = resp x: the dofs' change for the drives' change x, through a drive
    !> response resp (ndof, ndriven).
    pure subroutine apply_response(resp, x, y)
-      real(dp), intent(in) :: resp(:, :), x(:)
-      real(dp), intent(out) :: y(:)
+      real(dp), contiguous, intent(in) :: resp(:, :), x(:)
+      real(dp), contiguous, intent(out) :: y(:)
       integer :: j
       if (size(x) == 0) then
          y = 0

@@ -73,8 +73,15 @@ contains
    pure integer function history_column(self, k) result(column)
       class(predictor_history_type), intent(in) :: self
       integer, intent(in) :: k
-      column = modulo(self%newest - k, history_depth) + 1
+      column = ring_column(self%newest, k)
    end function history_column
+
+   !> The column of the k-th newest configuration of a ring whose newest is
+   !> in column `newest` (private, so that the predictor's loops inline it).
+   pure integer function ring_column(newest, k) result(column)
+      integer, intent(in) :: newest, k
+      column = modulo(newest - k, history_depth) + 1
+   end function ring_column
 
    !> The extrapolation of the history to time t into qt, and which it was
    !> (`kind`; qt is untouched for prediction_none). With `smooth`, the
@@ -87,13 +94,14 @@ contains
       type(predictor_history_type), intent(in) :: self
       real(dp), intent(in) :: t
       logical, intent(in) :: smooth
-      real(dp), intent(in) :: length, dof_length(:)
-      real(dp), intent(inout) :: qt(:)
+      real(dp), intent(in) :: length
+      real(dp), contiguous, intent(in) :: dof_length(:)
+      real(dp), contiguous, intent(inout) :: qt(:)
       integer, intent(out) :: kind
       integer :: i, n, columns(history_depth)
       ! The history's columns, newest first.
       do i = 1, self%count
-         columns(i) = self%column(i)
+         columns(i) = ring_column(self%newest, i)
       end do
       n = 0
       if (smooth) then
@@ -125,8 +133,9 @@ contains
       type(predictor_history_type), intent(in) :: self
       real(dp), intent(in) :: t
       integer, intent(in) :: columns(:)
-      real(dp), intent(in) :: length, dof_length(:)
-      real(dp), intent(inout) :: qt(:)
+      real(dp), intent(in) :: length
+      real(dp), contiguous, intent(in) :: dof_length(:)
+      real(dp), contiguous, intent(inout) :: qt(:)
       real(dp) :: beta(history_depth), drop(history_depth), estimate, difference
       integer :: i, k
       taken = .false.
@@ -147,8 +156,9 @@ contains
 
    !> The Taylor series q + h v + h**2/2 a from a configuration and its rates.
    pure subroutine taylor_predict(q, v, a, h, qt)
-      real(dp), intent(in) :: q(:), v(:), a(:), h
-      real(dp), intent(out) :: qt(:)
+      real(dp), intent(in) :: h
+      real(dp), contiguous, intent(in) :: q(:), v(:), a(:)
+      real(dp), contiguous, intent(out) :: qt(:)
       qt = q + h*v + h**2/2*a
    end subroutine taylor_predict
 

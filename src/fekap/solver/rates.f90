@@ -7,8 +7,7 @@ module fekap_solver_rates
    use fekap_model_work, only: work_counts_type
    use fekap_model_results, only: note_length
    use fekap_assembly_mesh, only: mesh_type
-   use fekap_assembly_assemble, only: assemble_second_derivative
-   use fekap_solver_linear_system, only: linear_system_type, drive_load_rhs, solve_system, phase_start, phase_end
+   use fekap_solver_linear_system, only: linear_system_type, drive_load_rhs, solve_system, assemble_second_derivative_at
    implicit none
    private
 
@@ -58,9 +57,9 @@ contains
       type(linear_system_type), intent(inout) :: system
       type(mesh_type), intent(in) :: mesh
       !> The drives' rates.
-      real(dp), intent(in) :: vd(:)
+      real(dp), contiguous, intent(in) :: vd(:)
       logical, intent(in) :: loaded
-      real(dp), intent(out) :: v(:)
+      real(dp), contiguous, intent(out) :: v(:)
       type(work_counts_type), intent(inout) :: counts
       integer :: i, k
       v = 0
@@ -81,20 +80,16 @@ contains
    subroutine solve_accelerations(system, mesh, q, v, seg, ad, a, work, counts)
       type(linear_system_type), intent(inout) :: system
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), v(:)
+      real(dp), contiguous, intent(in) :: q(:), v(:)
       !> Master segment of each slideline at q.
       integer, intent(in) :: seg(:)
       !> The drives' second rates.
-      real(dp), intent(in) :: ad(:)
-      real(dp), intent(out) :: a(:)
-      real(dp), intent(inout) :: work(:)
+      real(dp), contiguous, intent(in) :: ad(:)
+      real(dp), contiguous, intent(out) :: a(:)
+      real(dp), contiguous, intent(inout) :: work(:)
       type(work_counts_type), intent(inout) :: counts
-      real(dp) :: clock
       integer :: i, k
-      clock = phase_start(system)
-      call assemble_second_derivative(mesh, q, v, seg, work, system%section)
-      call phase_end(system, clock, counts%seconds_assembly)
-      counts%slideline_evaluations = counts%slideline_evaluations + size(mesh%slides)
+      call assemble_second_derivative_at(system, mesh, q, v, seg, work, counts)
       a = 0
       do i = 1, mesh%ndriven
          a(mesh%driven_dof(i)) = ad(i)
