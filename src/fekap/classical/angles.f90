@@ -12,9 +12,10 @@ module fekap_classical_angles
    use fekap_model, only: model_type, model_size, dof_x, dof_y, dof_rot, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_model_results, only: step_result_type, new_step_result
+   use fekap_strings, only: int_text, short_real_text
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, int_text
+      & no_convergence_text, branch_state_type, branch_jump_text, magnitude_ratio
    implicit none
    private
 
@@ -260,7 +261,7 @@ contains
          call solve2(k, -p, delta, error)
          self%counts%lu_factorisations = self%counts%lu_factorisations + 1
          if (allocated(error)) then
-            error%message = 't = '//real_text(t)//': '//error%message
+            error%message = 't = '//short_real_text(t)//': '//error%message
             return
          end if
          iterations = iterations + 1
@@ -268,7 +269,7 @@ contains
          self%d = self%d + delta
          correction = maxval(abs(delta)*self%length(2:3))
          if (correction > divergence_length*self%size) then
-            call analysis_error(error, 't = '//real_text(t)// &
+            call analysis_error(error, 't = '//short_real_text(t)// &
                & ': Newton diverged at iteration '//int_text(iterations))
             return
          end if

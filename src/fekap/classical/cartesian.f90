@@ -18,12 +18,12 @@ module fekap_classical_cartesian
    use fekap_error, only: error_type, input_error, analysis_error
    use fekap_model, only: model_type, model_size, convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
+   use fekap_strings, only: int_text, short_real_text
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
    use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, &
-      & int_text
+      & no_convergence_text, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
    implicit none
    private
 
@@ -286,9 +286,9 @@ contains
       if (self%redundant) then
          call self%system%residual(self%q, t, self%phi)
          if (maxval(abs(self%phi)) > redundant_tol*self%size) then
-            call analysis_error(error, 't = '//real_text(t)// &
+            call analysis_error(error, 't = '//short_real_text(t)// &
                & ': Newton converged to a configuration that violates the removed (redundant) equations (residual '// &
-               & real_text(maxval(abs(self%phi)))//'), not a configuration of the mechanism')
+               & short_real_text(maxval(abs(self%phi)))//'), not a configuration of the mechanism')
             return
          end if
       end if
@@ -414,7 +414,7 @@ contains
             correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
          end do
          if (correction > divergence_length*self%size) then
-            call analysis_error(error, 't = '//real_text(t)// &
+            call analysis_error(error, 't = '//short_real_text(t)// &
                & ': Newton diverged at iteration '//int_text(iterations))
             return
          end if
@@ -458,7 +458,7 @@ contains
          end do
       end if
       if (info /= 0) then
-         call analysis_error(error, 't = '//real_text(t)//': the constraint Jacobian is singular '// &
+         call analysis_error(error, 't = '//short_real_text(t)//': the constraint Jacobian is singular '// &
             & '(a singular configuration of the mechanism)')
          return
       end if

@@ -8,6 +8,7 @@ module fekap_classical_stepping
    use fekap_error, only: error_type, analysis_error, error_analysis
    use fekap_model, only: analysis_type, predictor_previous, predictor_extrapolate, predictor_taylor
    use fekap_model_drive_law, only: law_type
+   use fekap_strings, only: int_text, short_real_text
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type
@@ -17,8 +18,8 @@ module fekap_classical_stepping
    implicit none
    private
 
-   public :: history_type, new_history, drive_value, new_step_convergence, real_text, no_convergence_text
-   public :: branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, int_text
+   public :: history_type, new_history, drive_value, new_step_convergence, no_convergence_text
+   public :: branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
    public :: classical_stepper_type
 
    !> A change of sign of the Jacobian's determinant over a step is a
@@ -245,46 +246,10 @@ contains
       integer, intent(in) :: iterations
       real(dp), intent(in) :: t, residual
       character(:), allocatable :: text
-      text = 't = '//real_text(t)//': Newton did not converge in '//int_text(iterations)//' iterations (residual '// &
-         & real_text(residual)//')'
+      text = 't = '//short_real_text(t)//': Newton did not converge in '//int_text(iterations)//' iterations (residual '// &
+         & short_real_text(residual)//')'
    end function no_convergence_text
 
-   !> An integer as text.
-   pure function int_text(n) result(text)
-      integer, intent(in) :: n
-      character(:), allocatable :: text
-      character(len=16) :: buf
-      write (buf, '(i0)') n
-      text = trim(buf)
-   end function int_text
-
-   !> A short text for a real: fixed notation without trailing zeros for
-   !> moderate magnitudes, otherwise scientific with four digits.
-   pure function real_text(x) result(text)
-      real(dp), intent(in) :: x
-      character(:), allocatable :: text
-      character(len=32) :: buf
-      integer :: k
-      if (abs(x) < tiny(x)) then
-         text = '0'
-         return
-      end if
-      if (abs(x) >= 1.0e-3_dp .and. abs(x) < 1.0e6_dp) then
-         write (buf, '(f0.6)') x
-         text = trim(buf)
-         k = len(text)
-         do while (text(k:k) == '0')
-            k = k - 1
-         end do
-         if (text(k:k) == '.') k = k - 1
-         text = text(1:k)
-         if (text(1:1) == '.') text = '0'//text
-         if (text(1:2) == '-.') text = '-0'//text(2:)
-      else
-         write (buf, '(es11.4)') x
-         text = trim(adjustl(buf))
-      end if
-   end function real_text
 
    !> Magnitude part of the jump check: the largest ratio of |change| of an
    !> angle coordinate over the step to max(|dq_old|, |dq_new|, floor), the
@@ -326,10 +291,11 @@ contains
       if (worst > jump_ratio) then
          write (msg, '(a,es9.2,a)') ' rad over the step, ', min(worst, huge(1.0_dp)), &
             & ' times what the drive increment explains) at '
-         text = 't = '//real_text(t)//': assembly-mode jump rejected (rotation '//real_text(change)//trim(msg)//' '//what
+         text = 't = '//short_real_text(t)//': assembly-mode jump rejected (rotation '//short_real_text(change)// &
+            & trim(msg)//' '//what
       else if (old%known .and. new%known) then
          if (old%sign*new%sign < 0 .and. min(old%measure, new%measure) >= singular_share*reference) then
-            text = 't = '//real_text(t)//': assembly-mode jump rejected (the determinant of the Jacobian '// &
+            text = 't = '//short_real_text(t)//': assembly-mode jump rejected (the determinant of the Jacobian '// &
                & 'changed sign over the step, away from any singular configuration)'
          end if
       end if
