@@ -350,7 +350,7 @@ contains
       call check(error, default_penalty(2.0e8_dp, 1.0e8_dp, 2.0_dp, 0.5_dp), 2.0e8_dp, 'slave stiffer')
       call check(error, default_penalty(6.0e8_dp, 1.0e8_dp, 2.0_dp, 0.5_dp), 3.0e8_dp, 'master stiffer')
       call check(error, default_penalty(0.0_dp, 1.0e8_dp, 0.0_dp, 0.5_dp), 2.0e8_dp, 'ground guide')
-      call check(error, default_penalty(2.0e8_dp, 1.0e8_dp, 2.0_dp, 0.5_dp, scale=10.0_dp), 2.0e9_dp, 'scaled')
+      call check(error, default_penalty(2.0e8_dp, 1.0e8_dp, 2.0_dp, 0.5_dp, factor=10.0_dp), 2.0e9_dp, 'scaled')
       call check(error, default_tie_penalty(3.0e4_dp, 1.0e4_dp, 1.5_dp, 1.0_dp), 2.0e4_dp, 'tie')
    end subroutine test_default_penalty
 

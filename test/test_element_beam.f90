@@ -284,19 +284,20 @@ contains
       type(beam_type), intent(in) :: beam
       real(dp), intent(in) :: xe(6), above
       real(dp), intent(out) :: p(6), k(6, 6)
-      real(dp) :: wl, bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), sig(3), b(6, 3), kg(3, 3)
+      real(dp) :: wl, bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), sig(3), b(6, 3), kg(3, 3), cs(3)
       integer :: ig, m
+      cs = [beam%ea, beam%kga, beam%ei]
       p = 0
       k = 0
       do ig = 1, beam%ngauss
          call reference_point(beam, xe, ig, wl, bw, gam, grad, hess)
-         sig = beam%c*gam
+         sig = cs*gam
          b(:, 1) = matmul(grad(:, 1), bw)
          b(:, 2) = matmul(grad(:, 2), bw)
          b(:, 3) = [0.0_dp, 0.0_dp, -1/beam%length, 0.0_dp, 0.0_dp, 1/beam%length]
          do m = 1, 3
             p = p + wl*sig(m)*b(:, m)
-            k = k + wl*beam%c(m)*spread(b(:, m), 2, 6)*spread(b(:, m), 1, 6)
+            k = k + wl*cs(m)*spread(b(:, m), 2, 6)*spread(b(:, m), 1, 6)
          end do
          if (reference_strain(beam, xe, ig) > above) then
             kg = sig(1)*hess(:, :, 1) + sig(2)*hess(:, :, 2)
@@ -311,11 +312,13 @@ contains
       real(dp), intent(in) :: xe(6), v(6)
       real(dp), intent(out) :: d2p(6)
       real(dp) :: wl, bw(3, 6), gam(3), grad(3, 2), hess(3, 3, 2), sig(3), t3(3, 2), vw(3), bm(6), phi, c, s, vp
+      real(dp) :: cs(3)
       integer :: ig, m
+      cs = [beam%ea, beam%kga, beam%ei]
       d2p = 0
       do ig = 1, beam%ngauss
          call reference_point(beam, xe, ig, wl, bw, gam, grad, hess)
-         sig = beam%c*gam
+         sig = cs*gam
          vw = matmul(bw, v)
          vp = vw(3)
          phi = beam%angle + bw(3, 3)*xe(3) + bw(3, 6)*xe(6)
@@ -326,8 +329,8 @@ contains
          do m = 1, 2
             bm = matmul(grad(:, m), bw)
             d2p = d2p + wl*(sig(m)*matmul(t3(:, m), bw) &
-               & + 2*beam%c(m)*dot_product(bm, v)*matmul(matmul(hess(:, :, m), vw), bw) &
-               & + beam%c(m)*dot_product(vw, matmul(hess(:, :, m), vw))*bm)
+               & + 2*cs(m)*dot_product(bm, v)*matmul(matmul(hess(:, :, m), vw), bw) &
+               & + cs(m)*dot_product(vw, matmul(hess(:, :, m), vw))*bm)
          end do
       end do
    end subroutine reference_second_derivative

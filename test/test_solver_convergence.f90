@@ -49,7 +49,7 @@ contains
       type(convergence_type) :: conv
       conv%tol = 1.0e-10_dp
       conv%length = 1.0e-12_dp
-      conv%floor = 1.0e-20_dp
+      conv%residual_floor = 1.0e-20_dp
       ! Default: the residual against the scale and the correction against the length.
       call check(error, is_converged(conv, 1.0e-11_dp, 1.0_dp, 1.0_dp, 1.0e-13_dp), 'both small')
       if (allocated(error)) return

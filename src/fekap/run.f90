@@ -257,9 +257,9 @@ contains
       character(*), intent(in) :: stem
       integer, intent(in) :: step
       character(:), allocatable :: name
-      character(len=12) :: digits
-      write (digits, '(i0.6)') step
-      name = 'vtk/'//stem//'_'//trim(digits)//'.vtu'
+      character(len=12) :: number
+      write (number, '(i0.6)') step
+      name = 'vtk/'//stem//'_'//trim(number)//'.vtu'
    end function vtu_name
 
    !> Open a file for writing, replacing it (no_unit and an error if it cannot

@@ -613,9 +613,9 @@ contains
             do e = 1, size(self%elements)
                if (any(self%edof(1:2, e) == self%tdof(1, sl%slave)) .or. &
                   & any(self%edof(4:5, e) == self%tdof(1, sl%slave))) then
-                  if (self%elements(e)%c(1)/self%elements(e)%length > ea_s/max(l_s, tiny(1.0_dp))) then
-                     ea_s = self%elements(e)%c(1)
-                     ei_s = self%elements(e)%c(3)
+                  if (self%elements(e)%ea/self%elements(e)%length > ea_s/max(l_s, tiny(1.0_dp))) then
+                     ea_s = self%elements(e)%ea
+                     ei_s = self%elements(e)%ei
                      l_s = self%elements(e)%length
                   end if
                end if

@@ -44,7 +44,7 @@ module fekap_classical_angles
       !> Names of the crank, coupler and rocker, for messages.
       character(len=64) :: link_name(3) = ''
       !> Model size, the unit of divergence.
-      real(dp) :: size = 1
+      real(dp) :: model_length = 1
       !> Jump check: the state of the accepted configuration and the largest
       !> conditioning measure met so far.
       type(branch_state_type) :: branch
@@ -174,7 +174,7 @@ contains
             self%offset(k) = atan2(v(2), v(1)) - atan2(internal(2, k), internal(1, k))
          end associate
       end do
-      self%size = model_size(model)
+      self%model_length = model_size(model)
       do k = 1, 3
          self%link_name(k) = model%links(self%link(k))%name
       end do
@@ -232,7 +232,7 @@ contains
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
       type(branch_state_type) :: new
-      real(dp) :: p(2), k(2, 2), delta(2), r, r0, scale, correction, f0, df, ddf, increment, worst
+      real(dp) :: p(2), k(2, 2), delta(2), r, r0, increment_residual, correction, f0, df, ddf, increment, worst
       integer :: where_
       character(:), allocatable :: jump
 
@@ -240,7 +240,7 @@ contains
          & self%theta1(1), self%theta1(2), self%theta1(3))
       ! The scale of the default test: the residual of the drive increment alone.
       call closure(self, self%history%q(:, 1), p)
-      scale = norm2(p)
+      increment_residual = norm2(p)
       call self%history%predict(self%analysis%predictor, t, self%d)
       iterations = 0
       r0 = 0
@@ -249,8 +249,8 @@ contains
          self%counts%residual_assemblies = self%counts%residual_assemblies + 1
          r = norm2(p)
          if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%floor)) then
-            if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
+         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
+            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
          end if
          if (iterations >= self%analysis%max_iter) then
             call analysis_error(error, no_convergence_text(t, iterations, r))
@@ -268,13 +268,13 @@ contains
          self%counts%iterations = self%counts%iterations + 1
          self%d = self%d + delta
          correction = maxval(abs(delta)*self%length(2:3))
-         if (correction > divergence_length*self%size) then
+         if (correction > divergence_length*self%model_length) then
             call analysis_error(error, 't = '//short_real_text(t)// &
                & ': Newton diverged at iteration '//int_text(iterations))
             return
          end if
          if (self%conv%mode /= convergence_paper) then
-            if (is_converged(self%conv, r, r0, scale, correction)) exit
+            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
          end if
       end do
 

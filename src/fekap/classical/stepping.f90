@@ -45,7 +45,7 @@ module fekap_classical_stepping
    !> rates of the newest one when they were computed.
    type :: history_type
       !> Number of stored configurations (0 to 3).
-      integer :: count = 0
+      integer :: filled = 0
       !> (ncoord, 3): configurations; column 1 is the newest.
       real(dp), allocatable :: q(:, :)
       !> Their times.
@@ -171,7 +171,7 @@ contains
       self%t(3) = self%t(2)
       self%t(2) = self%t(1)
       self%t(1) = t
-      self%count = min(3, self%count + 1)
+      self%filled = min(3, self%filled + 1)
       self%has_rates = .false.
    end subroutine history_push
 
@@ -188,18 +188,18 @@ contains
    !> extrapolation through the last (up to) three; predictor_taylor
    !> q + dt q' + dt**2/2 q'' from the last rates, or extrapolation when
    !> velocities and accelerations were not both computed.
-   pure subroutine history_predict(self, kind, t, q)
+   pure subroutine history_predict(self, predictor, t, q)
       class(history_type), intent(in) :: self
       !> predictor_previous, predictor_extrapolate or predictor_taylor.
-      integer, intent(in) :: kind
+      integer, intent(in) :: predictor
       real(dp), intent(in) :: t
       real(dp), intent(out) :: q(:)
       ! The history's columns, newest first.
       integer, parameter :: columns(3) = [1, 2, 3]
       real(dp) :: h
       integer :: k
-      k = max(1, self%count)
-      select case (kind)
+      k = max(1, self%filled)
+      select case (predictor)
       case (predictor_previous)
          q = self%q(:, 1)
       case (predictor_taylor)
@@ -230,15 +230,15 @@ contains
    !> Convergence settings of a step from the analysis: mode and tolerance
    !> as given, the length tolerance scaled by the model size, and an absolute
    !> residual floor at rounding level (a step that starts converged).
-   pure function new_step_convergence(analysis, size_) result(conv)
+   pure function new_step_convergence(analysis, model_length) result(conv)
       type(analysis_type), intent(in) :: analysis
       !> model_size(model).
-      real(dp), intent(in) :: size_
+      real(dp), intent(in) :: model_length
       type(convergence_type) :: conv
       conv%mode = analysis%convergence
       conv%tol = analysis%tol
-      conv%length = analysis%length_tol*size_
-      conv%floor = 1.0e-14_dp*size_
+      conv%length = analysis%length_tol*model_length
+      conv%residual_floor = 1.0e-14_dp*model_length
    end function new_step_convergence
 
    !> The message of a step that hit max_iter.
@@ -255,11 +255,11 @@ contains
    !> angle coordinate over the step to max(|dq_old|, |dq_new|, floor), the
    !> linear responses to the drive increment at the two ends and the drive
    !> increment itself; and the coordinate where it occurs (0 if none moved).
-   pure subroutine magnitude_ratio(change, dq_old, dq_new, floor, worst, where_)
+   pure subroutine magnitude_ratio(change, dq_old, dq_new, drive_floor, worst, where_)
       !> Changes of the angle coordinates and their linear responses.
       real(dp), intent(in) :: change(:), dq_old(:), dq_new(:)
       !> The drive increment (radians, or lengths of the shortest link).
-      real(dp), intent(in) :: floor
+      real(dp), intent(in) :: drive_floor
       real(dp), intent(out) :: worst
       integer, intent(out) :: where_
       real(dp) :: ratio
@@ -267,7 +267,7 @@ contains
       worst = 0
       where_ = 0
       do i = 1, size(change)
-         ratio = jump_bound_ratio(change(i), dq_old(i), dq_new(i), floor)
+         ratio = jump_bound_ratio(change(i), dq_old(i), dq_new(i), drive_floor)
          if (ratio > worst) then
             worst = ratio
             where_ = i

@@ -30,7 +30,7 @@ module fekap_solver_convergence
       real(dp) :: length = 1.0e-12_dp
       !> Absolute residual floor, below which a step counts as converged
       !> whatever its scale (a step that starts converged).
-      real(dp) :: floor = 0
+      real(dp) :: residual_floor = 0
    end type convergence_type
 
 contains
@@ -40,16 +40,16 @@ contains
    !>   default: ||P(i)|| <= tol * scale, with scale the residual of the drive
    !>            increment alone (independent of the predictor), or ||P(i)|| <= floor;
    !>            and the correction computed from P(i) is below the length tolerance.
-   pure logical function is_converged(self, r, r0, scale, correction) result(done)
+   pure logical function is_converged(self, r, r0, reference, correction) result(done)
       type(convergence_type), intent(in) :: self
       !> Residual norm at the current iterate, at the predictor, and the scale.
-      real(dp), intent(in) :: r, r0, scale
+      real(dp), intent(in) :: r, r0, reference
       !> Max-norm of the translational part of the correction solved from r.
       real(dp), intent(in) :: correction
       if (self%mode == convergence_paper) then
-         done = r < self%tol*r0 .or. r <= self%floor
+         done = r < self%tol*r0 .or. r <= self%residual_floor
       else
-         done = (r <= self%tol*scale .or. r <= self%floor) .and. correction <= self%length
+         done = (r <= self%tol*reference .or. r <= self%residual_floor) .and. correction <= self%length
       end if
    end function is_converged
 
@@ -64,7 +64,7 @@ contains
    !> residual * next / c, passes the residual test. Linear convergence (a
    !> contraction above estimate_contraction, as at singular configurations)
    !> is never stopped this way.
-   logical function converged_by_estimate(self, model_length, constant, residual, r0, scale, correction, previous) &
+   logical function converged_by_estimate(self, model_length, constant, residual, r0, reference, correction, previous) &
       & result(done)
       type(convergence_type), intent(in) :: self
       !> The model size (model_size).
@@ -72,7 +72,7 @@ contains
       !> The quadratic-convergence constant M last measured (updated here).
       real(dp), intent(inout) :: constant
       !> Residual norm from which the last correction was solved, at the predictor, and the scale.
-      real(dp), intent(in) :: residual, r0, scale
+      real(dp), intent(in) :: residual, r0, reference
       !> The last correction and the one before it (0 if none), in lengths.
       real(dp), intent(in) :: correction, previous
       real(dp) :: m, next
@@ -89,7 +89,7 @@ contains
       end if
       next = m*correction**2
       if (next > estimate_contraction*correction) return
-      done = is_converged(self, residual*next/correction, r0, scale, next/estimate_margin)
+      done = is_converged(self, residual*next/correction, r0, reference, next/estimate_margin)
    end function converged_by_estimate
 
 end module fekap_solver_convergence

@@ -146,7 +146,7 @@ module fekap_solver_fem
       !> Whether a verification could not be completed (see advance_to).
       logical :: verify_failed = .false.
       !> The steps awaiting verification at each depth.
-      type(verification_type) :: verify(0:max_verify_depth)
+      type(verification_type) :: verification(0:max_verify_depth)
       !> Whether the predictor extrapolated: guard_extrapolation then checks it
       !> with the strains of the step's first assembly.
       logical :: guard_pending = .false.
@@ -199,11 +199,11 @@ contains
       shortest = huge(1.0_dp)
       do e = 1, size(self%mesh%elements)
          associate (el => self%mesh%elements(e))
-            force_scale = max(force_scale, el%c(1), el%c(2), el%c(3)/el%length**2)
+            force_scale = max(force_scale, el%ea, el%kga, el%ei/el%length**2)
             shortest = min(shortest, el%length)
          end associate
       end do
-      self%conv%floor = max(1.0e-13_dp, epsilon(1.0_dp)*self%model_length/shortest)*force_scale* &
+      self%conv%residual_floor = max(1.0e-13_dp, epsilon(1.0_dp)*self%model_length/shortest)*force_scale* &
          & sqrt(real(max(1, self%mesh%nfree), dp))
    end subroutine new_fem_stepper
 
@@ -239,13 +239,13 @@ contains
       call initial_segments(self%mesh, self%model, self%state%q, self%model_length, self%seg, error)
       if (allocated(error)) return
       self%state%seg = self%seg
-      self%state%history%count = 0
+      self%state%history%filled = 0
       self%factor_current = .false.
       self%state%has_jump_response = .false.
       result%iterations = 0
       call assemble_system_residual(self%system, self%mesh, self%state%q, self%state%t, self%seg, self%counts)
       result%residual = residual_norm(self%system, self%mesh)
-      if (self%loaded .and. result%residual > self%conv%floor) then
+      if (self%loaded .and. result%residual > self%conv%residual_floor) then
          ! Loads at t_start /= 0: find the loaded configuration first.
          call solve_step(self, self%state%t, result%iterations, result%residual, error)
          if (allocated(error)) return
@@ -485,7 +485,7 @@ contains
                      ! sensitivity times the round-off), so the length test cannot
                      ! be met; the last correction is the accuracy left, reported
                      ! in the listing.
-                     if (residual <= self%conv%floor) then
+                     if (residual <= self%conv%residual_floor) then
                         at_floor = at_floor + 1
                      else
                         at_floor = 0
@@ -596,7 +596,7 @@ contains
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       real(dp), contiguous, intent(inout) :: qt(:)
-      integer :: i, kind
+      integer :: i, made
       self%smooth_prediction = .false.
       self%guard_pending = .false.
       associate (state => self%state)
@@ -607,14 +607,14 @@ contains
             if (state%has_acceleration) then
                call taylor_predict(state%q, state%v, state%a, t - state%t, qt)
             else
-               call extrapolate_history(state%history, t, .false., self%conv%length, self%dof_length, qt, kind)
-               if (kind == prediction_none) call tangent_predictor(self, t, qt)
+               call extrapolate_history(state%history, t, .false., self%conv%length, self%dof_length, qt, made)
+               if (made == prediction_none) call tangent_predictor(self, t, qt)
             end if
          case default
-            call extrapolate_history(state%history, t, .true., self%conv%length, self%dof_length, qt, kind)
-            self%smooth_prediction = kind == prediction_smooth
-            self%guard_pending = kind /= prediction_none
-            if (kind == prediction_none) call tangent_predictor(self, t, qt)
+            call extrapolate_history(state%history, t, .true., self%conv%length, self%dof_length, qt, made)
+            self%smooth_prediction = made == prediction_smooth
+            self%guard_pending = made /= prediction_none
+            if (made == prediction_none) call tangent_predictor(self, t, qt)
          end select
       end associate
       do i = 1, self%mesh%ndof
@@ -747,10 +747,10 @@ contains
             self%verify_failed = .true.
             return
          case (branch_verify)
-            associate (verify => self%verify(self%verify_depth))
-               verify%before = state
-               verify%crossing = crossing
-               verify%turn = turn
+            associate (pending => self%verification(self%verify_depth))
+               pending%before = state
+               pending%crossing = crossing
+               pending%turn = turn
             end associate
             self%verify_pending = .true.
          end select
@@ -794,8 +794,8 @@ contains
       integer :: i, half, it, worst_dof
       character(len=200) :: msg
       q_whole = self%state%q
-      call restore_state(self, self%verify(depth)%before)
-      associate (c => self%verify(depth)%crossing)
+      call restore_state(self, self%verification(depth)%before)
+      associate (c => self%verification(depth)%crossing)
          pair = 'links '//self%model%links(c(1))%name//' and '//self%model%links(c(2))%name//' at node '// &
             & self%model%nodes(c(3))%name
       end associate
@@ -809,13 +809,13 @@ contains
          if (half == 1 .and. self%model%analysis%predictor == predictor_taylor) call solve_rates(self)
       end do
       if (allocated(half_error)) then
-         call restore_state(self, self%verify(depth)%before)
+         call restore_state(self, self%verification(depth)%before)
          self%verify_failed = .true.
          if (depth > 0) then
             call move_alloc(half_error, error)
          else
             write (msg, '(a,es12.5,a,f7.4,a)') 't = ', t, ': possible assembly-mode jump rejected ('//pair// &
-               & ' crossed collinear turning ', self%verify(depth)%turn, &
+               & ' crossed collinear turning ', self%verification(depth)%turn, &
                & ' rad; two half steps could not confirm it: '
             call analysis_error(error, trim(msg)//' '//half_error%message//')')
          end if

@@ -39,7 +39,7 @@ module fekap_solver_predictor
    !> one column instead of shifting the history.
    type :: predictor_history_type
       real(dp), allocatable :: q(:, :), t(:)
-      integer :: count = 0, newest = history_depth
+      integer :: filled = 0, newest = history_depth
       !> Their velocities, and whether each is known.
       real(dp), allocatable :: velocity(:, :)
       logical, allocatable :: has_velocity(:)
@@ -67,7 +67,7 @@ contains
       self%q(:, self%newest) = q
       self%t(self%newest) = t
       self%has_velocity(self%newest) = .false.
-      self%count = min(self%count + 1, history_depth)
+      self%filled = min(self%filled + 1, history_depth)
    end subroutine history_push
 
    pure integer function history_column(self, k) result(column)
@@ -90,23 +90,23 @@ contains
    !> velocities, Lagrange through the newest lagrange_points positions.
    !> length is the length tolerance, dof_length the length weight of each
    !> unknown (1 for translations, the model size for rotations).
-   subroutine extrapolate_history(self, t, smooth, length, dof_length, qt, kind)
+   subroutine extrapolate_history(self, t, smooth, length, dof_length, qt, made)
       type(predictor_history_type), intent(in) :: self
       real(dp), intent(in) :: t
       logical, intent(in) :: smooth
       real(dp), intent(in) :: length
       real(dp), contiguous, intent(in) :: dof_length(:)
       real(dp), contiguous, intent(inout) :: qt(:)
-      integer, intent(out) :: kind
+      integer, intent(out) :: made
       integer :: i, n, columns(history_depth)
       ! The history's columns, newest first.
-      do i = 1, self%count
+      do i = 1, self%filled
          columns(i) = ring_column(self%newest, i)
       end do
       n = 0
       if (smooth) then
          ! The newest configurations whose velocities are known.
-         do while (n < self%count)
+         do while (n < self%filled)
             if (.not. self%has_velocity(columns(n + 1))) exit
             n = n + 1
          end do
@@ -115,12 +115,12 @@ contains
          if (.not. adams_prediction(self, t, columns(1:n), length, dof_length, qt)) then
             call hermite_extrapolate(self%q, self%velocity, self%t, columns(1:min(n, hermite_points)), t, qt)
          end if
-         kind = prediction_smooth
-      else if (self%count > 1) then
-         call extrapolate(self%q, self%t, columns(1:min(self%count, lagrange_points)), t, qt)
-         kind = prediction_lagrange
+         made = prediction_smooth
+      else if (self%filled > 1) then
+         call extrapolate(self%q, self%t, columns(1:min(self%filled, lagrange_points)), t, qt)
+         made = prediction_lagrange
       else
-         kind = prediction_none
+         made = prediction_none
       end if
    end subroutine extrapolate_history
 

@@ -108,9 +108,9 @@ contains
 
    !> Wall-clock time in seconds, for the phase timers (30-60 ns a read here).
    real(dp) function clock_seconds() result(seconds)
-      integer(8) :: count, rate
-      call system_clock(count, rate)
-      seconds = real(count, dp)/real(rate, dp)
+      integer(8) :: ticks, rate
+      call system_clock(ticks, rate)
+      seconds = real(ticks, dp)/real(rate, dp)
    end function clock_seconds
 
    !> Wall-clock time in seconds to a few milliseconds (the kernel's tick),
