@@ -21,6 +21,7 @@ program fekap_main
       !> C's exit: a status code that is a variable (F2008 `stop` takes constants only).
       subroutine c_exit(status) bind(C, name='exit')
          import :: c_int
+         implicit none
          integer(c_int), value :: status
       end subroutine c_exit
    end interface

@@ -339,8 +339,9 @@ contains
       integer :: j
 
       if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
-      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) &
-         & call new_step_result(result, self%nnode, self%nlink)
+      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) then
+         call new_step_result(result, self%nnode, self%nlink)
+      end if
       result%step = self%step
       result%t = t
       result%iterations = iterations

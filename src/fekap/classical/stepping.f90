@@ -86,6 +86,7 @@ module fekap_classical_stepping
    abstract interface
       subroutine try_step_interface(self, t, iterations, error)
          import :: classical_stepper_type, dp, error_type
+         implicit none
          class(classical_stepper_type), intent(inout) :: self
          real(dp), intent(in) :: t
          integer, intent(out) :: iterations
@@ -94,6 +95,7 @@ module fekap_classical_stepping
 
       subroutine rates_at_interface(self, t, error)
          import :: classical_stepper_type, dp, error_type
+         implicit none
          class(classical_stepper_type), intent(inout) :: self
          real(dp), intent(in) :: t
          type(error_type), allocatable, intent(out) :: error
@@ -101,6 +103,7 @@ module fekap_classical_stepping
 
       subroutine finish_step_interface(self, t, iterations, result, error)
          import :: classical_stepper_type, dp, error_type, step_result_type
+         implicit none
          class(classical_stepper_type), intent(inout) :: self
          real(dp), intent(in) :: t
          integer, intent(in) :: iterations

@@ -19,6 +19,11 @@
 !> k = 54 (|x| down to about 1e-38), a 128-bit division for k < 0 (down to
 !> -21, |x| < 1e38). Other values (subnormals, NaN, infinities, magnitudes
 !> beyond these) go through the formatted write.
+!>
+!> Why one module of over 600 lines (just over): the exact digit paths, their
+!> tables of powers and the writers that call them share private constants
+!> and are tested together against the formatted write; split, the tables
+!> would have to be public.
 module fekap_output_format
    use fekap_kinds, only: dp
    implicit none

@@ -12,8 +12,15 @@
 !> rates (rates), step control (step_control), the convergence tests
 !> (convergence) and the result's fields (fields). What stays here is the
 !> Newton iteration of a step, with its choices of tangent, and the
-!> step-doubling verification that the branch check asks for: both act on the
-!> whole of the stepper's state.
+!> step-doubling verification that the branch check asks for.
+!>
+!> Why one module of over 600 lines: the Newton iteration (solve_step), the
+!> step loop (advance_to) and the verification by half steps (verify_step)
+!> call one another recursively and act on the whole of the stepper's state
+!> (the accepted state, the iterate, the factor's currency, the pending
+!> verifications); split, each would take the whole stepper as an argument
+!> and the recursion would cross modules, which plain Fortran modules cannot
+!> do without a cycle.
 module fekap_solver_fem
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
@@ -414,8 +421,9 @@ contains
                   ! The predictor's guard, once per step: it needs the strains of this first assembly.
                   if (self%guard_pending) then
                      self%guard_pending = .false.
-                     if (guard_extrapolation(self, t, qt)) &
-                        & call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
+                     if (guard_extrapolation(self, t, qt)) then
+                        call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
+                     end if
                   end if
                   residual = residual_norm(system, mesh)
                   if (i == 0) then
@@ -753,6 +761,8 @@ contains
                pending%turn = turn
             end associate
             self%verify_pending = .true.
+         case default
+            ! branch_accept: the step stands.
          end select
          state%has_jump_response = has_response
       end associate

@@ -3,6 +3,7 @@
 !> method and both constraint-equation methods extend `stepper_type`.
 module fekap_solver_stepper
    use, intrinsic :: iso_c_binding, only: c_int, c_long
+   use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
    use fekap_error, only: error_type
    use fekap_model_results, only: step_result_type
@@ -39,6 +40,7 @@ module fekap_solver_stepper
       !> clock_gettime(2) of the C library.
       integer(c_int) function clock_gettime(clock, time) bind(C, name='clock_gettime')
          import :: c_int, timespec_type
+         implicit none
          integer(c_int), value :: clock
          type(timespec_type), intent(out) :: time
       end function clock_gettime
@@ -59,6 +61,7 @@ module fekap_solver_stepper
    abstract interface
       subroutine start_interface(self, result, error)
          import :: stepper_type, step_result_type, error_type
+         implicit none
          class(stepper_type), intent(inout) :: self
          type(step_result_type), intent(inout) :: result
          type(error_type), allocatable, intent(out) :: error
@@ -66,6 +69,7 @@ module fekap_solver_stepper
 
       subroutine advance_interface(self, t, result, error)
          import :: stepper_type, step_result_type, error_type, dp
+         implicit none
          class(stepper_type), intent(inout) :: self
          real(dp), intent(in) :: t
          type(step_result_type), intent(inout) :: result
@@ -108,7 +112,7 @@ contains
 
    !> Wall-clock time in seconds, for the phase timers (30-60 ns a read here).
    real(dp) function clock_seconds() result(seconds)
-      integer(8) :: ticks, rate
+      integer(int64) :: ticks, rate
       call system_clock(ticks, rate)
       seconds = real(ticks, dp)/real(rate, dp)
    end function clock_seconds
