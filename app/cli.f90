@@ -2,9 +2,8 @@
 module fekap_app_cli
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
-   use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
-      & predictor_extrapolate, predictor_taylor
-   use fekap_strings, only: lower
+   use fekap_model, only: model_type, method_names, predictor_names
+   use fekap_strings, only: lower, word_index
    implicit none
    private
 
@@ -131,33 +130,24 @@ contains
       type(model_type), intent(inout) :: model
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: value
-      integer :: stat, start, comma
+      integer :: stat, start, comma, code
       character(:), allocatable :: item
       if (allocated(cli%method)) then
-         select case (lower(cli%method))
-         case ('fem')
-            model%analysis%method = method_fem
-         case ('cartesian')
-            model%analysis%method = method_cartesian
-         case ('angles')
-            model%analysis%method = method_angles
-         case default
+         ! A name of method_names (or 4 letters of it), as in the deck.
+         code = word_index(cli%method, method_names)
+         if (code == 0) then
             call input_error(error, 'fekap: --method '//cli%method//': expected fem, cartesian or angles')
             return
-         end select
+         end if
+         model%analysis%method = code
       end if
       if (allocated(cli%predictor)) then
-         select case (lower(cli%predictor))
-         case ('previous')
-            model%analysis%predictor = predictor_previous
-         case ('extrapolate')
-            model%analysis%predictor = predictor_extrapolate
-         case ('taylor')
-            model%analysis%predictor = predictor_taylor
-         case default
+         code = word_index(cli%predictor, predictor_names)
+         if (code == 0) then
             call input_error(error, 'fekap: --predictor '//cli%predictor//': expected previous, extrapolate or taylor')
             return
-         end select
+         end if
+         model%analysis%predictor = code
       end if
       if (allocated(cli%dt)) then
          read (cli%dt, *, iostat=stat) value

@@ -5,7 +5,7 @@ module fekap_output_listing
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, method_fem, method_cartesian, &
       & predictor_previous, predictor_extrapolate, convergence_paper, joint_prismatic
    use fekap_model_results, only: step_result_type
-   use fekap_solver_stepper, only: work_counts_type, phase_seconds
+   use fekap_model_work, only: work_counts_type, phase_seconds
    use fekap_output_format, only: append_es, append_i, append_integer, append_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
    implicit none

@@ -6,7 +6,7 @@
 !> cost about 2.3 us a step (docs/performance.md), more than the 2 us the
 !> analysis of a step aims at. The loop's time is measured whole and split
 !> into analysis and output as in a sample of its steps.
-module fekap_solver_run
+module fekap_run
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error, fatal_error
    use fekap_solver_interrupt, only: interrupt_signal
@@ -257,9 +257,9 @@ contains
       character(*), intent(in) :: stem
       integer, intent(in) :: step
       character(:), allocatable :: name
-      character(len=12) :: digits
-      write (digits, '(i0.6)') step
-      name = 'vtk/'//stem//'_'//trim(digits)//'.vtu'
+      character(len=12) :: number
+      write (number, '(i0.6)') step
+      name = 'vtk/'//stem//'_'//trim(number)//'.vtu'
    end function vtu_name
 
    !> Open a file for writing, replacing it (no_unit and an error if it cannot
@@ -319,4 +319,4 @@ contains
       flush (buffer%unit)
    end subroutine flush_buffer
 
-end module fekap_solver_run
+end module fekap_run
