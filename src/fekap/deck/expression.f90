@@ -34,12 +34,19 @@ module fekap_deck_expression
 
    integer, parameter :: ok = 0, bad_syntax = 1, bad_value = 2
 
+   !> Deepest nesting of parentheses, signs and powers in a field: far beyond
+   !> any real deck, and a bound on the parser's recursion (20,000 nested
+   !> parentheses once overflowed the stack).
+   integer, parameter, public :: max_depth = 100
+
    !> Parsing state of one field.
    type :: parser_type
       character(:), allocatable :: text
       integer :: pos = 1
       integer :: status = ok
       character(:), allocatable :: detail
+      !> Current nesting depth (see max_depth).
+      integer :: depth = 0
    end type parser_type
 
 contains
@@ -226,6 +233,16 @@ contains
    pure recursive subroutine parse_unary(p, v)
       type(parser_type), intent(inout) :: p
       real(dp), intent(out) :: v
+      character(len=12) :: limit
+      ! Every level of nesting (a sign, a parenthesis, a function argument, an
+      ! exponent) passes through here.
+      v = 0
+      if (p%depth >= max_depth) then
+         write (limit, '(i0)') max_depth
+         call fail(p, bad_syntax, 'nested too deeply (more than '//trim(limit)//' levels of parentheses and signs)')
+         return
+      end if
+      p%depth = p%depth + 1
       select case (peek(p))
       case ('-')
          p%pos = p%pos + 1
@@ -237,6 +254,7 @@ contains
       case default
          call parse_power(p, v)
       end select
+      p%depth = p%depth - 1
       if (p%status /= ok) v = 0
    end subroutine parse_unary
 
