@@ -1,7 +1,6 @@
 !> Test driver: `tester [suite [test]]` runs every suite, one suite, or one test.
 program tester
    use fekap_testing, only: unittest_type, run_testsuite
-   use test_drive_law, only: collect_drive_law
    use test_element_beam, only: collect_element_beam
    use test_assembly_band, only: collect_assembly_band
    use test_assembly_mesh, only: collect_assembly_mesh
@@ -37,7 +36,6 @@ program tester
    passed = 0
    failed = 0
 
-   call run('drive_law', collect_drive_law)
    call run('element_beam', collect_element_beam)
    call run('assembly_band', collect_assembly_band)
    call run('assembly_mesh', collect_assembly_mesh)
