@@ -4,7 +4,7 @@ module fekap_union_find
    implicit none
    private
 
-   public :: find_root, join
+   public :: find_root, join, flatten
 
 contains
 
@@ -32,6 +32,17 @@ contains
       call compress(parent, j, root)
       parent(max(ri, rj)) = root
    end subroutine join
+
+   !> Point every element straight at its representative: after it,
+   !> find_root takes one step. One ascending pass suffices, since a parent
+   !> never has a larger index than its child (the smaller index represents).
+   pure subroutine flatten(parent)
+      integer, intent(inout) :: parent(:)
+      integer :: k
+      do k = 1, size(parent)
+         parent(k) = parent(parent(k))
+      end do
+   end subroutine flatten
 
    !> Point every element on the path from i to its root at `root`.
    pure subroutine compress(parent, i, root)

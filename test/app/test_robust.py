@@ -9,13 +9,12 @@ scripts/test) in a few seconds. The full-disk tests mount a small tmpfs of
 their own and are skipped, saying why, where that is not allowed (not root,
 no mount).
 
-Run with pytest, or alone:  python3 test/app/test_robust.py
+Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_robust.py
 """
 
 from __future__ import annotations
 
 import csv
-import inspect
 import os
 import signal
 import subprocess
@@ -395,37 +394,5 @@ def test_huge_times_are_a_deck_error_not_a_trap(tmp_path, span):
     assert "beyond 1e9" in done.stderr
 
 
-def _main() -> int:
-    """Run the tests without pytest (scripts/test before the pytest port): the closing count line."""
-    tests = [(name, fn) for name, fn in globals().items() if name.startswith("test_") and callable(fn)]
-    passed = failed = skipped = 0
-    for name, fn in tests:
-        marks = getattr(fn, "pytestmark", [])
-        cases = [()]
-        for mark in marks:
-            if mark.name == "parametrize":
-                cases = [case if isinstance(case, tuple) else (case,) for case in mark.args[1]]
-        for case in cases:
-            kwargs = {}
-            params = [p for p in inspect.signature(fn).parameters if p != "tmp_path"]
-            kwargs.update(zip(params, case))
-            try:
-                with tempfile.TemporaryDirectory(prefix="fekap-robust-") as tmp:
-                    if "tmp_path" in inspect.signature(fn).parameters:
-                        kwargs["tmp_path"] = Path(tmp)
-                    fn(**kwargs)
-            except pytest.skip.Exception as why:
-                skipped += 1
-                print(f"  SKIP robust/{name}: {why}")
-            except BaseException as exc:  # noqa: BLE001 (a failed test of any kind)
-                failed += 1
-                print(f"  FAIL robust/{name}{list(case)!r:.60}: {type(exc).__name__}: {str(exc)[:2000]}")
-            else:
-                passed += 1
-                print(f"  PASS robust/{name}")
-    print(f"robust: {passed} passed, {failed} failed")
-    return 1 if failed else 0
-
-
 if __name__ == "__main__":
-    sys.exit(_main())
+    sys.exit(pytest.main([__file__, "-q"]))
