@@ -120,7 +120,8 @@ contains
       do k = 1, size(lines)
          line%file = ifile
          line%number = k
-         line%text = lines(k)%s
+         ! Each split line is freed as it is taken.
+         call move_alloc(lines(k)%s, line%text)
          call lex_line(line%text, line%code, line%tokens, empty_col)
          if (size(line%tokens) == 0 .and. empty_col == 0) cycle
          if (main) source%last_line = k
@@ -254,10 +255,20 @@ contains
       type(source_type), intent(inout) :: source
       type(line_type), intent(in) :: line
       type(line_type), allocatable :: grown(:)
+      integer :: i
       if (.not. allocated(source%lines)) allocate (source%lines(64))
       if (source%nlines == size(source%lines)) then
          allocate (grown(2*size(source%lines)))
-         grown(1:source%nlines) = source%lines(1:source%nlines)
+         ! Moved, not copied: a copy of every line's texts doubled the
+         ! memory of a large deck at each growth.
+         do i = 1, source%nlines
+            grown(i)%file = source%lines(i)%file
+            grown(i)%number = source%lines(i)%number
+            grown(i)%card = source%lines(i)%card
+            call move_alloc(source%lines(i)%text, grown(i)%text)
+            call move_alloc(source%lines(i)%code, grown(i)%code)
+            call move_alloc(source%lines(i)%tokens, grown(i)%tokens)
+         end do
          call move_alloc(grown, source%lines)
       end if
       source%nlines = source%nlines + 1
