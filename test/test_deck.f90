@@ -624,8 +624,10 @@ contains
          & 'the time step must be positive')
       call expect_error(error, with_base('ANALysis'//nl//' time 0 1e6 1e-3'//nl), 't.deck:11:13:', &
          & 'more than 10,000,000 time steps')
-      call expect_error(error, with_base('ANALysis'//nl//' time -1e308 1e308 1'//nl), 't.deck:11:20:', &
-         & 'more than 10,000,000 time steps')
+      call expect_error(error, with_base('ANALysis'//nl//' time -1e308 1e308 1'//nl), 't.deck:11:7:', &
+         & 'the start time is beyond 1e9')
+      call expect_error(error, with_base('ANALysis'//nl//' time 0 1e300 1e299'//nl), 't.deck:11:9:', &
+         & 'the end time is beyond 1e9')
    end subroutine test_time_step
 
    subroutine test_end_before_start(error)

@@ -109,7 +109,8 @@ contains
    end subroutine test_integer_text
 
    !> append_es equals the formatted write for the listing's descriptors
-   !> es20.11 and es16.6 (two-digit exponents, three without the E beyond 99).
+   !> es20.11 and es16.6 with two-digit exponents, and es20.11e3 and es16.6e3
+   !> with three (which keep their E; es20.11 writes 1e100 as 1.00000000000+100).
    subroutine test_append_es(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: x, u
@@ -117,6 +118,7 @@ contains
       integer :: i, n, f
       integer, parameter :: widths(2) = [20, 16], decimals(2) = [11, 6]
       character(len=10), parameter :: forms(2) = ['(es20.11) ', '(es16.6)  ']
+      character(len=12), parameter :: forms3(2) = ['(es20.11e3)', '(es16.6e3) ']
       do i = 1, 4000
          call random_number(u)
          call random_number(x)
@@ -126,6 +128,7 @@ contains
          if (i == 3) x = 1.0e100_dp
          do f = 1, 2
             write (want, forms(f)) x
+            if (index(want(1:widths(f)), 'E') == 0) write (want, forms3(f)) x
             n = 0
             got = ''
             call append_es(got, n, x, widths(f), decimals(f), 0)
@@ -151,17 +154,21 @@ contains
       end do
    end subroutine test_append_i
 
-   !> append_es of x equals the formatted write for es25.16e3, es20.11 and es16.6.
+   !> append_es of x equals the formatted write for es25.16e3, es20.11 and es16.6
+   !> (es20.11e3 and es16.6e3 for a three-digit exponent).
    subroutine check_es_forms(error, x)
       type(error_type), allocatable, intent(inout) :: error
       real(dp), intent(in) :: x
       integer, parameter :: widths(3) = [25, 20, 16], decimals(3) = [16, 11, 6], exponents(3) = [3, 0, 0]
       character(len=12), parameter :: forms(3) = ['(es25.16e3)', '(es20.11)  ', '(es16.6)   ']
+      character(len=12), parameter :: forms3(3) = ['(es25.16e3)', '(es20.11e3)', '(es16.6e3) ']
       character(len=40) :: want, got
       character(len=16) :: bits
       integer :: f, n
       do f = 1, size(forms)
          write (want, forms(f)) x
+         ! A three-digit exponent keeps its E (es_text).
+         if (index(want(1:widths(f)), 'E') == 0 .and. x == x .and. abs(x) <= huge(x)) write (want, forms3(f)) x
          n = 0
          got = ''
          call append_es(got, n, x, widths(f), decimals(f), exponents(f))

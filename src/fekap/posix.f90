@@ -18,7 +18,9 @@ module fekap_posix
 
    integer(c_int), parameter :: o_rdonly = 0, o_wronly = 1, o_append = 1024, o_cloexec = 524288
    integer(c_int), parameter :: lock_ex = 2, lock_nb = 4
-   integer(c_int), parameter :: eexist = 17, eintr = 4, enotdir = 20
+   integer(c_int), parameter :: eexist = 17, eintr = 4, enotdir = 20, efbig = 27
+   !> Most bytes os_read_all reads (256 MiB).
+   integer, parameter :: max_read = 268435456
    integer(c_int), parameter :: sigpipe = 13
    !> Permissions of a new directory, before the umask: 0777.
    integer(c_int), parameter :: mode_directory = 511
@@ -295,7 +297,9 @@ contains
 
    !> The whole content of `path` read with read(2) until its end: also a pipe
    !> or a terminal (`fekap /dev/stdin`), whose size is not known in advance.
-   !> 0 or the errno.
+   !> Reading stops early at a NUL byte (not text: /dev/zero ends at once, and
+   !> the caller reports a binary file) and at max_read bytes (EFBIG: an
+   !> endless stream). 0 or the errno.
    integer function os_read_all(path, text) result(code)
       character(*), intent(in) :: path
       character(:), allocatable, intent(out) :: text
@@ -321,6 +325,10 @@ contains
             exit
          end if
          if (got == 0) exit
+         if (n + got > max_read) then
+            code = efbig
+            exit
+         end if
          if (n + got > len(text)) then
             allocate (character(len=2*len(text) + int(got)) :: grown)
             grown(1:n) = text(1:n)
@@ -329,6 +337,7 @@ contains
          text(n + 1:n + got) = chunk(1:got)
          n = n + int(got)
          code = 0
+         if (index(chunk(1:got), c_null_char) > 0) exit
       end do
       status = c_close(fd)
       text = text(1:n)

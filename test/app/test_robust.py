@@ -371,6 +371,12 @@ def test_deck_from_a_pipe(tmp_path):
     assert (tmp_path / "o/points.csv").read_bytes() == reference_steps(tmp_path)
 
 
+def test_endless_inputs_are_refused_not_read_forever(tmp_path):
+    deck = write_deck(tmp_path / "z.deck", "INCLude /dev/zero\nEND\n")
+    done = fekap("-q", "-o", tmp_path / "o", deck, timeout=30)
+    assert done.returncode == 2 and "binary file" in done.stderr, done.stderr[-300:]
+
+
 def test_element_count_above_the_limit_names_the_limit(tmp_path):
     deck = write_deck(tmp_path / "e.deck", deck_text(**{"  AB  A  B  bar": "  AB  A  B  bar 100001"}))
     done = fekap("-q", "-o", tmp_path / "o", deck)
