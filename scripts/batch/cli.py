@@ -16,7 +16,6 @@ finished cases are kept; run the same command again to resume).
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import shutil
 import subprocess
@@ -24,7 +23,8 @@ import sys
 from pathlib import Path
 
 from . import engine, results
-from .sweep import OPTIONS, Case, Problems, Place, Sweep, SweepError, expand, expand_decks, load_sweep, values_of, option_values
+from .sweep import (Place, Problems, Sweep, SweepError, expand, expand_decks, load_sweep, option_values,
+                    values_of)
 
 ROOT = Path(__file__).resolve().parents[2]
 PROG = "fekap-batch"

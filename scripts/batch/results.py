@@ -101,22 +101,11 @@ def parse_measure(text: str) -> Measure:
 
 
 def load(directory: Path) -> fc.Run | None:
+    """A case's results, None when there are none to read."""
     try:
         return fc.load_run(directory)
     except (fc.UsageError, OSError, ValueError):
         return None
-
-
-def listing_figures(directory: Path) -> tuple[float | None, float | None]:
-    """Configurations solved and time in analysis (s) from the listing's summary."""
-    configurations = seconds = None
-    for path in directory.glob("*.lis"):
-        for line in path.read_text(errors="replace").splitlines():
-            if "configurations solved" in line:
-                configurations = float(line.split()[-1])
-            elif "time in analysis (s)" in line:
-                seconds = float(line.split()[-1])
-    return configurations, seconds
 
 
 def case_row(case: Case, directory: Path, record: dict | None, lost: str | None,
@@ -129,17 +118,11 @@ def case_row(case: Case, directory: Path, record: dict | None, lost: str | None,
         row.update(exit="lost" if lost else "not run", message=lost or "")
         return row
     row.update(exit=str(record["exit"]), message=record["message"])
-    steps = fc.read_steps(directory / "steps.csv") if (directory / "steps.csv").is_file() else None
-    if steps is not None and steps["step"].size:
-        later = steps["step"] > 0
-        row["steps"] = str(int(steps["step"].max()))
-        if later.any():
-            row["iterations_per_step"] = f"{float(np.mean(steps['iterations'][later])):.3f}"
-        if "cuts" in steps:
-            row["cuts"] = str(int(np.sum(steps["cuts"])))
-    configurations, seconds = listing_figures(directory)
-    if configurations and seconds is not None:
-        row["analysis_us_per_configuration"] = f"{1e6 * seconds / configurations:.2f}"
+    stats = record.get("statistics", {})
+    for key, form in (("steps", "{:d}"), ("iterations_per_step", "{:.3f}"), ("cuts", "{:d}"),
+                      ("analysis_us_per_configuration", "{:.2f}")):
+        if key in stats:
+            row[key] = form.format(stats[key])
     if measures:
         run = load(directory)
         reference = load(reference_dir) if reference_dir is not None else None

@@ -57,8 +57,8 @@ OUTPut
 END
 """
 
-#: A case of this many crank turns at dt = 1e-4 runs for about a second.
-LONG = 30
+#: A case of this many crank turns at dt = 1e-4 (100,000 steps) runs for about half a second.
+LONG = 10
 
 
 @pytest.fixture(scope="module")
@@ -66,14 +66,15 @@ def fekap() -> str:
     return str(Path(fekap_binary()).resolve())
 
 
-def batch(cwd: Path, fekap: str, *args: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    """Run fekap-batch to its end (no plots: they are tested apart)."""
-    return subprocess.run(batch_command(fekap, *args), cwd=cwd, env=batch_env(), capture_output=True,
-                          text=True, timeout=timeout)
+def batch(cwd: Path, fekap: str, *args: str, timeout: float = 120, workers: int = 2
+          ) -> subprocess.CompletedProcess:
+    """Run fekap-batch to its end."""
+    return subprocess.run(batch_command(fekap, *args, workers=workers), cwd=cwd, env=batch_env(),
+                          capture_output=True, text=True, timeout=timeout)
 
 
-def batch_command(fekap: str, *args: str) -> list[str]:
-    return [sys.executable, "-m", "batch", "--fekap", fekap, "--workers", "2", *args]
+def batch_command(fekap: str, *args: str, workers: int = 2) -> list[str]:
+    return [sys.executable, "-m", "batch", "--fekap", fekap, "--workers", str(workers), *args]
 
 
 def batch_env() -> dict[str, str]:
@@ -146,12 +147,14 @@ def sweep20(tmp_path_factory, fekap):
 decks = ["p.deck"]
 output = "out"
 measures = ["max(points.B.x)", "range(links.AB.angle)", "max(steps.iterations)"]
+[plot]
+point = "C"
 [parameters]
 crank = { linspace = [1.5, 2.4, 10] }
 [options]
 dt = [0.05, 0.1]
 """)
-    result = batch(directory, fekap, str(sweep), "--no-plots")
+    result = batch(directory, fekap, str(sweep))
     return directory, result
 
 
@@ -178,6 +181,9 @@ def test_sweep_of_20_cases_gives_the_right_table(sweep20):
         # The listing echoes the values the case ran with.
         listing = (case / "p.lis").read_text()
         assert f"{float(row['crank']):.15E}"[:8] in listing.split("PARAMETERS")[1].split("NODES")[0]
+    # The overlay of C (the cases at dt = 0.05: compare.py needs equal times) and a plot per measure.
+    for plot in ("paths-C-y.png", "measure-1.png", "measure-2.png", "measure-3.png"):
+        assert (directory / "out" / "plots" / plot).stat().st_size > 10000
     table = (directory / "out" / "summary.md").read_text().splitlines()
     assert len(table) == 22 and table[0].startswith("| case | crank | dt | exit |")
     assert result.stdout.strip().splitlines()[-20:] == table[2:]
@@ -208,7 +214,7 @@ decks = ["p.deck", "broken.deck"]
 crank = [2, 13]
 """)
     (tmp_path / "broken.deck").write_text(DECK.replace("LINKs", "LINKs\n  XY A Q bar"))
-    result = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots")
+    result = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots", workers=1)
     assert result.returncode == 0, result.stderr
     rows = {(Path(row["deck"]).name, row["crank"]): row for row in summary(tmp_path / "out")}
     assert rows["p.deck", "2.0"]["exit"] == "0"
@@ -219,8 +225,28 @@ crank = [2, 13]
     assert "broken.deck:17:" in rows["broken.deck", "2.0"]["message"]
     record = json.loads((tmp_path / "out" / "cases" / bad["case"] / "case.json").read_text())
     assert record["attempt"] == 1 and "retrying" not in result.stderr
-    again = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots")
-    assert "0 to run" in again.stderr
+
+
+def test_case_over_the_timeout_is_retried_then_lost(tmp_path, fekap):
+    sweep = write_sweep(tmp_path, f"""\
+decks = ["p.deck"]
+timeout = 1
+retries = 1
+[parameters]
+turns = [1, {50 * LONG}]
+every = 10000
+[options]
+dt = 1e-4
+""")
+    result = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots", workers=1)
+    assert result.returncode == 1, result.stderr
+    assert "CaseTimeout: exceeded the timeout of 1 s; retrying (1 of 1 retries)" in result.stderr
+    rows = {row["turns"]: row for row in summary(tmp_path / "out")}
+    assert rows["1.0"]["exit"] == "0"
+    assert rows[f"{50.0 * LONG}"]["exit"] == "lost"
+    assert "lost after 2 attempts: CaseTimeout" in rows[f"{50.0 * LONG}"]["message"]
+    assert not (tmp_path / "out" / "cases" / rows[f"{50.0 * LONG}"]["case"]).exists()
+    wait_until(lambda: not fekap_processes(str(tmp_path)), 10, "no fekap left running")
 
 
 @pytest.mark.parametrize("text, where, phrase", [
@@ -286,8 +312,8 @@ def test_sigint_keeps_the_finished_cases(tmp_path, fekap):
     sweep = write_sweep(tmp_path, f"""\
 decks = ["p.deck"]
 [parameters]
-crank = {{ linspace = [1.8, 2.2, 6] }}
-turns = {LONG // 2}
+crank = {{ linspace = [1.8, 2.1, 4] }}
+turns = {LONG}
 every = 10000
 [options]
 dt = 1e-4
@@ -304,16 +330,16 @@ dt = 1e-4
     assert process.returncode == 130, err
     assert "interrupted; finished cases are kept" in err
     done = {path.parent.name for path in cases.glob("*/case.json")}
-    assert 1 <= len(done) < 6
+    assert 1 <= len(done) < 4
     rows = summary(tmp_path / "out")
-    assert len(rows) == 6
+    assert len(rows) == 4
     assert {row["case"] for row in rows if row["exit"] == "0"} == done
     assert all(row["exit"] == "not run" for row in rows if row["case"] not in done)
     wait_until(lambda: not fekap_processes(str(tmp_path)), 10, "no fekap left running")
     # Resuming runs only the rest.
     again = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots")
     assert again.returncode == 0, again.stderr
-    assert f"{len(done)} done before, {6 - len(done)} to run" in again.stderr
+    assert f"{len(done)} done before, {4 - len(done)} to run" in again.stderr
     assert all(row["exit"] == "0" for row in summary(tmp_path / "out"))
 
 
@@ -337,7 +363,7 @@ def test_sweep_through_a_dask_scheduler_and_two_workers(tmp_path, fekap):
             (tmp_path / name).mkdir()
             processes.append(subprocess.Popen(
                 [dask, "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard",
-                 "--name", name], cwd=tmp_path / name, env=env,
+                 "--no-nanny", "--name", name], cwd=tmp_path / name, env=env,
                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         sweep = write_sweep(tmp_path, """\
 decks = ["p.deck"]
@@ -353,9 +379,12 @@ method = ["fem", "cartesian", "angles", "fem"]
         rows = summary(tmp_path / "out")
         assert [(row["crank"], row["method"]) for row in rows] == [
             ("1.7", "fem"), ("1.9", "cartesian"), ("2.1", "angles"), ("2.3", "fem")]
+        workers = set()
         for row in rows:
             assert row["exit"] == "0"
             assert float(row["max(points.B.x)"]) == pytest.approx(float(row["crank"]), rel=1e-12)
+            workers.add(json.loads((tmp_path / "out" / "cases" / row["case"] / "case.json").read_text())["worker"])
+        assert workers and workers <= {"w1", "w2"}
     finally:
         for process in reversed(processes):
             stop(process)
