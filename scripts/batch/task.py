@@ -123,3 +123,8 @@ def run_case(task: dict) -> dict:
             raise
         shutil.rmtree(work, ignore_errors=True)
     return record
+
+
+def run_cases(tasks: list[dict]) -> list[dict]:
+    """Run several cases one after the other (one Dask task); their records."""
+    return [run_case(task) for task in tasks]

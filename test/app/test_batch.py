@@ -267,11 +267,15 @@ dt = 1e-4
     ('decks = ["p.deck"]\nmeasures = ["top(points.C.y)"]\n', "sweep.toml:2: measures:", "unknown function"),
     ('decks = ["p.deck"\n', "sweep.toml:", "not valid TOML"),
 ])
-def test_bad_sweep_file_is_refused_before_any_case_runs(tmp_path, fekap, text, where, phrase):
+def test_bad_sweep_file_is_refused_before_any_case_runs(tmp_path, fekap, text, where, phrase, monkeypatch,
+                                                        capsys):
     sweep = write_sweep(tmp_path, text)
-    result = batch(tmp_path, fekap, str(sweep), "-o", "out", timeout=60)
-    assert result.returncode == 2
-    assert where in result.stderr and phrase in result.stderr, result.stderr
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    from batch import cli  # in this process: the checks need no cluster, and no second Python
+    assert cli.main([str(sweep), "-o", "out", "--fekap", fekap]) == 2
+    stderr = capsys.readouterr().err
+    assert where in stderr and phrase in stderr, stderr
     assert not (tmp_path / "out").exists()
 
 
