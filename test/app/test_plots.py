@@ -1,8 +1,6 @@
-#!/usr/bin/env python3
 """Tests of scripts/plot.py and scripts/compare.py on synthetic FEKAP output.
 
-Run from the repository root:  python3 test/app/test_plots.py
-Ends with one line "plots: N passed, M failed"; exit status 1 when a test failed.
+Run with pytest (scripts/test plots); each test gets its own tmp_path.
 
 The synthetic runs are an exact four-bar (A = (0, 0), D = (4, 0), crank AB = 2, coupler BC = 4,
 rocker DC = 4, crank angle 2*pi*t) whose positions, velocities and accelerations are computed
@@ -15,8 +13,6 @@ import os
 import re
 import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -200,9 +196,9 @@ ALL_PNGS = {"paths.png", "history_A.png", "history_B.png", "history_C.png", "his
             "angles.png", "iterations.png"}
 
 
-def test_full_run(tmp: Path) -> None:
+def test_full_run(tmp_path: Path) -> None:
     """A run with velocities and accelerations: every figure, valid and not blank."""
-    out = write_run(tmp / "full")
+    out = write_run(tmp_path / "full")
     proc = run_script(PLOT, out)
     check_ok(proc)
     check(listed_files(proc) == ALL_PNGS, f"listed {sorted(listed_files(proc))}")
@@ -210,9 +206,9 @@ def test_full_run(tmp: Path) -> None:
         check_png(out / name)
 
 
-def test_positions_only(tmp: Path) -> None:
+def test_positions_only(tmp_path: Path) -> None:
     """A run without velocities or mesh.csv still gives every figure."""
-    out = write_run(tmp / "positions", quantities=1, mesh=False)
+    out = write_run(tmp_path / "positions", quantities=1, mesh=False)
     proc = run_script(PLOT, out)
     check_ok(proc)
     check(proc.stderr.strip() == "", f"unexpected message: {proc.stderr.strip()}")
@@ -220,9 +216,9 @@ def test_positions_only(tmp: Path) -> None:
         check_png(out / name)
 
 
-def test_only_and_instants(tmp: Path) -> None:
+def test_only_and_instants(tmp_path: Path) -> None:
     """--only draws just the named figures; --instants changes the mechanism drawing."""
-    out = write_run(tmp / "only", steps=12)
+    out = write_run(tmp_path / "only", steps=12)
     proc = run_script(PLOT, out, "--only", "paths", "iterations", "--instants", "2")
     check_ok(proc)
     check(listed_files(proc) == {"paths.png", "iterations.png"}, f"listed {proc.stdout}")
@@ -236,9 +232,9 @@ def test_only_and_instants(tmp: Path) -> None:
     check(listed_files(proc) == {f"history_{p}.png" for p in "ABCD"}, f"listed {proc.stdout}")
 
 
-def test_animate(tmp: Path) -> None:
+def test_animate(tmp_path: Path) -> None:
     """--animate writes a GIF of the mechanism."""
-    out = write_run(tmp / "anim", steps=10)
+    out = write_run(tmp_path / "anim", steps=10)
     proc = run_script(PLOT, out, "--animate", "--only", "paths")
     check_ok(proc)
     gif = out / "motion.gif"
@@ -246,9 +242,9 @@ def test_animate(tmp: Path) -> None:
     check("motion.gif" in listed_files(proc), "motion.gif not listed")
 
 
-def test_animate_without_mesh(tmp: Path) -> None:
+def test_animate_without_mesh(tmp_path: Path) -> None:
     """--animate without mesh.csv says so and still draws the rest."""
-    out = write_run(tmp / "nomesh", steps=8, mesh=False)
+    out = write_run(tmp_path / "nomesh", steps=8, mesh=False)
     proc = run_script(PLOT, out, "--animate")
     check_ok(proc)
     check("mesh.csv" in proc.stderr, f"no clear message: {proc.stderr!r}")
@@ -256,9 +252,9 @@ def test_animate_without_mesh(tmp: Path) -> None:
     check_png(out / "paths.png")
 
 
-def test_mesh_with_untracked_point(tmp: Path) -> None:
+def test_mesh_with_untracked_point(tmp_path: Path) -> None:
     """Links whose end points are not tracked are skipped silently."""
-    out = write_run(tmp / "untracked", steps=8)
+    out = write_run(tmp_path / "untracked", steps=8)
     (out / "mesh.csv").write_text("link,node1,node2\ncrank,A,B\nghost,B,Q\n")
     proc = run_script(PLOT, out, "--only", "paths")
     check_ok(proc)
@@ -266,9 +262,9 @@ def test_mesh_with_untracked_point(tmp: Path) -> None:
     check_png(out / "paths.png")
 
 
-def test_fortran_number_spellings(tmp: Path) -> None:
+def test_fortran_number_spellings(tmp_path: Path) -> None:
     """1.0D+00 and exponents without E (1.0-100), and extra steps.csv columns, are read."""
-    out = write_run(tmp / "fortran", steps=6, quantities=1)
+    out = write_run(tmp_path / "fortran", steps=6, quantities=1)
     text = (out / "points.csv").read_text()
     text = text.replace("0000E+00,", "0000D+00,", 3)
     text = re.sub(r"^0,(.*),A,.*$", r"0,\1,A,0.0000000000000000-100,0.0", text, count=1,
@@ -277,18 +273,18 @@ def test_fortran_number_spellings(tmp: Path) -> None:
     check_ok(run_script(PLOT, out, "--only", "paths", "history", "iterations"))
 
 
-def test_bad_arguments(tmp: Path) -> None:
+def test_bad_arguments(tmp_path: Path) -> None:
     """Each bad argument: exit 2, one line on stderr, no traceback."""
-    positions = write_run(tmp / "bad_positions", steps=4, quantities=1)
-    empty = tmp / "bad_empty"
+    positions = write_run(tmp_path / "bad_positions", steps=4, quantities=1)
+    empty = tmp_path / "bad_empty"
     empty.mkdir()
     (empty / "points.csv").write_text("step,t,point,x,y\n")
-    no_points = tmp / "bad_nopoints"
+    no_points = tmp_path / "bad_nopoints"
     no_points.mkdir()
-    garbled = write_run(tmp / "bad_garbled", steps=4, quantities=1)
+    garbled = write_run(tmp_path / "bad_garbled", steps=4, quantities=1)
     (garbled / "points.csv").write_text("step,t,point,x,y\n0,0.0,A,abc,0.0\n")
     cases = [
-        ((tmp / "missing",), ("no such directory",)),
+        ((tmp_path / "missing",), ("no such directory",)),
         ((no_points,), ("no points.csv",)),
         ((empty,), ("no steps were written",)),
         ((positions, "--only", "velocity"), ("computed no velocities", "compute")),
@@ -307,11 +303,11 @@ def test_bad_arguments(tmp: Path) -> None:
 
 # --------------------------------------------------------------------------- compare.py tests
 
-def test_compare_identical(tmp: Path) -> None:
+def test_compare_identical(tmp_path: Path) -> None:
     """Two identical runs differ by exactly zero in every quantity."""
-    one = write_run(tmp / "cmp_fem", steps=20)
-    two = write_run(tmp / "cmp_angles", steps=20)
-    target = tmp / "identical.png"
+    one = write_run(tmp_path / "cmp_fem", steps=20)
+    two = write_run(tmp_path / "cmp_angles", steps=20)
+    target = tmp_path / "identical.png"
     proc = run_script(COMPARE, one, two, "--labels", "fem,angles", "-o", target)
     check_ok(proc)
     check_png(target)
@@ -322,16 +318,16 @@ def test_compare_identical(tmp: Path) -> None:
         check(all(v == 0.0 for v in row.values()), f"nonzero difference {row}")
 
 
-def test_compare_perturbed(tmp: Path) -> None:
+def test_compare_perturbed(tmp_path: Path) -> None:
     """A perturbed y of C shows up as its exact maximum, the rest stays zero."""
     steps = 20
     t = np.linspace(0.0, 1.0, steps + 1)
     delta = 1e-3 * np.sin(2 * np.pi * t) + 2.5e-4
-    base = write_run(tmp / "pert_base", steps=steps)
-    bent = write_run(tmp / "pert_bent", steps=steps, perturb={("C", 1): delta})
-    exact = tmp / "exact.csv"
+    base = write_run(tmp_path / "pert_base", steps=steps)
+    bent = write_run(tmp_path / "pert_bent", steps=steps, perturb={("C", 1): delta})
+    exact = tmp_path / "exact.csv"
     exact.write_text((base / "points.csv").read_text())
-    target = tmp / "perturbed.png"
+    target = tmp_path / "perturbed.png"
     proc = run_script(COMPARE, exact, base, bent, "--point", "C", "--quantity", "y",
                       "--labels", "exact,fem,bent", "-o", target)
     check_ok(proc)
@@ -346,11 +342,11 @@ def test_compare_perturbed(tmp: Path) -> None:
           f"spurious differences {table}")
 
 
-def test_compare_positions_only_and_default_output(tmp: Path) -> None:
+def test_compare_positions_only_and_default_output(tmp_path: Path) -> None:
     """Runs with positions only compare on x, y; the default output file is compare.png."""
-    one = write_run(tmp / "cmp_pos1", steps=8, quantities=1)
-    two = write_run(tmp / "cmp_pos2", steps=8, quantities=1)
-    workdir = tmp / "cwd"
+    one = write_run(tmp_path / "cmp_pos1", steps=8, quantities=1)
+    two = write_run(tmp_path / "cmp_pos2", steps=8, quantities=1)
+    workdir = tmp_path / "cwd"
     workdir.mkdir()
     env = dict(os.environ, MPLBACKEND="Agg")
     proc = subprocess.run([sys.executable, str(COMPARE), str(one), str(two)], cwd=workdir,
@@ -361,13 +357,13 @@ def test_compare_positions_only_and_default_output(tmp: Path) -> None:
     check(all(set(row) == {"x", "y"} for row in table.values()), f"columns {table}")
 
 
-def test_compare_with_positions_only_exact(tmp: Path) -> None:
+def test_compare_with_positions_only_exact(tmp_path: Path) -> None:
     """An exact solution with positions only: differences in x, y, '-' for the rest."""
-    run = write_run(tmp / "cmp_full", steps=8)
-    exact = tmp / "exact_positions.csv"
+    run = write_run(tmp_path / "cmp_full", steps=8)
+    exact = tmp_path / "exact_positions.csv"
     lines = (run / "points.csv").read_text().splitlines()
     exact.write_text("\n".join(",".join(line.split(",")[:5]) for line in lines) + "\n")
-    proc = run_script(COMPARE, run, exact, "--quantity", "y", "-o", tmp / "exact.png")
+    proc = run_script(COMPARE, run, exact, "--quantity", "y", "-o", tmp_path / "exact.png")
     check_ok(proc)
     table = difference_table(proc.stdout)
     check(set(table) == {("exact_positions", p) for p in "ABCD"}, f"rows {sorted(table)}")
@@ -375,21 +371,21 @@ def test_compare_with_positions_only_exact(tmp: Path) -> None:
     check(proc.stdout.count(" - ") >= 4, f"no '-' for missing quantities: {proc.stdout}")
 
 
-def test_compare_bad_arguments(tmp: Path) -> None:
+def test_compare_bad_arguments(tmp_path: Path) -> None:
     """compare.py refuses bad arguments with exit 2 and one clear line."""
-    one = write_run(tmp / "cbad_1", steps=10)
-    coarse = write_run(tmp / "cbad_coarse", steps=5)
-    positions = write_run(tmp / "cbad_pos", steps=10, quantities=1)
-    out = tmp / "cbad.png"
+    one = write_run(tmp_path / "cbad_1", steps=10)
+    coarse = write_run(tmp_path / "cbad_coarse", steps=5)
+    positions = write_run(tmp_path / "cbad_pos", steps=10, quantities=1)
+    out = tmp_path / "cbad.png"
     cases = [
         ((one, coarse), ("times differ",)),
         ((one,), ("at least two",)),
-        ((one, tmp / "nowhere"), ("no such",)),
+        ((one, tmp_path / "nowhere"), ("no such",)),
         ((one, one, "--labels", "a,b,c"), ("labels",)),
         ((one, one, "--point", "Z"), ("Z",)),
         ((one, positions, "--quantity", "vx"), ("velocities",)),
         ((one, one, "--quantity", "speed"), ("invalid choice",)),
-        ((one, one, "-o", tmp / "nowhere" / "x.png"), ("no such directory",)),
+        ((one, one, "-o", tmp_path / "nowhere" / "x.png"), ("no such directory",)),
     ]
     for args, fragments in cases:
         try:
@@ -397,46 +393,3 @@ def test_compare_bad_arguments(tmp: Path) -> None:
             check_usage_error(run_script(COMPARE, *args, *output), *fragments)
         except Failure as exc:
             raise Failure(f"compare.py {' '.join(map(str, args))}: {exc}") from None
-
-
-# --------------------------------------------------------------------------- runner
-
-TESTS = [test_full_run, test_positions_only, test_only_and_instants, test_animate,
-         test_animate_without_mesh, test_mesh_with_untracked_point, test_fortran_number_spellings,
-         test_bad_arguments, test_compare_identical, test_compare_perturbed,
-         test_compare_positions_only_and_default_output, test_compare_with_positions_only_exact,
-         test_compare_bad_arguments]
-
-
-def indent(text: str) -> str:
-    """Indent the continuation lines of a failure reason (e.g. a script's stderr)."""
-    return text.replace("\n", "\n      ")
-
-
-def main() -> int:
-    """Run every test in its own temporary directory and print the summary line."""
-    passed = failed = 0
-    start = time.monotonic()
-    with tempfile.TemporaryDirectory(prefix="fekap-plots-") as scratch:
-        for test in TESTS:
-            name = test.__name__.removeprefix("test_")
-            tmp = Path(scratch) / name
-            tmp.mkdir()
-            try:
-                test(tmp)
-            except Failure as exc:
-                failed += 1
-                print(f"  FAIL {name}: {indent(str(exc))}")
-            except Exception as exc:  # a bug in the test itself: report, do not crash
-                failed += 1
-                print(f"  FAIL {name}: {type(exc).__name__}: {indent(str(exc))}")
-            else:
-                passed += 1
-                print(f"  PASS {name}")
-    print(f"  ({time.monotonic() - start:.1f} s)")
-    print(f"plots: {passed} passed, {failed} failed")
-    return 1 if failed else 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
