@@ -174,7 +174,7 @@ def main(argv=None) -> int:
         rows.append(results.case_row(case, directory, record, outcome.lost.get(case.name), measures, ref_dir))
     columns = results.columns_of(rows, measures)
     results.write_csv(output / "summary.csv", rows, columns)
-    table = results.markdown(rows, columns)
+    table = results.markdown(rows, columns, measures)
     (output / "summary.md").write_text(table + "\n")
     if not args.quiet:
         print(table)

@@ -149,15 +149,20 @@ def write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
             writer.writerow({c: row.get(c, "") for c in columns})
 
 
-def markdown(rows: list[dict], columns: list[str]) -> str:
-    """The rows as a Markdown table (the deck column only when there are several decks)."""
+def markdown(rows: list[dict], columns: list[str], measures: list[Measure] = ()) -> str:
+    """The rows as a Markdown table (the deck column only when there are several
+    decks; measures to 10 digits, summary.csv has them in full)."""
     if len({row["deck"] for row in rows}) <= 1:
         columns = [c for c in columns if c != "deck"]
-    def cell(text: str) -> str:
+    short = {m.text for m in measures}
+
+    def cell(column: str, text: str) -> str:
+        if column in short and is_float(text):
+            text = f"{float(text):.10g}"
         return text.replace("|", "\\|")
     lines = ["| " + " | ".join(columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]
     for row in rows:
-        lines.append("| " + " | ".join(cell(row.get(c, "")) for c in columns) + " |")
+        lines.append("| " + " | ".join(cell(c, row.get(c, "")) for c in columns) + " |")
     return "\n".join(lines)
 
 
