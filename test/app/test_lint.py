@@ -11,8 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, check, run_suite  # noqa: E402
+from apptest import ROOT, check  # noqa: E402
 
 # Lines of a module above which its header must say why it is one module.
 LONGEST_MODULE = 600
@@ -52,6 +51,3 @@ def test_long_modules_say_why():
     check(not long_without_reason, "modules over 600 lines without a reason at their top: "
           + ", ".join(long_without_reason))
 
-
-if __name__ == "__main__":
-    sys.exit(run_suite("lint", [test_fortitude_finds_nothing, test_module_map_is_current, test_long_modules_say_why]))

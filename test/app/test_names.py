@@ -4,12 +4,10 @@ taken in full or shortened to 4 letters (FEAP's rule), in any case."""
 
 from __future__ import annotations
 
-import sys
 import tempfile
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, check, read_rows, run_fekap, run_suite  # noqa: E402
+from apptest import ROOT, check, read_rows, run_fekap  # noqa: E402
 
 DECK = ROOT / "decks" / "fourbar.deck"
 # (option, value as given, full name)
@@ -61,7 +59,3 @@ def test_deck_takes_the_same_abbreviations():
             check(read_rows(Path(work) / f"deck-{short}" / "points.csv")
                   == read_rows(Path(work) / f"cli-{full}" / "points.csv"), f"deck '{key} {short}' and {option} {full} differ")
 
-
-if __name__ == "__main__":
-    sys.exit(run_suite("names", [test_command_line_takes_abbreviations, test_command_line_refuses_other_names,
-                                 test_deck_takes_the_same_abbreviations]))
