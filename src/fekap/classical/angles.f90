@@ -15,7 +15,7 @@ module fekap_classical_angles
    use fekap_strings, only: int_text, short_real_text
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, branch_state_type, branch_jump_text, magnitude_ratio
+      & newton_positions, branch_state_type, branch_jump_text, magnitude_ratio
    implicit none
    private
 
@@ -24,7 +24,6 @@ module fekap_classical_angles
    !> Orientation-angle stepper of a four-bar linkage.
    type, extends(classical_stepper_type) :: angles_stepper_type
       private
-      type(convergence_type) :: conv
       integer :: nnode = 0, nlink = 0
       !> Nodes A, B, C, D of the loop (indices into model%nodes).
       integer :: node(4) = 0
@@ -43,8 +42,8 @@ module fekap_classical_angles
       real(dp) :: d(2) = 0, dd(2) = 0, ddd(2) = 0
       !> Names of the crank, coupler and rocker, for messages.
       character(len=64) :: link_name(3) = ''
-      !> Model size, the unit of divergence.
-      real(dp) :: model_length = 1
+      !> The loop-closure residual at d, for the Newton correction.
+      real(dp) :: p(2) = 0
       !> Jump check: the state of the accepted configuration and the largest
       !> conditioning measure met so far.
       type(branch_state_type) :: branch
@@ -54,6 +53,8 @@ module fekap_classical_angles
       procedure :: try_step
       procedure :: rates_at
       procedure :: finish_step
+      procedure :: position_residual
+      procedure :: position_correction
    end type angles_stepper_type
 
 contains
@@ -232,7 +233,7 @@ contains
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
       type(branch_state_type) :: new
-      real(dp) :: p(2), k(2, 2), delta(2), r, r0, increment_residual, correction, f0, df, ddf, increment, worst
+      real(dp) :: p(2), increment_residual, f0, df, ddf, increment, worst
       integer :: where_
       character(:), allocatable :: jump
 
@@ -242,41 +243,8 @@ contains
       call closure(self, self%history%q(:, 1), p)
       increment_residual = norm2(p)
       call self%history%predict(self%analysis%predictor, t, self%d)
-      iterations = 0
-      r0 = 0
-      do
-         call closure(self, self%d, p)
-         self%counts%residual_assemblies = self%counts%residual_assemblies + 1
-         r = norm2(p)
-         if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
-            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
-         end if
-         if (iterations >= self%analysis%max_iter) then
-            call analysis_error(error, no_convergence_text(t, iterations, r))
-            return
-         end if
-         call tangent(self, self%d, k)
-         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         call solve2(k, -p, delta, error)
-         self%counts%lu_factorisations = self%counts%lu_factorisations + 1
-         if (allocated(error)) then
-            error%message = 't = '//short_real_text(t)//': '//error%message
-            return
-         end if
-         iterations = iterations + 1
-         self%counts%iterations = self%counts%iterations + 1
-         self%d = self%d + delta
-         correction = maxval(abs(delta)*self%length(2:3))
-         if (correction > divergence_length*self%model_length) then
-            call analysis_error(error, 't = '//short_real_text(t)// &
-               & ': Newton diverged at iteration '//int_text(iterations))
-            return
-         end if
-         if (self%conv%mode /= convergence_paper) then
-            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
-         end if
-      end do
+      call newton_positions(self, t, increment_residual, iterations, error)
+      if (allocated(error)) return
 
       ! Branch-jump check: the coupler and rocker angles against their linear
       ! response to the crank increment, and the sign of det K.
@@ -296,6 +264,38 @@ contains
       self%branch = new
       call self%history%push(self%d, t)
    end subroutine try_step
+
+   !> The loop-closure residual at the current d (kept in self%p) and its norm
+   !> (theta1 at time t is already set: the closure needs no t).
+   subroutine position_residual(self, t, norm)
+      class(angles_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: norm
+      call closure(self, self%d, self%p)
+      self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+      norm = norm2(self%p)
+   end subroutine position_residual
+
+   !> The Newton correction of d from the kept residual, and its length
+   !> (each angle times the length of its link).
+   subroutine position_correction(self, t, correction, error)
+      class(angles_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: correction
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: k(2, 2), delta(2)
+      call tangent(self, self%d, k)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      call solve2(k, -self%p, delta, error)
+      self%counts%lu_factorisations = self%counts%lu_factorisations + 1
+      correction = 0
+      if (allocated(error)) then
+         error%message = 't = '//short_real_text(t)//': '//error%message
+         return
+      end if
+      self%d = self%d + delta
+      correction = maxval(abs(delta)*self%length(2:3))
+   end subroutine position_correction
 
    !> The jump check's view of the configuration d at the current crank angle:
    !> the sign of det K, |det K| / (|k1| |k2|) = |sin(theta3 - theta2)|, and the

@@ -23,7 +23,7 @@ module fekap_classical_cartesian
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
    use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
+      & newton_positions, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
    implicit none
    private
 
@@ -41,7 +41,6 @@ module fekap_classical_cartesian
    type, extends(classical_stepper_type) :: cartesian_stepper_type
       private
       type(constraint_system_type) :: system
-      type(convergence_type) :: conv
       integer :: nnode = 0, nlink = 0
       !> The equations solved (all of them unless redundant ones were removed).
       integer, allocatable :: active(:)
@@ -57,7 +56,7 @@ module fekap_classical_cartesian
       !> 1 for the translation coordinates, the model size for the angles.
       real(dp), allocatable :: column_scale(:)
       !> Model size and the shortest link (the unit of translation drives in the jump check).
-      real(dp) :: model_length = 1, shortest_link = 1
+      real(dp) :: shortest_link = 1
       !> Whether the equations solved can change from step to step (redundant
       !> ones removed, slidelines on master chains): then the determinant of the
       !> last configuration is recomputed with the equations of the step.
@@ -76,6 +75,8 @@ module fekap_classical_cartesian
       procedure :: try_step
       procedure :: rates_at => solve_rates
       procedure :: finish_step
+      procedure :: position_residual
+      procedure :: position_correction
    end type cartesian_stepper_type
 
 contains
@@ -231,7 +232,7 @@ contains
       self%equations_time = huge(1.0_dp)
       call self%system%residual(self%q, t, self%phi)
       increment_residual = active_norm(self)
-      call solve_positions(self, t, increment_residual, iterations, error)
+      call newton_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) then
          error%message = 'the initial configuration cannot be assembled: '//error%message
          return
@@ -279,7 +280,7 @@ contains
       ! Predictor, with the driven angles set to their values at t (the paper's (8)).
       call self%history%predict(self%analysis%predictor, t, self%q)
       call set_driven_angles(self, t)
-      call solve_positions(self, t, increment_residual, iterations, error)
+      call newton_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) return
       ! Without its redundant equations the system may converge to a
       ! configuration of a mechanism with a joint missing: every equation must hold.
@@ -375,54 +376,38 @@ contains
       end do
    end subroutine set_driven_angles
 
-   !> Newton iterations on the active equations from self%q; iterations are
-   !> counted as linear solves until the shared convergence test passes.
-   subroutine solve_positions(self, t, increment_residual, iterations, error)
-      type(cartesian_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t, increment_residual
-      integer, intent(out) :: iterations
-      type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r, r0, correction
-      integer :: k
+   !> The residuals of the constraint equations at self%q and time t (in
+   !> self%phi) and the norm of the active ones.
+   subroutine position_residual(self, t, norm)
+      class(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: norm
+      call self%system%residual(self%q, t, self%phi)
+      self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+      norm = active_norm(self)
+   end subroutine position_residual
 
-      iterations = 0
-      r0 = 0
-      do
-         call self%system%residual(self%q, t, self%phi)
-         self%counts%residual_assemblies = self%counts%residual_assemblies + 1
-         r = active_norm(self)
-         if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
-            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
-         end if
-         if (iterations >= self%analysis%max_iter) then
-            call analysis_error(error, no_convergence_text(t, iterations, r))
-            return
-         end if
-         call self%system%jacobian(self%q, self%jac_all)
-         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         do k = 1, size(self%active)
-            self%rhs(k) = -self%phi(self%active(k))
-         end do
-         call factor_and_solve(self, t, error)
-         if (allocated(error)) return
-         iterations = iterations + 1
-         self%counts%iterations = self%counts%iterations + 1
-         self%q = self%q + self%rhs
-         correction = 0
-         do k = 1, self%system%n/3
-            correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
-         end do
-         if (correction > divergence_length*self%model_length) then
-            call analysis_error(error, 't = '//short_real_text(t)// &
-               & ': Newton diverged at iteration '//int_text(iterations))
-            return
-         end if
-         if (self%conv%mode /= convergence_paper) then
-            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
-         end if
+   !> The Newton correction of self%q from the active residuals, and its
+   !> length (the largest change of a body's position).
+   subroutine position_correction(self, t, correction, error)
+      class(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: correction
+      type(error_type), allocatable, intent(out) :: error
+      integer :: k
+      correction = 0
+      call self%system%jacobian(self%q, self%jac_all)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      do k = 1, size(self%active)
+         self%rhs(k) = -self%phi(self%active(k))
       end do
-   end subroutine solve_positions
+      call factor_and_solve(self, t, error)
+      if (allocated(error)) return
+      self%q = self%q + self%rhs
+      do k = 1, self%system%n/3
+         correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
+      end do
+   end subroutine position_correction
 
    !> Euclidean norm of the active residuals in self%phi.
    pure real(dp) function active_norm(self) result(r)

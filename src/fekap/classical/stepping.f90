@@ -6,12 +6,12 @@
 module fekap_classical_stepping
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error, error_analysis
-   use fekap_model, only: analysis_type, predictor_previous, predictor_extrapolate, predictor_taylor
+   use fekap_model, only: analysis_type, predictor_previous, predictor_extrapolate, predictor_taylor, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_strings, only: int_text, short_real_text
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_convergence, only: convergence_type
+   use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_solver_predictor, only: extrapolate
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_branch, only: jump_ratio, jump_bound_ratio
@@ -20,7 +20,7 @@ module fekap_classical_stepping
 
    public :: history_type, new_history, drive_value, new_step_convergence, no_convergence_text
    public :: branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
-   public :: classical_stepper_type
+   public :: classical_stepper_type, newton_positions
 
    !> A change of sign of the Jacobian's determinant over a step is a
    !> legitimate passage through a singular configuration only if one end of
@@ -68,6 +68,9 @@ module fekap_classical_stepping
    !> step and the step's result.
    type, abstract, extends(stepper_type) :: classical_stepper_type
       type(analysis_type) :: analysis
+      !> The convergence test of the Newton solves, and the model size (the unit of divergence).
+      type(convergence_type) :: conv
+      real(dp) :: model_length = 1
       !> The accepted configurations (newest first) and their times.
       type(history_type) :: history
       !> Steps advanced so far.
@@ -81,6 +84,12 @@ module fekap_classical_stepping
       procedure(rates_at_interface), deferred :: rates_at
       !> Rates at the accepted configuration (when asked for) and the step's result.
       procedure(finish_step_interface), deferred :: finish_step
+      !> The residual of the position equations at time t and the current
+      !> unknowns (kept for position_correction), counted, and its norm.
+      procedure(position_residual_interface), deferred :: position_residual
+      !> The Newton correction from the kept residual, applied to the
+      !> unknowns, counted, and its length (translations in lengths).
+      procedure(position_correction_interface), deferred :: position_correction
    end type classical_stepper_type
 
    abstract interface
@@ -110,9 +119,61 @@ module fekap_classical_stepping
          type(step_result_type), intent(inout) :: result
          type(error_type), allocatable, intent(out) :: error
       end subroutine finish_step_interface
+
+      subroutine position_residual_interface(self, t, norm)
+         import :: classical_stepper_type, dp
+         implicit none
+         class(classical_stepper_type), intent(inout) :: self
+         real(dp), intent(in) :: t
+         real(dp), intent(out) :: norm
+      end subroutine position_residual_interface
+
+      subroutine position_correction_interface(self, t, correction, error)
+         import :: classical_stepper_type, dp, error_type
+         implicit none
+         class(classical_stepper_type), intent(inout) :: self
+         real(dp), intent(in) :: t
+         real(dp), intent(out) :: correction
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine position_correction_interface
    end interface
 
 contains
+
+   !> Newton on the method's position equations at time t from its current
+   !> unknowns, until the shared convergence test passes (increment_residual:
+   !> the scale of the default test); iterations are counted as corrections.
+   subroutine newton_positions(self, t, increment_residual, iterations, error)
+      class(classical_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, increment_residual
+      integer, intent(out) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: r, r0, correction
+      iterations = 0
+      r0 = 0
+      do
+         call self%position_residual(t, r)
+         if (iterations == 0) r0 = r
+         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
+            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
+         end if
+         if (iterations >= self%analysis%max_iter) then
+            call analysis_error(error, no_convergence_text(t, iterations, r))
+            return
+         end if
+         call self%position_correction(t, correction, error)
+         if (allocated(error)) return
+         iterations = iterations + 1
+         self%counts%iterations = self%counts%iterations + 1
+         if (correction > divergence_length*self%model_length) then
+            call analysis_error(error, 't = '//short_real_text(t)//': Newton diverged at iteration '//int_text(iterations))
+            return
+         end if
+         if (self%conv%mode /= convergence_paper) then
+            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
+         end if
+      end do
+   end subroutine newton_positions
 
    !> Advance to time t: the method's Newton solve at t, the step cut in
    !> halves (at most max_cuts times) when Newton fails or the converged
