@@ -14,7 +14,7 @@ module fekap_classical_angles
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_strings, only: int_text, short_real_text
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
-   use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
+   use fekap_classical_stepping, only: classical_stepper_type, new_classical_history, drive_value, new_step_convergence, &
       & newton_positions, branch_state_type, branch_jump_text, magnitude_ratio
    implicit none
    private
@@ -182,7 +182,7 @@ contains
       self%law = model%drives(idrive)%law
       self%theta1_initial = atan2(internal(2, 1), internal(1, 1))
       self%d = [atan2(internal(2, 2), internal(1, 2)), atan2(internal(2, 3), internal(1, 3))]
-      call new_history(self%history, 2)
+      call new_classical_history(self, 2)
    contains
       subroutine refuse(error, what)
          type(error_type), allocatable, intent(out) :: error
@@ -218,7 +218,7 @@ contains
       self%step = 0
       call drive_value(self%law, self%theta1_initial, self%analysis%t_start, self%analysis%t_start, &
          & self%theta1(1), self%theta1(2), self%theta1(3))
-      call self%history%push(self%d, self%analysis%t_start)
+      call self%accept(self%d, self%analysis%t_start)
       call branch_state(self, self%d, self%branch)
       self%reference = self%branch%measure
       call finish_step(self, self%analysis%t_start, 0, result, error)
@@ -240,29 +240,29 @@ contains
       call drive_value(self%law, self%theta1_initial, self%analysis%t_start, t, &
          & self%theta1(1), self%theta1(2), self%theta1(3))
       ! The scale of the default test: the residual of the drive increment alone.
-      call closure(self, self%history%q(:, 1), p)
+      call closure(self, self%history%q(:, self%history%newest), p)
       increment_residual = norm2(p)
-      call self%history%predict(self%analysis%predictor, t, self%d)
+      call self%predict(t, self%d)
       call newton_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) return
 
       ! Branch-jump check: the coupler and rocker angles against their linear
       ! response to the crank increment, and the sign of det K.
-      call drive_value(self%law, self%theta1_initial, self%analysis%t_start, self%history%t(1), f0, df, ddf)
+      call drive_value(self%law, self%theta1_initial, self%analysis%t_start, self%history%t(self%history%newest), f0, df, ddf)
       increment = self%theta1(1) - f0
       call branch_state(self, self%d, new)
-      call magnitude_ratio(self%d - self%history%q(:, 1), increment*self%branch%response(:, 1), &
+      call magnitude_ratio(self%d - self%history%q(:, self%history%newest), increment*self%branch%response(:, 1), &
          & increment*new%response(:, 1), abs(increment), worst, where_)
       self%reference = max(self%reference, new%measure)
       where_ = max(1, where_)
-      jump = branch_jump_text(t, self%branch, new, self%reference, worst, self%d(where_) - self%history%q(where_, 1), &
-         & 'the angle of link '//trim(self%link_name(where_ + 1)))
+      jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
+         & self%d(where_) - self%history%q(where_, self%history%newest), 'the angle of link '//trim(self%link_name(where_ + 1)))
       if (len(jump) > 0) then
          call analysis_error(error, jump)
          return
       end if
       self%branch = new
-      call self%history%push(self%d, t)
+      call self%accept(self%d, t)
    end subroutine try_step
 
    !> The loop-closure residual at the current d (kept in self%p) and its norm
@@ -404,7 +404,7 @@ contains
       call solve2(k, rhs, self%ddd, error)
       self%counts%acceleration_solves = self%counts%acceleration_solves + 1
       if (allocated(error)) return
-      call self%history%set_rates(self%dd, self%ddd)
+      call self%set_rates(self%dd, self%ddd)
    end subroutine solve_rates
 
    !> Unit directions e = (cos, sin) and normals n = (-sin, cos) of theta1, theta2, theta3.

@@ -22,7 +22,7 @@ module fekap_classical_cartesian
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
-   use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
+   use fekap_classical_stepping, only: classical_stepper_type, new_classical_history, drive_value, new_step_convergence, &
       & newton_positions, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
    implicit none
    private
@@ -102,7 +102,7 @@ contains
       allocate (self%phi(m), self%jac_all(m, n), self%jac(n, n), source=0.0_dp)
       allocate (self%ipiv(n))
       self%q = self%system%bodies%q0
-      call new_history(self%history, n)
+      call new_classical_history(self, n)
       self%model_length = model_size(model)
       self%shortest_link = huge(1.0_dp)
       allocate (self%body_name(n/3))
@@ -237,7 +237,7 @@ contains
          error%message = 'the initial configuration cannot be assembled: '//error%message
          return
       end if
-      call self%history%push(self%q, t)
+      call self%accept(self%q, t)
       call branch_state(self, self%q, .true., self%branch)
       self%reference = self%branch%measure
       call finish_step(self, t, iterations, result, error)
@@ -262,23 +262,23 @@ contains
       ! The equations (and master segments) to solve are chosen at the last
       ! accepted configuration, once: a retry after a step cut starts from
       ! the same configuration and would choose the same.
-      if (self%equations_time /= self%history%t(1)) then
+      if (self%equations_time /= self%history%t(self%history%newest)) then
          if (self%redundant) then
-            call select_equations(self, self%history%q(:, 1), .false., error)
+            call select_equations(self, self%history%q(:, self%history%newest), .false., error)
             if (allocated(error)) return
          end if
-         call self%system%select_segments(self%history%q(:, 1))
+         call self%system%select_segments(self%history%q(:, self%history%newest))
          ! With other equations the determinant of the last configuration is another one.
-         if (self%changing_equations) call branch_state(self, self%history%q(:, 1), .true., self%branch)
-         self%equations_time = self%history%t(1)
+         if (self%changing_equations) call branch_state(self, self%history%q(:, self%history%newest), .true., self%branch)
+         self%equations_time = self%history%t(self%history%newest)
       end if
       ! The scale of the default test: the residual of the drive increment alone.
-      self%q = self%history%q(:, 1)
+      self%q = self%history%q(:, self%history%newest)
       call set_driven_angles(self, t)
       call self%system%residual(self%q, t, self%phi)
       increment_residual = active_norm(self)
       ! Predictor, with the driven angles set to their values at t (the paper's (8)).
-      call self%history%predict(self%analysis%predictor, t, self%q)
+      call self%predict(t, self%q)
       call set_driven_angles(self, t)
       call newton_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) return
@@ -299,7 +299,7 @@ contains
       ! Newton factor, at the converged configuration within tolerance).
       call branch_state(self, self%q, iterations == 0, new)
       self%reference = max(self%reference, new%measure)
-      call self%system%drive_increments(self%history%t(1), t, dd, rotation)
+      call self%system%drive_increments(self%history%t(self%history%newest), t, dd, rotation)
       ! The drive increment: radians, or lengths of the shortest link.
       step_floor = 0
       do b = 1, size(dd)
@@ -309,17 +309,17 @@ contains
          dq_old(b) = dot_product(self%branch%response(3*b, :), dd)
          dq_new(b) = dot_product(new%response(3*b, :), dd)
       end do
-      call magnitude_ratio(self%q(3:self%system%n:3) - self%history%q(3:self%system%n:3, 1), dq_old, dq_new, step_floor, &
-         & worst, where_)
+      call magnitude_ratio(self%q(3:self%system%n:3) - self%history%q(3:self%system%n:3, self%history%newest), dq_old, dq_new, &
+         & step_floor, worst, where_)
       where_ = max(1, where_)
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
-         & self%q(3*where_) - self%history%q(3*where_, 1), 'the angle of link '//trim(self%body_name(where_)))
+         & self%q(3*where_) - self%history%q(3*where_, self%history%newest), 'the angle of link '//trim(self%body_name(where_)))
       if (len(jump) > 0) then
          call analysis_error(error, jump)
          return
       end if
       self%branch = new
-      call self%history%push(self%q, t)
+      call self%accept(self%q, t)
    end subroutine try_step
 
    !> The jump check's view of configuration q with the equations of the
@@ -523,7 +523,7 @@ contains
       self%qdd = gamma_rhs(self%active)
       call dense_lu_solve(self%jac, self%ipiv, self%qdd, info)
       self%counts%acceleration_solves = self%counts%acceleration_solves + 1
-      call self%history%set_rates(self%qd, self%qdd)
+      call self%set_rates(self%qd, self%qdd)
    end subroutine solve_rates
 
 end module fekap_classical_cartesian
