@@ -14,7 +14,8 @@ module fekap_classical_angles
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_strings, only: int_text, short_real_text
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
-   use fekap_classical_stepping, only: classical_stepper_type, new_classical_history, drive_value, new_step_convergence, &
+   use fekap_classical_stepping, only: classical_stepper_type, new_classical_history, begin_result, drive_value, &
+      & new_step_convergence, &
       & newton_positions, branch_state_type, branch_jump_text, magnitude_ratio
    implicit none
    private
@@ -338,14 +339,7 @@ contains
       real(dp) :: p(2), e(2, 3), n(2, 3), w(3), a(3)
       integer :: j
 
-      if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
-      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) then
-         call new_step_result(result, self%nnode, self%nlink)
-      end if
-      result%step = self%step
-      result%t = t
-      result%iterations = iterations
-      result%note = ''
+      call begin_result(self, t, iterations, self%nnode, self%nlink, result)
       call closure(self, self%d, p)
       result%residual = norm2(p)
       result%has_velocity = self%analysis%velocities

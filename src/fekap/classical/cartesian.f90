@@ -22,7 +22,8 @@ module fekap_classical_cartesian
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
-   use fekap_classical_stepping, only: classical_stepper_type, new_classical_history, drive_value, new_step_convergence, &
+   use fekap_classical_stepping, only: classical_stepper_type, new_classical_history, begin_result, drive_value, &
+      & new_step_convergence, &
       & newton_positions, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
    implicit none
    private
@@ -459,14 +460,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       integer :: k, b, l
 
-      if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
-      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) then
-         call new_step_result(result, self%nnode, self%nlink)
-      end if
-      result%step = self%step
-      result%t = t
-      result%iterations = iterations
-      result%note = ''
+      call begin_result(self, t, iterations, self%nnode, self%nlink, result)
       call self%system%residual(self%q, t, self%phi)
       self%counts%residual_assemblies = self%counts%residual_assemblies + 1
       result%residual = norm2(self%phi)

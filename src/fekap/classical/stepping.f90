@@ -9,7 +9,7 @@ module fekap_classical_stepping
    use fekap_model, only: analysis_type, predictor_previous, predictor_taylor, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_strings, only: int_text, short_real_text
-   use fekap_model_results, only: step_result_type
+   use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_solver_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, extrapolate, &
@@ -21,7 +21,7 @@ module fekap_classical_stepping
 
    public :: new_classical_history, drive_value, new_step_convergence, no_convergence_text
    public :: branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
-   public :: classical_stepper_type, newton_positions
+   public :: classical_stepper_type, newton_positions, begin_result
 
    !> A change of sign of the Jacobian's determinant over a step is a
    !> legitimate passage through a singular configuration only if one end of
@@ -207,6 +207,21 @@ contains
       result%cuts = cuts%cuts
       result%note = cuts%note()
    end subroutine classical_advance
+
+   !> The head of a step's result at time t: its storage for nnode nodes and
+   !> nlink links, the step, the time and the iterations, no note.
+   subroutine begin_result(self, t, iterations, nnode, nlink, result)
+      class(classical_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      integer, intent(in) :: iterations, nnode, nlink
+      type(step_result_type), intent(inout) :: result
+      if (.not. allocated(result%pos)) call new_step_result(result, nnode, nlink)
+      if (size(result%pos, 2) /= nnode .or. size(result%angle) /= nlink) call new_step_result(result, nnode, nlink)
+      result%step = self%step
+      result%t = t
+      result%iterations = iterations
+      result%note = ''
+   end subroutine begin_result
 
    !> An empty history and rates for ncoord coordinates.
    pure subroutine new_classical_history(self, ncoord)
