@@ -18,7 +18,7 @@ module fekap_assembly_mesh
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, joint_prismatic
    use fekap_element_beam, only: beam_type, new_beam
    use fekap_contact_slideline, only: default_penalty, default_tie_penalty
-   use fekap_union_find, only: find_root, join
+   use fekap_union_find, only: find_root, join, flatten
    implicit none
    private
 
@@ -162,6 +162,7 @@ contains
          self%tdof(:, ip) = [2*ip - 1, 2*ip]
       end do
       allocate (rot_index(nrot), source=0)
+      call flatten(parent)
       do i = 1, nrot
          j = find_root(parent, i)
          if (rot_index(j) == 0) then

@@ -17,6 +17,10 @@ module fekap_deck_settings
 
    public :: read_title, read_analysis, read_output
 
+   !> Largest start or end time: the drive laws' values stay far from overflow
+   !> (and keep their precision) below it.
+   real(dp), parameter :: max_time = 1.0e9_dp
+
    !> Most time steps of one run.
    real(dp), parameter :: max_steps = 1.0e7_dp
 
@@ -208,6 +212,15 @@ contains
             if (a%t_end <= a%t_start) then
                call ctx%error(iline_, 3, 'the end time must be after the start time', &
                   & label='time START END STEP with END > START')
+            end if
+            ! Drive values of times like 1e300 overflow in the tangent's products.
+            if (abs(a%t_start) > max_time) then
+               call ctx%error(iline_, 2, 'the start time is beyond 1e9', label='times from -1e9 to 1e9')
+               return
+            end if
+            if (abs(a%t_end) > max_time) then
+               call ctx%error(iline_, 3, 'the end time is beyond 1e9', label='times from -1e9 to 1e9')
+               return
             end if
             if (a%dt <= 0 .or. a%t_end <= a%t_start) return
             call safe_add(a%t_end, -a%t_start, span, fine)

@@ -44,6 +44,7 @@ module fekap_solver_fem
       & singular_floor
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
+   use fekap_output_format, only: es_text
    implicit none
    private
 
@@ -222,8 +223,8 @@ contains
          & ' driven; half-bandwidth ', self%mesh%kd
       text = trim(line)
       do i = 1, size(self%mesh%slides)
-         write (line, '(a,es12.5,a,es12.5)') 'slideline '//self%model%slidelines(i)%name//': penalty ', &
-            & self%mesh%slides(i)%kp, ', rotational tie ', self%mesh%slides(i)%kr
+         write (line, '(a,a,a,a)') 'slideline '//self%model%slidelines(i)%name//': penalty ', &
+            & es_text(self%mesh%slides(i)%kp, 12, 5), ', rotational tie ', es_text(self%mesh%slides(i)%kr, 12, 5)
          text = text//new_line('a')//'  '//trim(line)
       end do
    end function fem_plan_text
