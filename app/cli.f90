@@ -2,10 +2,10 @@
 module fekap_app_cli
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
-   use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
-      & predictor_extrapolate, predictor_taylor
-   use fekap_strings, only: lower
+   use fekap_model, only: model_type, method_names, predictor_names
+   use fekap_strings, only: lower, word_index
    use fekap_deck_expression, only: evaluate_expression
+   use fekap_deck, only: override_type
    implicit none
    private
 
@@ -22,6 +22,8 @@ module fekap_app_cli
       !> Print the output directory and exit (used by scripts/fekap).
       logical :: print_outdir = .false.
       character(:), allocatable :: method, dt, tol, predictor, compute
+      !> `--set name=value` values of deck parameters, in the order given.
+      type(override_type), allocatable :: sets(:)
    end type cli_type
 
 contains
@@ -41,6 +43,7 @@ contains
          & '  --tol VALUE         Newton tolerance (overrides the deck; an expression)'//nl// &
          & '  --predictor NAME    previous | extrapolate | taylor (overrides the deck)'//nl// &
          & '  --compute LIST      positions[,velocities[,accelerations]] (overrides the deck)'//nl// &
+         & '  --set NAME=VALUE    value of the deck parameter NAME (PARAmeters block); repeatable'//nl// &
          & '  --print-outdir      print the output directory and exit'//nl// &
          & '  --version           print the version and exit'//nl// &
          & '  --help              print this help and exit'//nl//nl// &
@@ -57,6 +60,7 @@ contains
       integer :: i, n
       character(:), allocatable :: arg
       n = command_argument_count()
+      allocate (cli%sets(0))
       i = 0
       do while (i < n)
          i = i + 1
@@ -70,6 +74,14 @@ contains
             cli%quiet = .true.
          case ('--print-outdir')
             cli%print_outdir = .true.
+         case ('--set')
+            if (i == n) then
+               call input_error(error, 'fekap: option --set needs a value NAME=VALUE (see fekap --help)')
+               return
+            end if
+            i = i + 1
+            cli%sets = [cli%sets, override_type('')]
+            call argument(i, cli%sets(size(cli%sets))%text)
          case ('-o', '--method', '--dt', '--tol', '--predictor', '--compute')
             if (i == n) then
                call input_error(error, 'fekap: option '//arg//' needs a value (see fekap --help)')
@@ -135,33 +147,24 @@ contains
       type(model_type), intent(inout) :: model
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: value
-      integer :: start, comma
+      integer :: start, comma, code
       character(:), allocatable :: item
       if (allocated(cli%method)) then
-         select case (lower(cli%method))
-         case ('fem')
-            model%analysis%method = method_fem
-         case ('cartesian')
-            model%analysis%method = method_cartesian
-         case ('angles')
-            model%analysis%method = method_angles
-         case default
+         ! A name of method_names (or 4 letters of it), as in the deck.
+         code = word_index(cli%method, method_names)
+         if (code == 0) then
             call input_error(error, 'fekap: --method '//cli%method//': expected fem, cartesian or angles')
             return
-         end select
+         end if
+         model%analysis%method = code
       end if
       if (allocated(cli%predictor)) then
-         select case (lower(cli%predictor))
-         case ('previous')
-            model%analysis%predictor = predictor_previous
-         case ('extrapolate')
-            model%analysis%predictor = predictor_extrapolate
-         case ('taylor')
-            model%analysis%predictor = predictor_taylor
-         case default
+         code = word_index(cli%predictor, predictor_names)
+         if (code == 0) then
             call input_error(error, 'fekap: --predictor '//cli%predictor//': expected previous, extrapolate or taylor')
             return
-         end select
+         end if
+         model%analysis%predictor = code
       end if
       if (allocated(cli%dt)) then
          call option_number('--dt', cli%dt, value, error)

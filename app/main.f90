@@ -11,7 +11,7 @@ program fekap_main
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
       & new_cartesian_stepper
    use fekap_solver_interrupt, only: catch_interrupts
-   use fekap_solver_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
+   use fekap_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
    use fekap_output_csv, only: write_mesh_csv
    use fekap_output_format, only: es_text
    use fekap_output_directory, only: prepare_output_directory, make_directory
@@ -25,6 +25,7 @@ program fekap_main
       !> C's exit: a status code that is a variable (F2008 `stop` takes constants only).
       subroutine c_exit(status) bind(C, name='exit')
          import :: c_int
+         implicit none
          integer(c_int), value :: status
       end subroutine c_exit
    end interface
@@ -54,13 +55,14 @@ program fekap_main
       call c_exit(0_c_int)
    end if
 
-   call read_deck(model, cli%deck, error)
+   call read_deck(model, cli%deck, error, cli%sets)
    if (allocated(error)) call finish(error)
    call apply_overrides(cli, model, error)
    if (allocated(error)) call finish(error)
 
-   call make_stepper(model, stepper, mesh_text, error)
+   call make_stepper(model, stepper, error)
    if (allocated(error)) call finish(error)
+   mesh_text = stepper%plan_text()
    call open_outputs(cli%outdir, cli%deck, model, units, error)
    if (allocated(error)) then
       if (error%kind == error_output) error%message = 'fekap: '//error%message
@@ -93,30 +95,17 @@ contains
    end subroutine say
 
    !> The stepper of the deck's method.
-   subroutine make_stepper(model, stepper, mesh_text, error)
+   subroutine make_stepper(model, stepper, error)
       type(model_type), intent(in) :: model
       class(stepper_type), allocatable, intent(out) :: stepper
-      character(:), allocatable, intent(out) :: mesh_text
       type(error_type), allocatable, intent(out) :: error
       type(fem_stepper_type), allocatable :: fem
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
-      character(len=160) :: line
-      integer :: i
-      mesh_text = ''
       select case (model%analysis%method)
       case (method_fem)
          allocate (fem)
          call new_fem_stepper(fem, model)
-         write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0)') 'mesh: ', size(fem%mesh%elements), ' elements, ', &
-            & fem%mesh%ndof, ' dofs, ', fem%mesh%nfree, ' equations, ', fem%mesh%ndriven, &
-            & ' driven; half-bandwidth ', fem%mesh%kd
-         mesh_text = trim(line)
-         do i = 1, size(fem%mesh%slides)
-            write (line, '(a,a,a,a)') 'slideline '//model%slidelines(i)%name//': penalty ', &
-               & es_text(fem%mesh%slides(i)%kp, 12, 5), ', rotational tie ', es_text(fem%mesh%slides(i)%kr, 12, 5)
-            mesh_text = mesh_text//new_line('a')//'  '//trim(line)
-         end do
          call move_alloc(fem, stepper)
       case (method_cartesian)
          allocate (cartesian)

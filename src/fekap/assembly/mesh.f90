@@ -2,6 +2,11 @@
 !> freedom with double nodes at hinges, elements, supports and drives, and
 !> equation numbers in reverse Cuthill-McKee order for a small bandwidth.
 !>
+!> Why one module of over 600 lines: the mesh is built in one pass
+!> (new_mesh) whose steps (dofs, statuses, numbering, scatter map, envelope,
+!> slidelines) each fill part of the same mesh_type and need the parts
+!> before; they are the mesh's private construction, not concepts of their own.
+!>
 !> Points 1..size(model%nodes) are the model's nodes in order; a link meshed
 !> with several elements adds its interior points after them. Every point has
 !> two translational dofs, shared by all element ends there (a hinge). Every
@@ -614,9 +619,9 @@ contains
             do e = 1, size(self%elements)
                if (any(self%edof(1:2, e) == self%tdof(1, sl%slave)) .or. &
                   & any(self%edof(4:5, e) == self%tdof(1, sl%slave))) then
-                  if (self%elements(e)%c(1)/self%elements(e)%length > ea_s/max(l_s, tiny(1.0_dp))) then
-                     ea_s = self%elements(e)%c(1)
-                     ei_s = self%elements(e)%c(3)
+                  if (self%elements(e)%ea/self%elements(e)%length > ea_s/max(l_s, tiny(1.0_dp))) then
+                     ea_s = self%elements(e)%ea
+                     ei_s = self%elements(e)%ei
                      l_s = self%elements(e)%length
                   end if
                end if

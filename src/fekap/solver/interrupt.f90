@@ -15,11 +15,12 @@ module fekap_solver_interrupt
    integer(c_int), parameter :: sighup = 1, sigint = 2, sigterm = 15
 
    !> The signal received, 0 if none.
-   integer(c_int), volatile, save :: received = 0
+   integer(c_int), volatile :: received = 0
 
    interface
       function c_signal(signum, handler) bind(C, name='signal') result(previous)
          import :: c_int, c_funptr
+         implicit none
          integer(c_int), value :: signum
          type(c_funptr), value :: handler
          type(c_funptr) :: previous

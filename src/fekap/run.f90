@@ -6,7 +6,7 @@
 !> cost about 2.3 us a step (docs/performance.md), more than the 2 us the
 !> analysis of a step aims at. The loop's time is measured whole and split
 !> into analysis and output as in a sample of its steps.
-module fekap_solver_run
+module fekap_run
    use fekap_kinds, only: dp
    use, intrinsic :: iso_fortran_env, only: int64
    use fekap_error, only: error_type, analysis_error, fatal_error, output_error
@@ -299,9 +299,9 @@ contains
       character(*), intent(in) :: stem
       integer, intent(in) :: step
       character(:), allocatable :: name
-      character(len=12) :: digits
-      write (digits, '(i0.6)') step
-      name = 'vtk/'//stem//'_'//trim(digits)//'.vtu'
+      character(len=12) :: number
+      write (number, '(i0.6)') step
+      name = 'vtk/'//stem//'_'//trim(number)//'.vtu'
    end function vtu_name
 
    !> Open a file for writing, replacing it (no_unit and an error if it cannot
@@ -368,4 +368,4 @@ contains
       end subroutine flush_one
    end subroutine flush_all
 
-end module fekap_solver_run
+end module fekap_run
