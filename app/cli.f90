@@ -2,9 +2,10 @@
 module fekap_app_cli
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
-   use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
-      & predictor_extrapolate, predictor_taylor
-   use fekap_strings, only: lower
+   use fekap_model, only: model_type, method_names, predictor_names
+   use fekap_strings, only: lower, word_index
+   use fekap_deck_expression, only: evaluate_expression
+   use fekap_deck, only: override_type
    implicit none
    private
 
@@ -21,6 +22,8 @@ module fekap_app_cli
       !> Print the output directory and exit (used by scripts/fekap).
       logical :: print_outdir = .false.
       character(:), allocatable :: method, dt, tol, predictor, compute
+      !> `--set name=value` values of deck parameters, in the order given.
+      type(override_type), allocatable :: sets(:)
    end type cli_type
 
 contains
@@ -35,18 +38,24 @@ contains
          & '  -o DIR              output directory'//nl// &
          & '  -q                  quiet: print nothing but errors'//nl// &
          & '  --method NAME       fem | cartesian | angles (overrides the deck)'//nl// &
-         & '  --dt VALUE          time step (overrides the deck)'//nl// &
-         & '  --tol VALUE         Newton tolerance (overrides the deck)'//nl// &
+         & '  --dt VALUE          time step (overrides the deck; an expression as in a'//nl// &
+         & '                      deck: 0.01, 2*0.05, pi/100)'//nl// &
+         & '  --tol VALUE         Newton tolerance (overrides the deck; an expression)'//nl// &
          & '  --predictor NAME    previous | extrapolate | taylor (overrides the deck)'//nl// &
          & '  --compute LIST      positions[,velocities[,accelerations]] (overrides the deck)'//nl// &
+         & '  --set NAME=VALUE    value of the deck parameter NAME (PARAmeters block); repeatable'//nl// &
          & '  --print-outdir      print the output directory and exit'//nl// &
          & '  --version           print the version and exit'//nl// &
          & '  --help              print this help and exit'//nl//nl// &
          & 'exit codes:'//nl// &
          & '  0  success'//nl// &
-         & '  1  anything else, including a run stopped by SIGINT or SIGTERM'//nl// &
-         & '  2  input error (bad deck or command line)'//nl// &
-         & '  3  the analysis did not converge (the rows of the completed steps are kept)'
+         & '  1  anything else, including a run stopped by SIGINT, SIGTERM or SIGHUP'//nl// &
+         & '  2  input error (bad deck or command line; also: another run is writing'//nl// &
+         & '     into the output directory)'//nl// &
+         & '  3  the analysis did not converge (the rows of the completed steps are kept)'//nl// &
+         & '  4  an output file or directory could not be written (full disk, no'//nl// &
+         & '     permission: the message names the file and the reason; the rows'//nl// &
+         & '     written before are kept, whole)'
    end function usage_text
 
    !> Read the command line into `cli`.
@@ -56,6 +65,7 @@ contains
       integer :: i, n
       character(:), allocatable :: arg
       n = command_argument_count()
+      allocate (cli%sets(0))
       i = 0
       do while (i < n)
          i = i + 1
@@ -69,6 +79,14 @@ contains
             cli%quiet = .true.
          case ('--print-outdir')
             cli%print_outdir = .true.
+         case ('--set')
+            if (i == n) then
+               call input_error(error, 'fekap: option --set needs a value NAME=VALUE (see fekap --help)')
+               return
+            end if
+            i = i + 1
+            cli%sets = [cli%sets, override_type('')]
+            call argument(i, cli%sets(size(cli%sets))%text)
          case ('-o', '--method', '--dt', '--tol', '--predictor', '--compute')
             if (i == n) then
                call input_error(error, 'fekap: option '//arg//' needs a value (see fekap --help)')
@@ -128,56 +146,71 @@ contains
       if (dot > 1) name = name(:dot - 1)
    end function stem
 
+   !> The code of `value` of an option among the blank-separated `names`
+   !> (model's method_names or predictor_names): a name, or 4 letters of it,
+   !> as in the deck; code is left as it was when value is none of them.
+   subroutine named_code(option, value, names, code, error)
+      character(*), intent(in) :: option, value, names
+      integer, intent(inout) :: code
+      type(error_type), allocatable, intent(out) :: error
+      integer :: found, last
+      found = word_index(value, names)
+      if (found == 0) then
+         last = index(names, ' ', back=.true.)
+         call input_error(error, 'fekap: '//option//' '//value//': expected '// &
+            & replace_blanks(names(:last - 1))//' or '//names(last + 1:))
+         return
+      end if
+      code = found
+   contains
+      !> "a b c" as "a, b, c".
+      pure recursive function replace_blanks(text) result(listed)
+         character(*), intent(in) :: text
+         character(:), allocatable :: listed
+         integer :: blank
+         blank = index(text, ' ')
+         if (blank == 0) then
+            listed = text
+         else
+            listed = text(:blank - 1)//', '//replace_blanks(text(blank + 1:))
+         end if
+      end function replace_blanks
+   end subroutine named_code
+
    !> Apply the command-line overrides to the model's analysis settings.
    subroutine apply_overrides(cli, model, error)
       type(cli_type), intent(in) :: cli
       type(model_type), intent(inout) :: model
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: value
-      integer :: stat, start, comma
+      integer :: start, comma
       character(:), allocatable :: item
       if (allocated(cli%method)) then
-         select case (lower(cli%method))
-         case ('fem')
-            model%analysis%method = method_fem
-         case ('cartesian')
-            model%analysis%method = method_cartesian
-         case ('angles')
-            model%analysis%method = method_angles
-         case default
-            call input_error(error, 'fekap: --method '//cli%method//': expected fem, cartesian or angles')
-            return
-         end select
+         call named_code('--method', cli%method, method_names, model%analysis%method, error)
+         if (allocated(error)) return
       end if
       if (allocated(cli%predictor)) then
-         select case (lower(cli%predictor))
-         case ('previous')
-            model%analysis%predictor = predictor_previous
-         case ('extrapolate')
-            model%analysis%predictor = predictor_extrapolate
-         case ('taylor')
-            model%analysis%predictor = predictor_taylor
-         case default
-            call input_error(error, 'fekap: --predictor '//cli%predictor//': expected previous, extrapolate or taylor')
-            return
-         end select
+         call named_code('--predictor', cli%predictor, predictor_names, model%analysis%predictor, error)
+         if (allocated(error)) return
       end if
       if (allocated(cli%dt)) then
-         read (cli%dt, *, iostat=stat) value
-         if (stat /= 0 .or. .not. (value > 0 .and. value <= huge(value))) then
-            call input_error(error, 'fekap: --dt '//cli%dt//': expected a positive number')
+         call option_number('--dt', cli%dt, value, error)
+         if (allocated(error)) return
+         if (.not. value > 0) then
+            call input_error(error, "fekap: --dt '"//cli%dt//"': expected a positive number")
             return
          end if
          if ((model%analysis%t_end - model%analysis%t_start)/value > 1.0e7_dp) then
-            call input_error(error, 'fekap: --dt '//cli%dt//': more than 10,000,000 steps')
+            call input_error(error, "fekap: --dt '"//cli%dt//"': more than 10,000,000 steps")
             return
          end if
          model%analysis%dt = value
       end if
       if (allocated(cli%tol)) then
-         read (cli%tol, *, iostat=stat) value
-         if (stat /= 0 .or. .not. (value > 0 .and. value < 1)) then
-            call input_error(error, 'fekap: --tol '//cli%tol//': expected a number between 0 and 1')
+         call option_number('--tol', cli%tol, value, error)
+         if (allocated(error)) return
+         if (.not. (value > 0 .and. value < 1)) then
+            call input_error(error, "fekap: --tol '"//cli%tol//"': expected a number between 0 and 1")
             return
          end if
          model%analysis%tol = value
@@ -210,6 +243,22 @@ contains
          end do
       end if
    end subroutine apply_overrides
+
+   !> The value of a numeric option, read as a deck field is (an expression:
+   !> `2*0.05`, `pi/100`, `1e-3`), the whole text and nothing else.
+   subroutine option_number(option, text, value, error)
+      character(*), intent(in) :: option, text
+      real(dp), intent(out) :: value
+      type(error_type), allocatable, intent(out) :: error
+      character(:), allocatable :: detail
+      call evaluate_expression(text, value, error, detail)
+      if (.not. allocated(error)) return
+      if (len(detail) > 0) then
+         error%message = 'fekap: '//option//" '"//text//"': "//error%message//' ('//detail//')'
+      else
+         error%message = 'fekap: '//option//" '"//text//"': "//error%message
+      end if
+   end subroutine option_number
 
 
 end module fekap_app_cli

@@ -1,6 +1,6 @@
 !> The example decks of decks/, for the suites that run over all of them.
 module test_example_decks
-   use fekap_testing, only: error_type, test_failed
+   use fekap_error, only: error_type, fatal_error
    use fekap_model, only: model_type
    use fekap_deck, only: read_deck
    use fekap_assembly_mesh, only: mesh_type, new_mesh
@@ -15,7 +15,8 @@ module test_example_decks
 
 contains
 
-   !> The model and mesh of decks/<stem>.deck; a deck that does not read is a test failure.
+   !> The model and mesh of decks/<stem>.deck; a deck that does not read sets `error`
+   !> (with the deck's name), which the suites assert is not set.
    subroutine example_mesh(stem, model, mesh, error)
       character(*), intent(in) :: stem
       type(model_type), intent(out) :: model
@@ -24,7 +25,7 @@ contains
       type(error_type), allocatable :: failure
       call read_deck(model, 'decks/'//trim(stem)//'.deck', failure)
       if (allocated(failure)) then
-         call test_failed(error, trim(stem)//': '//failure%message)
+         call fatal_error(error, trim(stem)//': '//failure%message)
          return
       end if
       call new_mesh(mesh, model)

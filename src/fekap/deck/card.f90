@@ -3,7 +3,7 @@
 !> (COOR, COORD and COORDINATES all match COORDINATES; COORX does not). END is
 !> matched in full.
 module fekap_deck_card
-   use fekap_strings, only: lower, upper
+   use fekap_strings, only: lower, upper, is_word_of
    implicit none
    private
 
@@ -11,21 +11,22 @@ module fekap_deck_card
 
    integer, parameter, public :: card_none = 0, card_title = 1, card_sections = 2, card_nodes = 3, &
       & card_links = 4, card_welds = 5, card_supports = 6, card_drives = 7, card_loads = 8, &
-      & card_slidelines = 9, card_analysis = 10, card_output = 11, card_include = 12, card_end = 13
+      & card_slidelines = 9, card_analysis = 10, card_output = 11, card_include = 12, card_end = 13, &
+      & card_parameters = 14
    !> Number of distinct cards.
-   integer, parameter, public :: ncards = 13
+   integer, parameter, public :: ncards = 14
 
    !> Keywords (upper case) and the card each selects; aliases share a card.
-   character(*), parameter :: keywords(15) = [character(len=11) :: 'TITLE', 'SECTIONS', 'NODES', &
+   character(*), parameter :: keywords(16) = [character(len=11) :: 'TITLE', 'SECTIONS', 'NODES', &
       & 'COORDINATES', 'LINKS', 'ELEMENTS', 'WELDS', 'SUPPORTS', 'BOUNDARY', 'DRIVES', 'LOADS', &
-      & 'SLIDELINES', 'ANALYSIS', 'OUTPUT', 'INCLUDE']
-   integer, parameter :: keyword_card(15) = [card_title, card_sections, card_nodes, card_nodes, &
+      & 'SLIDELINES', 'ANALYSIS', 'OUTPUT', 'INCLUDE', 'PARAMETERS']
+   integer, parameter :: keyword_card(16) = [card_title, card_sections, card_nodes, card_nodes, &
       & card_links, card_links, card_welds, card_supports, card_supports, card_drives, card_loads, &
-      & card_slidelines, card_analysis, card_output, card_include]
+      & card_slidelines, card_analysis, card_output, card_include, card_parameters]
    !> Names for messages: the capital letters are the shortest accepted form.
    character(*), parameter :: display(ncards) = [character(len=10) :: 'TITLe', 'SECTions', 'NODEs', &
       & 'LINKs', 'WELDs', 'SUPPorts', 'DRIVes', 'LOADs', 'SLIDelines', 'ANALysis', 'OUTPut', &
-      & 'INCLude', 'END']
+      & 'INCLude', 'END', 'PARAmeters']
 
 contains
 
@@ -66,20 +67,8 @@ contains
    !> All card names, blank-separated, with their aliases.
    pure function card_list() result(list)
       character(:), allocatable :: list
-      list = 'TITLe SECTions NODEs (COORdinates) LINKs (ELEMents) WELDs SUPPorts (BOUNdary) DRIVes LOADs ' &
-         & //'SLIDelines ANALysis OUTPut INCLude END'
+      list = 'TITLe PARAmeters SECTions NODEs (COORdinates) LINKs (ELEMents) WELDs SUPPorts (BOUNdary) DRIVes ' &
+         & //'LOADs SLIDelines ANALysis OUTPut INCLude END'
    end function card_list
-
-   !> Whether `field` names the word `word` (case-insensitive): in full, or as a
-   !> prefix of at least `shortest` letters.
-   pure logical function is_word_of(field, word, shortest)
-      character(*), intent(in) :: field, word
-      integer, intent(in) :: shortest
-      is_word_of = .false.
-      if (len(field) > len(word) .or. len(field) < min(shortest, len(word))) return
-      is_word_of = lower(field) == lower(word(1:len(field)))
-   end function is_word_of
-
-
 
 end module fekap_deck_card

@@ -11,7 +11,7 @@ module fekap_model
 
    public :: model_type, node_type, section_type, link_type, weld_type
    public :: support_type, drive_type, load_type, slideline_type
-   public :: analysis_type, output_type, source_loc_type
+   public :: analysis_type, output_type, source_loc_type, parameter_type
    public :: find_node, find_link, model_size
 
    !> Degree-of-freedom kinds at a node.
@@ -19,10 +19,16 @@ module fekap_model
 
    !> Analysis methods.
    integer, parameter, public :: method_fem = 1, method_cartesian = 2, method_angles = 3
+   !> The methods' names, each at the position of its code: the deck and the
+   !> command line both take a name, or a prefix of at least 4 letters of it,
+   !> through word_index.
+   character(*), parameter, public :: method_names = 'fem cartesian angles'
    !> Predictors: last converged configuration (the paper's), polynomial
    !> extrapolation of the last converged configurations (default), Taylor
    !> series from the last velocities and accelerations.
    integer, parameter, public :: predictor_previous = 1, predictor_extrapolate = 2, predictor_taylor = 3
+   !> The predictors' names, each at the position of its code (as method_names).
+   character(*), parameter, public :: predictor_names = 'previous extrapolate taylor'
    !> Convergence tests: the paper's ||P(i)||/||P(0)|| < tol, or FEKAP's
    !> default (residual against the drive-increment scale and a correction length test).
    integer, parameter, public :: convergence_paper = 1, convergence_default = 2
@@ -169,6 +175,17 @@ module fekap_model
       character(len=16) :: time_unit = 's'
    end type output_type
 
+   !> A deck parameter (PARAmeters block): a named number that later numeric
+   !> fields of the deck may use.
+   type :: parameter_type
+      !> Its name as spelt in the deck (matched case-insensitively).
+      character(:), allocatable :: name
+      real(dp) :: value = 0
+      !> Whether `fekap --set` gave the value instead of the deck.
+      logical :: set_on_command_line = .false.
+      type(source_loc_type) :: loc
+   end type parameter_type
+
    !> The whole model of one deck.
    type :: model_type
       !> The deck's file name, for diagnostics.
@@ -184,6 +201,8 @@ module fekap_model
       type(slideline_type), allocatable :: slidelines(:)
       type(analysis_type) :: analysis
       type(output_type) :: output
+      !> The deck's parameters in the order defined, with the values used.
+      type(parameter_type), allocatable :: parameters(:)
    end type model_type
 
 contains

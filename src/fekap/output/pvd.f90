@@ -1,21 +1,19 @@
 !> The ParaView collection `<stem>.pvd` of a run's .vtu files, listing each
 !> with its time. Its lines are formatted once, as each .vtu is written, and
-!> held in memory; the file is written whole to a temporary name and renamed
-!> over the collection, so that it is never seen cut short, not even after a
-!> SIGKILL. Rewriting it after every step made a run quadratic in its steps
+!> held in memory; the run writes the file whole to a temporary name and
+!> renames it over the collection (fekap_run), so that it is never seen cut
+!> short, not even after a SIGKILL. Rewriting it after every step made a run quadratic in its steps
 !> (16,000 steps: 107 s, of which 0.19 s analysis); it is rewritten only when
 !> it has grown by an eighth since the last write (pvd_due) and at the end,
 !> so that all the rewrites together write at most about nine times its
 !> final size: linear in the steps.
 module fekap_output_pvd
-   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, fatal_error
    use fekap_output_format, only: real_text
    implicit none
    private
 
-   public :: pvd_type, add_pvd_entry, pvd_due, write_pvd_file
+   public :: pvd_type, add_pvd_entry, pvd_due, write_pvd_text
 
    type :: pvd_type
       !> text(1:n): one DataSet line per .vtu file, each ending in a newline.
@@ -26,13 +24,6 @@ module fekap_output_pvd
       integer :: written = 0
    end type pvd_type
 
-   interface
-      !> C's rename: atomic replacement of `to` by `from` on one file system.
-      integer(c_int) function c_rename(from, to) bind(C, name='rename')
-         import :: c_int, c_char
-         character(kind=c_char), intent(in) :: from(*), to(*)
-      end function c_rename
-   end interface
 
 contains
 
@@ -62,33 +53,17 @@ contains
       pvd_due = self%entries - self%written >= max(1, self%written/8)
    end function pvd_due
 
-   !> Write the collection to `path`: to `path.part` first, then renamed.
-   subroutine write_pvd_file(self, path, error)
-      type(pvd_type), intent(inout) :: self
-      character(*), intent(in) :: path
-      type(error_type), allocatable, intent(out) :: error
-      character(*), parameter :: nl = new_line('a')
-      integer :: unit, ios
-      open (newunit=unit, file=path//'.part', status='replace', action='write', access='stream', &
-         & form='unformatted', iostat=ios)
-      if (ios /= 0) then
-         call fatal_error(error, path//'.part: cannot write this file')
-         return
-      end if
-      write (unit, iostat=ios) '<?xml version="1.0"?>'//nl// &
-         & '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">'//nl//'  <Collection>'//nl
-      if (ios == 0 .and. self%n > 0) write (unit, iostat=ios) self%text(1:self%n)
-      if (ios == 0) write (unit, iostat=ios) '  </Collection>'//nl//'</VTKFile>'//nl
-      close (unit)
-      if (ios /= 0) then
-         call fatal_error(error, path//'.part: cannot write this file')
-         return
-      end if
-      if (c_rename(path//'.part'//c_null_char, path//c_null_char) /= 0) then
-         call fatal_error(error, path//': cannot replace this file by '//path//'.part')
-         return
-      end if
-      self%written = self%entries
-   end subroutine write_pvd_file
+   !> The whole collection, to a unit open for formatted stream access.
+   subroutine write_pvd_text(unit, self)
+      integer, intent(in) :: unit
+      type(pvd_type), intent(in) :: self
+      write (unit, '(a)') '<?xml version="1.0"?>'
+      write (unit, '(a)') '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">'
+      write (unit, '(a)') '  <Collection>'
+      ! Each newline of the held lines ends a record of the formatted stream.
+      if (self%n > 0) write (unit, '(a)') self%text(1:self%n - 1)
+      write (unit, '(a)') '  </Collection>'
+      write (unit, '(a)') '</VTKFile>'
+   end subroutine write_pvd_text
 
 end module fekap_output_pvd

@@ -148,6 +148,7 @@ contains
       type(model_type), intent(in) :: model
       integer :: i, j
       character(len=4) :: code
+      if (.not. allocated(model%nodes)) return
       write (unit, '(a)') '      <Array type="String" Name="'//name//'" NumberOfTuples="'// &
          & integer_text(size(model%nodes))//'" format="ascii">'
       do i = 1, size(model%nodes)
