@@ -146,7 +146,7 @@ contains
          call write_mesh_csv(mesh_unit, model)
          call close_checked(mesh_unit, -1_int64, error)
          if (allocated(error)) return
-         call open_replace(outdir//'/mechanism.csv', mesh_unit, error, stream=.true.)
+         call open_replace(outdir//'/mechanism.txt', mesh_unit, error, stream=.true.)
          if (allocated(error)) return
          call write_mechanism_csv(mesh_unit, model)
          call close_checked(mesh_unit, -1_int64, error)

@@ -13,7 +13,7 @@ Files (see README.md, "What a run writes"):
 - ``nodes.csv``: ``step,t,A.x,A.y,B.x,...``, every node's position at every written step;
 - ``points.csv``: ``step,t,point,x,y[,vx,vy[,ax,ay]]``; ``links.csv``: ``step,t,link,angle[,...]``;
 - ``steps.csv``: ``step,t,iterations,residual,cuts``;
-- ``mesh.csv``: ``link,node1,node2``; ``mechanism.csv``: title, units, supports, guides, drives.
+- ``mesh.csv``: ``link,node1,node2``; ``mechanism.txt``: title, units, supports, guides, drives.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ BLOCK_BYTES = 1 << 24
 
 @dataclass
 class Mechanism:
-    """What mechanism.csv and mesh.csv say about the model (for drawing and labelling)."""
+    """What mechanism.txt and mesh.csv say about the model (for drawing and labelling)."""
 
     title: str = ""
     length_unit: str = "m"
@@ -62,9 +62,9 @@ class Mechanism:
 
 
 def read_mechanism(directory: Path) -> Mechanism:
-    """mechanism.csv and mesh.csv of a run (defaults for what is missing: an older run)."""
+    """mechanism.txt and mesh.csv of a run (defaults for what is missing: an older run)."""
     mech = Mechanism()
-    path = directory / "mechanism.csv"
+    path = directory / "mechanism.txt"
     if path.is_file():
         with open(path, newline="", encoding="utf-8") as handle:
             for row in csv.reader(handle):

@@ -7,7 +7,7 @@ draws into OUTDIR:
 
 - paths.png        the whole mechanism (every link, the supports, the sliders' guides) at a few
                    instants, with the paths of the tracked points highlighted and those of the
-                   other moving nodes faint (nodes.csv, mesh.csv, mechanism.csv);
+                   other moving nodes faint (nodes.csv, mesh.csv, mechanism.txt);
 - history_<P>.png  time histories of x, y (vx, vy, ax, ay when computed) of each tracked point P;
 - angles.png       time histories of the link angles (omega, alpha when computed);
 - iterations.png   Newton iterations (and the final residual) per step;

@@ -224,7 +224,8 @@ def test_double_crank_exactly_collinear():
     # reaches t = 0.25, step 5, but no configuration of step 6 is admissible):
     # exit 3, the message names the step and its time, the rows before it kept.
     out, err = run_case("decks/double-crank.deck", "--dt", "0.05", "--predictor", "previous", want=3)
-    check("step 6" in err and "3.00000E-01" in err, f"the message names the step and time:\n{err}")
+    # One time: where the step was cut (not also the step's target time).
+    check("step 6" in err and err.count("t = ") == 1, f"the message names the step and one time:\n{err}")
     t = point_series(out, "F")["t"]
     check(len(t) == 6 and abs(t[-1] - 0.25) < 1e-12, f"rows of steps 0-5 kept, got t = {t}")
 
@@ -496,7 +497,8 @@ def test_nonconvergence_stop():
     deck = OUT / "fourbar-iterations2.deck"
     deck.write_text((ROOT / FOURBAR).read_text().replace("ANALysis", "ANALysis\n  iterations 2"))
     out, err = run_case(str(deck), "--dt", "0.4", name="iterations2", want=3)
-    check(re.search(r"step \d+ \(t = ", err) is not None and "did not converge" in err, f"message:\n{err}")
+    check(re.search(r"step \d+:? \(?t = ", err) is not None and err.count("t = ") == 1 and "did not converge" in err,
+          f"message:\n{err}")
     check("RUN STOPPED" in listing(out), "the listing says the run stopped")
     check(check_rows_complete(out) >= 1, "the initial step's rows stay")
 

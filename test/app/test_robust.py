@@ -239,7 +239,8 @@ def test_files_of_an_earlier_run_are_removed_and_others_kept(tmp_path):
     done = fekap("-q", "-o", out, FOURBAR)
     assert done.returncode == 0, done.stderr
     left = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
-    assert left == ["fourbar.lis", "links.csv", "mesh.csv", "notes.txt", "points.csv", "steps.csv"], left
+    assert left == ["fourbar.lis", "links.csv", "mechanism.txt", "mesh.csv", "nodes.csv", "notes.txt", "points.csv",
+                    "steps.csv"], left
     assert (out / "links.csv").read_text() != "stale\n"
 
 

@@ -1,5 +1,5 @@
 !> CSV tables of a run: points.csv, links.csv, steps.csv, nodes.csv, and
-!> mesh.csv and mechanism.csv (written once).
+!> mesh.csv and mechanism.txt (written once).
 !> The per-step rows are built with the exact number texts of
 !> fekap_output_format (no format to interpret, no allocation) and appended
 !> to the file's text buffer, which writes them in large pieces; mesh.csv,
@@ -217,7 +217,7 @@ contains
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_nodes_row
 
-   !> mechanism.csv: what the plots need to draw the mechanism and label it,
+   !> mechanism.txt: what the plots need to draw the mechanism and label it,
    !> one record per line, the kind first: `title,TEXT`; `units,length,NAME`
    !> and `units,time,NAME`; `support,NODE,FIXED` (FIXED: the fixed
    !> freedoms among x, y, rotation, blank-separated); `guide,NAME,SLAVE,x1,y1,x2,y2`
