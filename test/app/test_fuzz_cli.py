@@ -74,17 +74,6 @@ def random_command(rng: random.Random, deck: Path, case_dir: Path) -> list[str]:
     return args[:position] + decks + args[position:]
 
 
-def without_warnings(stderr: str) -> str:
-    """stderr without the checking build's run-time warnings (an array
-    temporary: a cost, not a crash) and the `At line` that names each."""
-    lines = stderr.splitlines()
-    kept = [line for k, line in enumerate(lines)
-            if not line.startswith("Fortran runtime warning")
-            and not (line.startswith("At line ") and k + 1 < len(lines)
-                     and lines[k + 1].startswith("Fortran runtime warning"))]
-    return "\n".join(kept)
-
-
 def csv_files_whole(directory: Path) -> list[str]:
     problems = []
     for path in directory.glob("*.csv"):
@@ -112,7 +101,7 @@ def run_case(k: int, rng: random.Random, work: Path, deck: Path, binary: str) ->
         problems.append(f"exit {done.returncode}")
     if done.returncode != 0 and not done.stderr.strip():
         problems.append("non-zero exit without a message")
-    if any(sign in without_warnings(done.stderr) for sign in BAD_SIGNS):
+    if any(sign in done.stderr for sign in BAD_SIGNS):
         problems.append(f"crash: {done.stderr[-300:]}")
     for name in ("PWNED", "x", "y"):
         for place in (case_dir, ROOT, work):
