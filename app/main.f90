@@ -6,6 +6,7 @@ program fekap_main
    use fekap_error, only: error_type, fatal_error, error_input, error_analysis
    use fekap_model, only: model_type, method_fem, method_cartesian
    use fekap_deck, only: read_deck
+   use fekap_model_effects, only: check_effects_request
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
@@ -50,6 +51,8 @@ program fekap_main
    call read_deck(model, cli%deck, error)
    if (allocated(error)) call finish(error)
    call apply_overrides(cli, model, error)
+   if (allocated(error)) call finish(error)
+   call check_effects_request(model, error)
    if (allocated(error)) call finish(error)
 
    call make_stepper(model, stepper, mesh_text, error)
