@@ -4,9 +4,10 @@ program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
    use fekap_error, only: error_type, fatal_error, error_input, error_analysis
-   use fekap_model, only: model_type, method_fem, method_cartesian
+   use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics
    use fekap_deck, only: read_deck
-   use fekap_model_effects, only: check_effects_request
+   use fekap_model_effects, only: check_effects_request, planned_effects
+   use fekap_effects_kinetostatic_stepper, only: kinetostatic_stepper_type, new_kinetostatic_stepper
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
@@ -84,6 +85,7 @@ contains
       character(:), allocatable, intent(out) :: mesh_text
       type(error_type), allocatable, intent(out) :: error
       type(fem_stepper_type), allocatable :: fem
+      type(kinetostatic_stepper_type), allocatable :: kinetostatic
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
       character(len=160) :: line
@@ -102,7 +104,13 @@ contains
                & fem%mesh%slides(i)%kp, ', rotational tie ', fem%mesh%slides(i)%kr
             mesh_text = mesh_text//new_line('a')//'  '//trim(line)
          end do
-         call move_alloc(fem, stepper)
+         if (planned_effects(model) == effects_kinetostatics) then
+            allocate (kinetostatic)
+            call new_kinetostatic_stepper(kinetostatic, fem)
+            call move_alloc(kinetostatic, stepper)
+         else
+            call move_alloc(fem, stepper)
+         end if
       case (method_cartesian)
          allocate (cartesian)
          call new_cartesian_stepper(cartesian, model, error)
@@ -136,6 +144,8 @@ contains
          if (.not. allocated(error)) call open_replace(outdir//'/links.csv', units%links, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
+         if (.not. allocated(error) .and. planned_effects(model) == effects_kinetostatics) &
+            & call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)
          close (mesh_unit)

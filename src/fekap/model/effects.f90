@@ -12,7 +12,7 @@ module fekap_model_effects
    implicit none
    private
 
-   public :: effects_plan_type, plan_effects, check_effects_request, has_masses, has_gravity, effects_name
+   public :: effects_plan_type, plan_effects, planned_effects, check_effects_request, has_masses, has_gravity, effects_name
 
    !> The plan: the effects, why they were chosen, what is left out, and why
    !> an explicit request cannot be met ('' if it can).
@@ -69,6 +69,14 @@ contains
       if (plan%effects == effects_kinetostatics) plan%left_out = 'left out: the elastic deflection''s effect on the '// &
          & 'motion (the motion is the kinematic one), statics under loads, dynamics'
    end function plan_effects
+
+   !> The effects the plan of `model` simulates (effects_kinematics, ...).
+   pure integer function planned_effects(model) result(effects)
+      type(model_type), intent(in) :: model
+      type(effects_plan_type) :: plan
+      plan = plan_effects(model)
+      effects = plan%effects
+   end function planned_effects
 
    !> An input error when the ANALysis type asked for cannot run (the deck
    !> reader reports this at the type line; this catches what the command

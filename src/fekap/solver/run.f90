@@ -14,7 +14,8 @@ module fekap_solver_run
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes, has_note
    use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
-      & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix
+      & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix, write_reactions_header, &
+      & write_reactions_rows
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop, write_listing_note
    use fekap_output_vtk, only: write_vtu, write_pvd
@@ -44,6 +45,8 @@ module fekap_solver_run
       integer :: links = no_unit
       integer :: steps = no_unit
       integer :: listing = no_unit
+      !> reactions.csv, written by kinetostatics runs only.
+      integer :: reactions = no_unit
       logical :: vtk = .false.
       !> The output directory and the deck's stem, for the VTK file names.
       character(:), allocatable :: outdir, stem
@@ -64,7 +67,7 @@ module fekap_solver_run
 
    !> The text of the files written step by step, held between flushes.
    type :: run_buffers_type
-      type(text_buffer_type) :: points, links, steps, listing
+      type(text_buffer_type) :: points, links, steps, listing, reactions
    end type run_buffers_type
 
 contains
@@ -124,6 +127,7 @@ contains
       if (units%points /= no_unit) call write_points_header(out%points, vel, acc)
       if (units%links /= no_unit) call write_links_header(out%links, vel, acc)
       if (units%steps /= no_unit) call write_steps_header(out%steps)
+      if (units%reactions /= no_unit) call write_reactions_header(out%reactions)
       if (units%listing /= no_unit) call write_listing_step_header(units%listing)
       if (units%vtk) then
          allocate (vtk%links_nodes(2, size(model%links)), vtk%times(0), vtk%steps(0))
@@ -160,7 +164,8 @@ contains
             if (n == 0) vtk%initial_pos = result%mesh_pos
          end if
          if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
-            if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit) then
+            if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit .or. &
+               & units%reactions /= no_unit) then
                call new_row_prefix(prefix, result)
             end if
             if (units%points /= no_unit) then
@@ -174,6 +179,10 @@ contains
             if (units%steps /= no_unit) then
                call write_steps_row(out%steps, result, prefix)
                rows = rows + 1
+            end if
+            if (units%reactions /= no_unit) then
+               call write_reactions_rows(out%reactions, model, result, prefix)
+               rows = rows + size(result%reactions, 2)
             end if
             if (units%listing /= no_unit) call write_listing_step(out%listing, result)
             if (units%vtk) then
@@ -300,6 +309,7 @@ contains
       if (units%points /= no_unit) call new_text_buffer(out%points, units%points, formatted=.false.)
       if (units%links /= no_unit) call new_text_buffer(out%links, units%links, formatted=.false.)
       if (units%steps /= no_unit) call new_text_buffer(out%steps, units%steps, formatted=.false.)
+      if (units%reactions /= no_unit) call new_text_buffer(out%reactions, units%reactions, formatted=.false.)
       if (units%listing /= no_unit) call new_text_buffer(out%listing, units%listing, formatted=.true.)
    end subroutine new_run_buffers
 
@@ -310,6 +320,7 @@ contains
       if (units%points /= no_unit) call flush_buffer(out%points)
       if (units%links /= no_unit) call flush_buffer(out%links)
       if (units%steps /= no_unit) call flush_buffer(out%steps)
+      if (units%reactions /= no_unit) call flush_buffer(out%reactions)
       if (units%listing /= no_unit) call flush_buffer(out%listing)
    end subroutine flush_all
 
