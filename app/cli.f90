@@ -2,9 +2,9 @@
 module fekap_app_cli
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
-   use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
-      & predictor_extrapolate, predictor_taylor
-   use fekap_strings, only: lower
+   use fekap_model, only: model_type, method_names, predictor_names
+   use fekap_strings, only: lower, word_index
+   use fekap_deck_expression, only: evaluate_expression
    implicit none
    private
 
@@ -35,15 +35,18 @@ contains
          & '  -o DIR              output directory'//nl// &
          & '  -q                  quiet: print nothing but errors'//nl// &
          & '  --method NAME       fem | cartesian | angles (overrides the deck)'//nl// &
-         & '  --dt VALUE          time step (overrides the deck)'//nl// &
-         & '  --tol VALUE         Newton tolerance (overrides the deck)'//nl// &
+         & '  --dt VALUE          time step (overrides the deck; an expression as in a'//nl// &
+         & '                      deck: 0.01, 2*0.05, pi/100)'//nl// &
+         & '  --tol VALUE         Newton tolerance (overrides the deck; an expression)'//nl// &
          & '  --predictor NAME    previous | extrapolate | taylor (overrides the deck)'//nl// &
          & '  --compute LIST      positions[,velocities[,accelerations]] (overrides the deck)'//nl// &
          & '  --print-outdir      print the output directory and exit'//nl// &
          & '  --version           print the version and exit'//nl// &
          & '  --help              print this help and exit'//nl//nl// &
-         & 'exit codes: 0 success, 2 input error, 3 analysis did not converge or hit a'//nl// &
-         & 'singular configuration, 1 anything else.'
+         & 'exit codes: 0 success, 2 input error (also: another run is writing into the'//nl// &
+         & 'output directory), 3 analysis did not converge, 4 an output file or directory'//nl// &
+         & 'could not be written (full disk, no permission: the message names the file'//nl// &
+         & 'and the reason; the rows written before are kept, whole), 1 anything else.'
    end function usage_text
 
    !> Read the command line into `cli`.
@@ -131,50 +134,43 @@ contains
       type(model_type), intent(inout) :: model
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: value
-      integer :: stat, start, comma
+      integer :: start, comma, code
       character(:), allocatable :: item
       if (allocated(cli%method)) then
-         select case (lower(cli%method))
-         case ('fem')
-            model%analysis%method = method_fem
-         case ('cartesian')
-            model%analysis%method = method_cartesian
-         case ('angles')
-            model%analysis%method = method_angles
-         case default
+         ! A name of method_names (or 4 letters of it), as in the deck.
+         code = word_index(cli%method, method_names)
+         if (code == 0) then
             call input_error(error, 'fekap: --method '//cli%method//': expected fem, cartesian or angles')
             return
-         end select
+         end if
+         model%analysis%method = code
       end if
       if (allocated(cli%predictor)) then
-         select case (lower(cli%predictor))
-         case ('previous')
-            model%analysis%predictor = predictor_previous
-         case ('extrapolate')
-            model%analysis%predictor = predictor_extrapolate
-         case ('taylor')
-            model%analysis%predictor = predictor_taylor
-         case default
+         code = word_index(cli%predictor, predictor_names)
+         if (code == 0) then
             call input_error(error, 'fekap: --predictor '//cli%predictor//': expected previous, extrapolate or taylor')
             return
-         end select
+         end if
+         model%analysis%predictor = code
       end if
       if (allocated(cli%dt)) then
-         read (cli%dt, *, iostat=stat) value
-         if (stat /= 0 .or. .not. (value > 0 .and. value <= huge(value))) then
-            call input_error(error, 'fekap: --dt '//cli%dt//': expected a positive number')
+         call option_number('--dt', cli%dt, value, error)
+         if (allocated(error)) return
+         if (.not. value > 0) then
+            call input_error(error, "fekap: --dt '"//cli%dt//"': expected a positive number")
             return
          end if
          if ((model%analysis%t_end - model%analysis%t_start)/value > 1.0e7_dp) then
-            call input_error(error, 'fekap: --dt '//cli%dt//': more than 10,000,000 steps')
+            call input_error(error, "fekap: --dt '"//cli%dt//"': more than 10,000,000 steps")
             return
          end if
          model%analysis%dt = value
       end if
       if (allocated(cli%tol)) then
-         read (cli%tol, *, iostat=stat) value
-         if (stat /= 0 .or. .not. (value > 0 .and. value < 1)) then
-            call input_error(error, 'fekap: --tol '//cli%tol//': expected a number between 0 and 1')
+         call option_number('--tol', cli%tol, value, error)
+         if (allocated(error)) return
+         if (.not. (value > 0 .and. value < 1)) then
+            call input_error(error, "fekap: --tol '"//cli%tol//"': expected a number between 0 and 1")
             return
          end if
          model%analysis%tol = value
@@ -207,6 +203,22 @@ contains
          end do
       end if
    end subroutine apply_overrides
+
+   !> The value of a numeric option, read as a deck field is (an expression:
+   !> `2*0.05`, `pi/100`, `1e-3`), the whole text and nothing else.
+   subroutine option_number(option, text, value, error)
+      character(*), intent(in) :: option, text
+      real(dp), intent(out) :: value
+      type(error_type), allocatable, intent(out) :: error
+      character(:), allocatable :: detail
+      call evaluate_expression(text, value, error, detail)
+      if (.not. allocated(error)) return
+      if (len(detail) > 0) then
+         error%message = 'fekap: '//option//" '"//text//"': "//error%message//' ('//detail//')'
+      else
+         error%message = 'fekap: '//option//" '"//text//"': "//error%message
+      end if
+   end subroutine option_number
 
 
 end module fekap_app_cli

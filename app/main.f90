@@ -2,8 +2,8 @@
 !> The only place that prints errors and sets the exit code.
 program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
-   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
-   use fekap_error, only: error_type, fatal_error, error_input, error_analysis
+   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
+   use fekap_error, only: error_type, error_input, error_analysis, error_output
    use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics
    use fekap_deck, only: read_deck
    use fekap_model_effects, only: check_effects_request, planned_effects
@@ -13,8 +13,12 @@ program fekap_main
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
       & new_cartesian_stepper
    use fekap_solver_interrupt, only: catch_interrupts
-   use fekap_solver_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
+   use fekap_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
    use fekap_output_csv, only: write_mesh_csv
+   use fekap_output_format, only: es_text
+   use fekap_output_directory, only: prepare_output_directory, make_directory
+   use fekap_output_checked_file, only: close_checked
+   use fekap_posix, only: os_ignore_sigpipe
    use fekap_output_listing, only: write_listing_model, write_listing_plan, plan_text
    use fekap_app_cli, only: cli_type, parse_command_line, apply_overrides, usage_text, fekap_version
    implicit none
@@ -23,6 +27,7 @@ program fekap_main
       !> C's exit: a status code that is a variable (F2008 `stop` takes constants only).
       subroutine c_exit(status) bind(C, name='exit')
          import :: c_int
+         implicit none
          integer(c_int), value :: status
       end subroutine c_exit
    end interface
@@ -34,18 +39,21 @@ program fekap_main
    type(run_units_type) :: units
    character(:), allocatable :: mesh_text
 
+   ! A closed standard output (`fekap ... | head -1`) is not a failed
+   ! analysis: its writes fail quietly instead of killing the run.
+   call os_ignore_sigpipe()
    call parse_command_line(cli, error)
    if (allocated(error)) call finish(error)
    if (cli%help) then
-      write (output_unit, '(a)') usage_text()
+      call say(usage_text())
       call c_exit(0_c_int)
    end if
    if (cli%version) then
-      write (output_unit, '(a)') 'fekap '//fekap_version
+      call say('fekap '//fekap_version)
       call c_exit(0_c_int)
    end if
    if (cli%print_outdir) then
-      write (output_unit, '(a)') cli%outdir
+      call say(cli%outdir)
       call c_exit(0_c_int)
    end if
 
@@ -56,54 +64,53 @@ program fekap_main
    call check_effects_request(model, error)
    if (allocated(error)) call finish(error)
 
-   call make_stepper(model, stepper, mesh_text, error)
+   call make_stepper(model, stepper, error)
    if (allocated(error)) call finish(error)
+   mesh_text = stepper%plan_text()
    call open_outputs(cli%outdir, cli%deck, model, units, error)
-   if (allocated(error)) call finish(error)
+   if (allocated(error)) then
+      if (error%kind == error_output) error%message = 'fekap: '//error%message
+      call finish(error)
+   end if
    if (units%listing /= no_unit) then
       call write_listing_model(units%listing, model, fekap_version)
       call write_listing_plan(units%listing, model, step_count(model), mesh_text)
    end if
-   if (.not. cli%quiet) write (output_unit, '(a)') 'fekap: '//cli%deck//': '//plan_text(model, step_count(model))
+   if (.not. cli%quiet) call say('fekap: '//cli%deck//': '//plan_text(model, step_count(model)))
 
    call catch_interrupts()
    call run_analysis(stepper, model, units, error)
    if (allocated(error)) then
       error%message = cli%deck//': '//error%message
-      if (.not. cli%quiet) write (output_unit, '(a)') 'fekap: results of the completed steps are in '//cli%outdir//'/'
+      if (.not. cli%quiet) call say('fekap: results of the completed steps are in '//cli%outdir//'/')
       call finish(error)
    end if
-   if (.not. cli%quiet) write (output_unit, '(a)') 'fekap: results in '//cli%outdir//'/'
+   if (.not. cli%quiet) call say('fekap: results in '//cli%outdir//'/')
    call c_exit(0_c_int)
 
 contains
 
+   !> A line to standard output; a closed output is ignored.
+   subroutine say(text)
+      character(*), intent(in) :: text
+      integer :: ios
+      write (output_unit, '(a)', iostat=ios) text
+      flush (output_unit, iostat=ios)
+   end subroutine say
+
    !> The stepper of the deck's method.
-   subroutine make_stepper(model, stepper, mesh_text, error)
+   subroutine make_stepper(model, stepper, error)
       type(model_type), intent(in) :: model
       class(stepper_type), allocatable, intent(out) :: stepper
-      character(:), allocatable, intent(out) :: mesh_text
       type(error_type), allocatable, intent(out) :: error
       type(fem_stepper_type), allocatable :: fem
       type(kinetostatic_stepper_type), allocatable :: kinetostatic
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
-      character(len=160) :: line
-      integer :: i
-      mesh_text = ''
       select case (model%analysis%method)
       case (method_fem)
          allocate (fem)
          call new_fem_stepper(fem, model)
-         write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0)') 'mesh: ', size(fem%mesh%elements), ' elements, ', &
-            & fem%mesh%ndof, ' dofs, ', fem%mesh%nfree, ' equations, ', fem%mesh%ndriven, &
-            & ' driven; half-bandwidth ', fem%mesh%kd
-         mesh_text = trim(line)
-         do i = 1, size(fem%mesh%slides)
-            write (line, '(a,es12.5,a,es12.5)') 'slideline '//model%slidelines(i)%name//': penalty ', &
-               & fem%mesh%slides(i)%kp, ', rotational tie ', fem%mesh%slides(i)%kr
-            mesh_text = mesh_text//new_line('a')//'  '//trim(line)
-         end do
          if (planned_effects(model) == effects_kinetostatics) then
             allocate (kinetostatic)
             call new_kinetostatic_stepper(kinetostatic, fem)
@@ -124,19 +131,17 @@ contains
       end select
    end subroutine make_stepper
 
-   !> Create the output directory and open the files the deck asks for.
+   !> Create and lock the output directory, clear it of an earlier run's
+   !> files, and open the files the deck asks for.
    subroutine open_outputs(outdir, deck, model, units, error)
       character(*), intent(in) :: outdir, deck
       type(model_type), intent(in) :: model
       type(run_units_type), intent(out) :: units
       type(error_type), allocatable, intent(out) :: error
-      integer :: stat, mesh_unit
+      integer :: mesh_unit
       character(:), allocatable :: stem
-      call execute_command_line('mkdir -p "'//outdir//'"', exitstat=stat)
-      if (stat /= 0) then
-         call fatal_error(error, outdir//': cannot create the output directory')
-         return
-      end if
+      call prepare_output_directory(outdir, error)
+      if (allocated(error)) return
       stem = deck(index(deck, '/', back=.true.) + 1:)
       if (index(stem, '.', back=.true.) > 1) stem = stem(:index(stem, '.', back=.true.) - 1)
       if (model%output%csv) then
@@ -148,18 +153,16 @@ contains
             & call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)
-         close (mesh_unit)
+         call close_checked(mesh_unit, -1_int64, error)
+         if (allocated(error)) return
       end if
       ! Formatted stream: the run writes the listing's step lines many at a time.
       if (model%output%listing) call open_replace(outdir//'/'//stem//'.lis', units%listing, error, stream=.true., &
          & formatted=.true.)
       if (allocated(error)) return
       if (model%output%vtk) then
-         call execute_command_line('mkdir -p "'//outdir//'/vtk"', exitstat=stat)
-         if (stat /= 0) then
-            call fatal_error(error, outdir//'/vtk: cannot create the VTK directory')
-            return
-         end if
+         call make_directory(outdir//'/vtk', error)
+         if (allocated(error)) return
          units%vtk = .true.
          units%outdir = outdir
          units%stem = stem
@@ -170,12 +173,15 @@ contains
    !> Print the error and exit with the code of its kind.
    subroutine finish(error)
       type(error_type), intent(in) :: error
-      write (error_unit, '(a)') error%message
+      integer :: ios
+      write (error_unit, '(a)', iostat=ios) error%message
       select case (error%kind)
       case (error_input)
          call c_exit(2_c_int)
       case (error_analysis)
          call c_exit(3_c_int)
+      case (error_output)
+         call c_exit(4_c_int)
       case default
          call c_exit(1_c_int)
       end select

@@ -4,16 +4,18 @@ module fekap_error
    implicit none
    private
 
-   public :: error_type, fatal_error, input_error, analysis_error
+   public :: error_type, fatal_error, input_error, analysis_error, output_error
 
-   !> Kinds of error, which the app maps to exit codes 1, 2 and 3.
+   !> Kinds of error, which the app maps to exit codes 1, 2, 3 and 4.
    integer, parameter, public :: error_other = 1
    integer, parameter, public :: error_input = 2
    integer, parameter, public :: error_analysis = 3
+   !> An output file or directory could not be written (full disk, no permission).
+   integer, parameter, public :: error_output = 4
 
    !> An error travelling up to the app.
    type :: error_type
-      !> One of error_other, error_input, error_analysis.
+      !> One of error_other, error_input, error_analysis, error_output.
       integer :: kind = error_other
       !> What went wrong, possibly several lines (deck diagnostics).
       character(:), allocatable :: message
@@ -47,5 +49,14 @@ contains
       error%kind = error_analysis
       error%message = message
    end subroutine analysis_error
+
+   !> Allocate an output error (a file or directory that cannot be written): exit code 4.
+   pure subroutine output_error(error, message)
+      type(error_type), allocatable, intent(out) :: error
+      character(*), intent(in) :: message
+      allocate (error)
+      error%kind = error_output
+      error%message = message
+   end subroutine output_error
 
 end module fekap_error

@@ -1,9 +1,11 @@
-!> Small string helpers shared by the deck reader, the model and the command line.
+!> Small string helpers shared by the deck reader, the model, the methods' messages
+!> and the command line: case, FEAP-style keyword abbreviations, numbers as text.
 module fekap_strings
+   use fekap_kinds, only: dp
    implicit none
    private
 
-   public :: lower, upper, same_name
+   public :: lower, upper, same_name, is_word_of, word_index, int_text, short_real_text
 
 contains
 
@@ -35,5 +37,73 @@ contains
       same_name = len(a) == len(b)
       if (same_name) same_name = lower(a) == lower(b)
    end function same_name
+
+   !> Whether `field` names the word `word` (case-insensitive): in full, or as a
+   !> prefix of at least `shortest` letters.
+   pure logical function is_word_of(field, word, shortest)
+      character(*), intent(in) :: field, word
+      integer, intent(in) :: shortest
+      is_word_of = .false.
+      if (len(field) > len(word) .or. len(field) < min(shortest, len(word))) return
+      is_word_of = lower(field) == lower(word(1:len(field)))
+   end function is_word_of
+
+   !> Position (1, 2, ...) of field among the blank-separated `words`; a word may be
+   !> shortened to 4 letters. 0 if it is none of them.
+   pure integer function word_index(field, words) result(idx)
+      character(*), intent(in) :: field, words
+      integer :: start, i, n
+      idx = 0
+      n = 0
+      start = 1
+      do i = 1, len(words) + 1
+         if (i <= len(words)) then
+            if (words(i:i) /= ' ') cycle
+         end if
+         n = n + 1
+         if (is_word_of(field, words(start:i - 1), 4)) then
+            idx = n
+            return
+         end if
+         start = i + 1
+      end do
+   end function word_index
+
+   !> An integer as text.
+   pure function int_text(n) result(text)
+      integer, intent(in) :: n
+      character(:), allocatable :: text
+      character(len=16) :: buf
+      write (buf, '(i0)') n
+      text = trim(buf)
+   end function int_text
+
+   !> A short text for a real, for messages: fixed notation without trailing zeros for
+   !> moderate magnitudes, otherwise scientific with four digits.
+   pure function short_real_text(x) result(text)
+      real(dp), intent(in) :: x
+      character(:), allocatable :: text
+      character(len=32) :: buf
+      integer :: k
+      if (abs(x) < tiny(x)) then
+         text = '0'
+         return
+      end if
+      if (abs(x) >= 1.0e-3_dp .and. abs(x) < 1.0e6_dp) then
+         write (buf, '(f0.6)') x
+         text = trim(buf)
+         k = len(text)
+         do while (text(k:k) == '0')
+            k = k - 1
+         end do
+         if (text(k:k) == '.') k = k - 1
+         text = text(1:k)
+         if (text(1:1) == '.') text = '0'//text
+         if (text(1:2) == '-.') text = '-0'//text(2:)
+      else
+         write (buf, '(es11.4)') x
+         text = trim(adjustl(buf))
+      end if
+   end function short_real_text
 
 end module fekap_strings

@@ -1,21 +1,19 @@
-"""Small shared pieces of the app-level tests: the fekap executable, running
-it, reading its CSV output, and a plain test runner that ends with
-"<suite>: N passed, M failed"."""
+"""Small shared pieces of the app-level tests (run by pytest, see conftest.py):
+the fekap executable, running it, reading its CSV output, and `check`, an
+assertion with a reason."""
 
 from __future__ import annotations
 
 import csv
 import os
 import subprocess
-import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-class Failure(Exception):
-    """A failed check, with its reason."""
+class Failure(AssertionError):
+    """A failed check, with its reason (an AssertionError: pytest reports it as a failure)."""
 
 
 def check(condition: bool, reason: str) -> None:
@@ -51,27 +49,3 @@ def point_series(outdir: Path, point: str) -> dict[str, list[float]]:
     check(bool(rows), f"no rows for point {point} in {outdir / 'points.csv'}")
     return {key: [float(row[key]) if row[key] else float("nan") for row in rows]
             for key in rows[0] if key != "point"}
-
-
-def run_suite(name: str, tests: list) -> int:
-    """Run test functions, print PASS/FAIL lines and the closing count; return the exit code."""
-    passed = failed = 0
-    start = time.time()
-    for test in tests:
-        try:
-            test()
-        except Failure as failure:
-            failed += 1
-            print(f"  FAIL {name}/{test.__name__}")
-            for line in str(failure).splitlines():
-                print(f"      {line}")
-        except Exception as exc:  # a crash of the test itself counts as a failure
-            failed += 1
-            print(f"  FAIL {name}/{test.__name__}: {type(exc).__name__}: {exc}")
-        else:
-            passed += 1
-            print(f"  PASS {name}/{test.__name__}")
-    print(f"  ({time.time() - start:.1f} s)")
-    print(f"{name}: {passed} passed, {failed} failed")
-    sys.stdout.flush()
-    return 1 if failed else 0

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """The example decks run by the fekap executable, checked against independent
 exact solutions at every step.
 
@@ -6,21 +5,22 @@ The references are closed-form geometry evaluated with hyper-dual numbers
 (value, first and second time derivative carried through the arithmetic), so
 velocities and accelerations are exact too, and owe nothing to FEKAP.
 
-Run from the repository root:  python3 test/app/test_examples.py
+Run with scripts/test (pytest): scripts/test NAME runs the tests whose names contain NAME.
 """
 
 from __future__ import annotations
 
 import math
 import re
+import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, check, point_series, read_rows, run_fekap, run_suite  # noqa: E402
+import pytest
 
-OUT = Path(tempfile.mkdtemp(prefix="fekap-examples-"))
+from apptest import ROOT, check, point_series, read_rows, run_fekap  # noqa: E402
+
+OUT: Path  # a fresh scratch directory for each run, set by conftest.py
 
 
 class Dual:
@@ -129,10 +129,10 @@ def test_fourbar():
     compare(out, "C", lambda t: fourbar_exact(t)[1], 1e-9)
 
 
-def test_fourbar_large_steps():
-    for deck in ("decks/fourbar-quarter-turn.deck", "decks/fourbar-half-turn.deck"):
-        out = run_deck(deck)
-        compare(out, "C", lambda t: fourbar_exact(t)[1], 1e-9)
+@pytest.mark.parametrize("deck", ("decks/fourbar-quarter-turn.deck", "decks/fourbar-half-turn.deck"))
+def test_fourbar_large_steps(deck):
+    out = run_deck(deck)
+    compare(out, "C", lambda t: fourbar_exact(t)[1], 1e-9)
 
 
 def test_fourbar_appendage():
@@ -334,23 +334,13 @@ def test_failure_keeps_results():
     check(len(steps) == len(p["t"]), "steps.csv and points.csv hold the same steps")
 
 
-def test_plots_on_real_output():
-    """The plot script draws every example deck's output (headless)."""
-    import subprocess
-    for name in ("fourbar", "quick-return", "peaucellier", "cantilever-rollup"):
-        out = run_deck(f"decks/{name}.deck")
-        result = subprocess.run([sys.executable, str(ROOT / "scripts/plot.py"), str(out)],
-                                capture_output=True, text=True)
-        check(result.returncode == 0, f"plot.py {name}: {result.stderr}")
-        for png in ("paths.png", "iterations.png"):
-            path = out / png
-            check(path.is_file() and path.stat().st_size > 1000, f"{name}: {png} missing or empty")
-
-
-if __name__ == "__main__":
-    sys.exit(run_suite("examples", [
-        test_fourbar, test_fourbar_large_steps, test_fourbar_appendage, test_double_crank,
-        test_peaucellier, test_quick_return, test_quick_return_pin_on_lever, test_prismatic_block,
-        test_slider_crank, test_cantilever_rollup,
-        test_methods_agree, test_redundant_cartesian, test_exit_codes_and_messages,
-        test_failure_keeps_results, test_plots_on_real_output]))
+@pytest.mark.parametrize("name", ("fourbar", "quick-return", "peaucellier", "cantilever-rollup"))
+def test_plots_on_real_output(name, tmp_path):
+    """The plot script draws the example deck's output (headless)."""
+    out = run_deck(f"decks/{name}.deck", outdir=tmp_path / name)
+    result = subprocess.run([sys.executable, str(ROOT / "scripts/plot.py"), str(out)],
+                            capture_output=True, text=True)
+    check(result.returncode == 0, f"plot.py {name}: {result.stderr}")
+    for png in ("paths.png", "iterations.png"):
+        path = out / png
+        check(path.is_file() and path.stat().st_size > 1000, f"{name}: {png} missing or empty")

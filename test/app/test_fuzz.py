@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Fuzzing the fekap executable with mutated example decks.
 
 Each case takes an example deck, applies one to three random mutations
@@ -17,7 +16,7 @@ The random seed is fixed; FEKAP_FUZZ_CASES and FEKAP_FUZZ_SEED override the
 case count and the seed. Decks in test/app/fuzz-crashes/ (reproducers of
 crashes found earlier) are run first, unmutated.
 
-Run from the repository root:  python3 test/app/test_fuzz.py
+Run with scripts/test (pytest): scripts/test NAME runs the tests whose names contain NAME.
 """
 
 from __future__ import annotations
@@ -29,16 +28,15 @@ import os
 import random
 import shutil
 import subprocess
-import sys
-import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, check, fekap_binary, run_suite  # noqa: E402
+import pytest
 
-OUT = Path(tempfile.mkdtemp(prefix="fekap-fuzz-"))
+from apptest import ROOT, check, fekap_binary  # noqa: E402
+
+OUT: Path  # a fresh scratch directory for each run, set by conftest.py
 CASES = int(os.environ.get("FEKAP_FUZZ_CASES", "6000"))
 SEED = int(os.environ.get("FEKAP_FUZZ_SEED", "20240611"))
 TIMEOUT = 10.0
@@ -256,13 +254,20 @@ def save(case: int, deck: Path, data: bytes, what: list[str], why: str) -> str:
     return f"case {case} ({deck.name}: {', '.join(what)}): {why}\n      reproducer: {path}"
 
 
-def test_known_crashes():
-    """Reproducers of crashes found earlier (test/app/fuzz-crashes/, all fixed):
-    each must now end with exit 0, 2 or 3 and a message, like any deck."""
-    decks = sorted(CRASH_DIR.glob("*.deck")) if CRASH_DIR.is_dir() else []
-    failures = [f for k, deck in enumerate(decks) if (f := run_one(k, deck, deck.read_bytes(), ["reproducer"]))]
-    check(bool(decks), f"no reproducers in {CRASH_DIR}")
-    check(not failures, "\n".join(failures))
+KNOWN_CRASHES = sorted(CRASH_DIR.glob("*.deck")) if CRASH_DIR.is_dir() else []
+
+
+def test_known_crashes_present():
+    """The reproducers of crashes found earlier are there to be run."""
+    check(bool(KNOWN_CRASHES), f"no reproducers in {CRASH_DIR}")
+
+
+@pytest.mark.parametrize("deck", KNOWN_CRASHES, ids=lambda d: d.stem)
+def test_known_crashes(deck):
+    """A reproducer of a crash found earlier (test/app/fuzz-crashes/, all fixed)
+    must now end with exit 0, 2 or 3 and a message, like any deck."""
+    failure = run_one(KNOWN_CRASHES.index(deck), deck, deck.read_bytes(), ["reproducer"])
+    check(failure is None, str(failure))
 
 
 def test_mutated_decks():
@@ -283,6 +288,3 @@ def test_mutated_decks():
     check(not failures, "\n".join(failures[:20]) + (f"\n... and {len(failures) - 20} more"
                                                      if len(failures) > 20 else ""))
 
-
-if __name__ == "__main__":
-    sys.exit(run_suite("fuzz", [test_known_crashes, test_mutated_decks]))

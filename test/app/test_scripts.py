@@ -1,11 +1,10 @@
-#!/usr/bin/env python3
 """The benchmark and study scripts on reduced sizes: scripts/paper_tables.py
 --short, scripts/bench --quick, scripts/scissor.py (a 3-cell lift against its
 exact platform height, with the band and the dense solver) and
 scripts/accuracy_study.py --short. They run with the executable under test
 ($FEKAP_BIN, set by scripts/test) and write nothing into docs/.
 
-Run from the repository root:  python3 test/app/test_scripts.py
+Run with scripts/test (pytest): scripts/test NAME runs the tests whose names contain NAME.
 """
 
 from __future__ import annotations
@@ -14,16 +13,14 @@ import math
 import re
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, check, fekap_binary, read_rows, run_fekap, run_suite  # noqa: E402
+from apptest import ROOT, check, read_rows, run_fekap  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "scripts"))
 import scissor  # noqa: E402
 
-OUT = Path(tempfile.mkdtemp(prefix="fekap-scripts-"))
+OUT: Path  # a fresh scratch directory for each run, set by conftest.py
 LAST_LINE = re.compile(r"^fourbar us_per_config_full=(\S+) us_per_config_positions=(\S+) "
                        r"us_per_config_with_output=(\S+) iterations_per_step=(\S+)$")
 
@@ -35,10 +32,10 @@ def script(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
     return result
 
 
-def test_paper_tables_short() -> None:
+def test_paper_tables_short(fekap: Path) -> None:
     out = OUT / "tables.md"
     result = script(sys.executable, "scripts/paper_tables.py", "--short", "--out", str(out),
-                    "--bin", fekap_binary())
+                    "--bin", str(fekap))
     text = out.read_text()
     for method in ("angles", "cartesian", "fem"):
         check(f"FEKAP paper settings: {method}" in text and f"FEKAP default: {method}" in text,
@@ -58,8 +55,8 @@ def test_paper_tables_short() -> None:
           "runs with the paper's settings must end on the upper branch:\n" + "\n".join(rows))
 
 
-def test_bench_quick() -> None:
-    result = script(str(ROOT / "scripts" / "bench"), "--quick", "--no-build", "--bin", fekap_binary(),
+def test_bench_quick(fekap: Path) -> None:
+    result = script(str(ROOT / "scripts" / "bench"), "--quick", "--no-build", "--bin", str(fekap),
                     "--sizes", "10", "--dense-sizes", "10", timeout=180)
     lines = result.stdout.strip().splitlines()
     match = LAST_LINE.match(lines[-1])
@@ -71,10 +68,10 @@ def test_bench_quick() -> None:
     check(any("N =     10 dense" in line for line in lines), "no dense scissor run")
 
 
-def test_bench_against_short() -> None:
+def test_bench_against_short(fekap: Path) -> None:
     """The before/after comparison of two executables (here the same one
     twice): both cases, both binaries, and the ratios of the medians."""
-    result = script(sys.executable, str(ROOT / "scripts" / "bench_against.py"), fekap_binary(), fekap_binary(),
+    result = script(sys.executable, str(ROOT / "scripts" / "bench_against.py"), str(fekap), str(fekap),
                     "--dt", "0.01", "--repeat", "1", timeout=120)
     lines = result.stdout.splitlines()
     for files in ("listing", "csv listing"):
@@ -114,8 +111,8 @@ def test_scissor_deck_text() -> None:
     check(abs(scissor.platform_height(2, 0.0) - 2.0) < 1e-15, "height at theta0 = 30 deg is 2 N sin 30 = N")
 
 
-def test_accuracy_study_short() -> None:
-    result = script(sys.executable, "scripts/accuracy_study.py", "--short", "--bin", fekap_binary(),
+def test_accuracy_study_short(fekap: Path) -> None:
+    result = script(sys.executable, "scripts/accuracy_study.py", "--short", "--bin", str(fekap),
                     timeout=180)
     rows = [line for line in result.stdout.splitlines() if line.startswith("| ") and "---" not in line][1:]
     check(len(rows) >= 15, f"too few rows:\n{result.stdout}")
@@ -128,7 +125,3 @@ def test_accuracy_study_short() -> None:
               if c[1] == "cantilever roll-up"}
     check(rollup["16 elements"] < rollup["4 elements"] / 8, f"roll-up error does not fall as h^2: {rollup}")
 
-
-if __name__ == "__main__":
-    sys.exit(run_suite("scripts", [test_paper_tables_short, test_bench_quick, test_bench_against_short,
-                                   test_scissor_height_exact, test_scissor_deck_text, test_accuracy_study_short]))

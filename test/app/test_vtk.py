@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """The VTK output of the fekap executable, read back with meshio (a
 third-party VTK reader) and xml.etree, and checked against the CSV output of
 the same run: one .vtu per written step and a .pvd listing them with their
@@ -6,25 +5,22 @@ times; the model's nodes are the first points; cells connect the right
 points; displacement, velocity and acceleration; stress resultants of a
 beam in pure bending; classical methods; a run that stops early.
 
-Run from the repository root:  python3 test/app/test_vtk.py
+Run with scripts/test (pytest): scripts/test NAME runs the tests whose names contain NAME.
 """
 
 from __future__ import annotations
 
 import math
 import re
-import sys
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import meshio
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, check, read_rows, run_fekap, run_suite  # noqa: E402
+from apptest import ROOT, check, read_rows, run_fekap  # noqa: E402
 
-OUT = Path(tempfile.mkdtemp(prefix="fekap-vtk-"))
+OUT: Path  # a fresh scratch directory for each run, set by conftest.py
 
 
 def vtk_deck(deck: str, name: str, *replace: tuple[str, str], extra: str = "") -> Path:
@@ -218,8 +214,3 @@ def test_early_stop():
     r = Run(out, "short-guide").check_all()
     check(5 < len(r.steps) < 101, f"{len(r.steps)} steps written before the stop")
 
-
-if __name__ == "__main__":
-    sys.exit(run_suite("vtk", [
-        test_fourbar_fem, test_thinned_steps, test_cantilever_pure_bending, test_quick_return,
-        test_classical_methods, test_early_stop]))

@@ -9,12 +9,13 @@ module fekap_assembly_assemble
    use fekap_assembly_mesh, only: mesh_type, slide_type
    use fekap_assembly_band, only: band_matrix_type
    use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain, max_gauss
+   use fekap_assembly_tracking, only: slide_position
    use fekap_contact_slideline, only: slide_force, slide_second_derivative, slide_tie_force, &
       & slide_tie_second_derivative
    implicit none
    private
 
-   public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain, slide_position
+   public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain
 
 contains
 
@@ -130,29 +131,6 @@ contains
          end do
       end do
    end subroutine scatter
-
-   !> Positions of slideline `sl` on segment iseg: slave, master ends, and the
-   !> dofs (slave x, y, master x1, y1, x2, y2; 0 for a fixed guide).
-   pure subroutine slide_position(mesh, sl, iseg, q, xs, x1, x2, dofs)
-      type(mesh_type), intent(in) :: mesh
-      type(slide_type), intent(in) :: sl
-      integer, intent(in) :: iseg
-      real(dp), intent(in) :: q(:)
-      real(dp), intent(out) :: xs(2), x1(2), x2(2)
-      integer, intent(out) :: dofs(6)
-      dofs(1:2) = mesh%tdof(:, sl%slave)
-      xs = q(dofs(1:2))
-      if (sl%ground) then
-         dofs(3:6) = 0
-         x1 = sl%guide(:, 1)
-         x2 = sl%guide(:, 2)
-      else
-         dofs(3:4) = mesh%tdof(:, sl%seg(1, iseg))
-         dofs(5:6) = mesh%tdof(:, sl%seg(2, iseg))
-         x1 = q(dofs(3:4))
-         x2 = q(dofs(5:6))
-      end if
-   end subroutine slide_position
 
    !> r -= F^c and, when given, K -= K^c: the gap springs (65), (72) and the
    !> rotational ties of prismatic joints.

@@ -13,6 +13,7 @@ module fekap_assembly_lapack
       !> Cholesky factorisation of a symmetric positive definite band matrix.
       pure subroutine dpbtrf(uplo, n, kd, ab, ldab, info)
          import :: dp
+         implicit none
          character, intent(in) :: uplo
          integer, intent(in) :: n, kd, ldab
          real(dp), intent(inout) :: ab(ldab, *)
@@ -22,6 +23,7 @@ module fekap_assembly_lapack
       !> Solve with the factor of dpbtrf.
       pure subroutine dpbtrs(uplo, n, kd, nrhs, ab, ldab, b, ldb, info)
          import :: dp
+         implicit none
          character, intent(in) :: uplo
          integer, intent(in) :: n, kd, nrhs, ldab, ldb
          real(dp), intent(in) :: ab(ldab, *)
@@ -32,6 +34,7 @@ module fekap_assembly_lapack
       !> LU factorisation with partial pivoting of a general band matrix.
       pure subroutine dgbtrf(m, n, kl, ku, ab, ldab, ipiv, info)
          import :: dp
+         implicit none
          integer, intent(in) :: m, n, kl, ku, ldab
          real(dp), intent(inout) :: ab(ldab, *)
          integer, intent(out) :: ipiv(*)
@@ -41,6 +44,7 @@ module fekap_assembly_lapack
       !> Solve with the factor of dgbtrf.
       pure subroutine dgbtrs(trans, n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
          import :: dp
+         implicit none
          character, intent(in) :: trans
          integer, intent(in) :: n, kl, ku, nrhs, ldab, ldb
          real(dp), intent(in) :: ab(ldab, *)
@@ -52,6 +56,7 @@ module fekap_assembly_lapack
       !> LU factorisation with partial pivoting of a general (dense) matrix.
       pure subroutine dgetrf(m, n, a, lda, ipiv, info)
          import :: dp
+         implicit none
          integer, intent(in) :: m, n, lda
          real(dp), intent(inout) :: a(lda, *)
          integer, intent(out) :: ipiv(*)
@@ -61,6 +66,7 @@ module fekap_assembly_lapack
       !> Solve with the factor of dgetrf.
       pure subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
          import :: dp
+         implicit none
          character, intent(in) :: trans
          integer, intent(in) :: n, nrhs, lda, ldb
          real(dp), intent(in) :: a(lda, *)
@@ -72,6 +78,7 @@ module fekap_assembly_lapack
       !> QR factorisation with column pivoting (rank-revealing).
       subroutine dgeqp3(m, n, a, lda, jpvt, tau, work, lwork, info)
          import :: dp
+         implicit none
          integer, intent(in) :: m, n, lda, lwork
          real(dp), intent(inout) :: a(lda, *)
          integer, intent(inout) :: jpvt(*)

@@ -2,6 +2,11 @@
 !> freedom with double nodes at hinges, elements, supports and drives, and
 !> equation numbers in reverse Cuthill-McKee order for a small bandwidth.
 !>
+!> Why one module of over 600 lines: the mesh is built in one pass
+!> (new_mesh) whose steps (dofs, statuses, numbering, scatter map, envelope,
+!> slidelines) each fill part of the same mesh_type and need the parts
+!> before; they are the mesh's private construction, not concepts of their own.
+!>
 !> Points 1..size(model%nodes) are the model's nodes in order; a link meshed
 !> with several elements adds its interior points after them. Every point has
 !> two translational dofs, shared by all element ends there (a hinge). Every
@@ -13,7 +18,7 @@ module fekap_assembly_mesh
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, joint_prismatic
    use fekap_element_beam, only: beam_type, new_beam
    use fekap_contact_slideline, only: default_penalty, default_tie_penalty
-   use fekap_union_find, only: find_root, join
+   use fekap_union_find, only: find_root, join, flatten
    implicit none
    private
 
@@ -157,6 +162,7 @@ contains
          self%tdof(:, ip) = [2*ip - 1, 2*ip]
       end do
       allocate (rot_index(nrot), source=0)
+      call flatten(parent)
       do i = 1, nrot
          j = find_root(parent, i)
          if (rot_index(j) == 0) then
@@ -613,9 +619,9 @@ contains
             do e = 1, size(self%elements)
                if (any(self%edof(1:2, e) == self%tdof(1, sl%slave)) .or. &
                   & any(self%edof(4:5, e) == self%tdof(1, sl%slave))) then
-                  if (self%elements(e)%c(1)/self%elements(e)%length > ea_s/max(l_s, tiny(1.0_dp))) then
-                     ea_s = self%elements(e)%c(1)
-                     ei_s = self%elements(e)%c(3)
+                  if (self%elements(e)%ea/self%elements(e)%length > ea_s/max(l_s, tiny(1.0_dp))) then
+                     ea_s = self%elements(e)%ea
+                     ei_s = self%elements(e)%ei
                      l_s = self%elements(e)%length
                   end if
                end if

@@ -12,10 +12,10 @@ module fekap_classical_angles
    use fekap_model, only: model_type, model_size, dof_x, dof_y, dof_rot, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_model_results, only: step_result_type, new_step_result
-   use fekap_solver_convergence, only: convergence_type, is_converged
+   use fekap_strings, only: int_text, short_real_text
+   use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, divergence_length, &
-      & int_text
+      & no_convergence_text, branch_state_type, branch_jump_text, magnitude_ratio
    implicit none
    private
 
@@ -44,7 +44,7 @@ module fekap_classical_angles
       !> Names of the crank, coupler and rocker, for messages.
       character(len=64) :: link_name(3) = ''
       !> Model size, the unit of divergence.
-      real(dp) :: size = 1
+      real(dp) :: model_length = 1
       !> Jump check: the state of the accepted configuration and the largest
       !> conditioning measure met so far.
       type(branch_state_type) :: branch
@@ -174,7 +174,7 @@ contains
             self%offset(k) = atan2(v(2), v(1)) - atan2(internal(2, k), internal(1, k))
          end associate
       end do
-      self%size = model_size(model)
+      self%model_length = model_size(model)
       do k = 1, 3
          self%link_name(k) = model%links(self%link(k))%name
       end do
@@ -232,7 +232,7 @@ contains
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
       type(branch_state_type) :: new
-      real(dp) :: p(2), k(2, 2), delta(2), r, r0, scale, correction, f0, df, ddf, increment, worst
+      real(dp) :: p(2), k(2, 2), delta(2), r, r0, increment_residual, correction, f0, df, ddf, increment, worst
       integer :: where_
       character(:), allocatable :: jump
 
@@ -240,7 +240,7 @@ contains
          & self%theta1(1), self%theta1(2), self%theta1(3))
       ! The scale of the default test: the residual of the drive increment alone.
       call closure(self, self%history%q(:, 1), p)
-      scale = norm2(p)
+      increment_residual = norm2(p)
       call self%history%predict(self%analysis%predictor, t, self%d)
       iterations = 0
       r0 = 0
@@ -249,8 +249,8 @@ contains
          self%counts%residual_assemblies = self%counts%residual_assemblies + 1
          r = norm2(p)
          if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%floor)) then
-            if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
+         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
+            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
          end if
          if (iterations >= self%analysis%max_iter) then
             call analysis_error(error, no_convergence_text(t, iterations, r))
@@ -261,20 +261,20 @@ contains
          call solve2(k, -p, delta, error)
          self%counts%lu_factorisations = self%counts%lu_factorisations + 1
          if (allocated(error)) then
-            error%message = 't = '//real_text(t)//': '//error%message
+            error%message = 't = '//short_real_text(t)//': '//error%message
             return
          end if
          iterations = iterations + 1
          self%counts%iterations = self%counts%iterations + 1
          self%d = self%d + delta
          correction = maxval(abs(delta)*self%length(2:3))
-         if (correction > divergence_length*self%size) then
-            call analysis_error(error, 't = '//real_text(t)// &
+         if (correction > divergence_length*self%model_length) then
+            call analysis_error(error, 't = '//short_real_text(t)// &
                & ': Newton diverged at iteration '//int_text(iterations))
             return
          end if
          if (self%conv%mode /= convergence_paper) then
-            if (is_converged(self%conv, r, r0, scale, correction)) exit
+            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
          end if
       end do
 
@@ -339,8 +339,9 @@ contains
       integer :: j
 
       if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
-      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) &
-         & call new_step_result(result, self%nnode, self%nlink)
+      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) then
+         call new_step_result(result, self%nnode, self%nlink)
+      end if
       result%step = self%step
       result%t = t
       result%iterations = iterations

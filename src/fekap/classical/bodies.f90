@@ -12,7 +12,7 @@ module fekap_classical_bodies
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
    use fekap_model, only: model_type, model_size
-   use fekap_union_find, only: find_root, join
+   use fekap_union_find, only: find_root, join, flatten
    implicit none
    private
 
@@ -83,6 +83,7 @@ contains
          end do
       end if
       ! Number the bodies in the order of their first links.
+      call flatten(parent)
       allocate (self%link_body(nlink), source=0)
       allocate (self%first_link(nlink))
       do i = 1, nlink

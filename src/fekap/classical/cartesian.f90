@@ -18,12 +18,12 @@ module fekap_classical_cartesian
    use fekap_error, only: error_type, input_error, analysis_error
    use fekap_model, only: model_type, model_size, convergence_paper
    use fekap_model_results, only: step_result_type, new_step_result
-   use fekap_solver_convergence, only: convergence_type, is_converged
+   use fekap_strings, only: int_text, short_real_text
+   use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
    use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, real_text, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, &
-      & divergence_length, int_text
+      & no_convergence_text, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
    implicit none
    private
 
@@ -57,7 +57,7 @@ module fekap_classical_cartesian
       !> 1 for the translation coordinates, the model size for the angles.
       real(dp), allocatable :: column_scale(:)
       !> Model size and the shortest link (the unit of translation drives in the jump check).
-      real(dp) :: size = 1, shortest_link = 1
+      real(dp) :: model_length = 1, shortest_link = 1
       !> Whether the equations solved can change from step to step (redundant
       !> ones removed, slidelines on master chains): then the determinant of the
       !> last configuration is recomputed with the equations of the step.
@@ -102,7 +102,7 @@ contains
       allocate (self%ipiv(n))
       self%q = self%system%bodies%q0
       call new_history(self%history, n)
-      self%size = model_size(model)
+      self%model_length = model_size(model)
       self%shortest_link = huge(1.0_dp)
       allocate (self%body_name(n/3))
       do l = size(model%links), 1, -1
@@ -111,9 +111,9 @@ contains
          end associate
          self%body_name(self%system%bodies%link_body(l)) = model%links(l)%name
       end do
-      if (self%shortest_link == huge(1.0_dp)) self%shortest_link = self%size
+      if (self%shortest_link == huge(1.0_dp)) self%shortest_link = self%model_length
       allocate (self%column_scale(n), source=1.0_dp)
-      self%column_scale(3:n:3) = self%size
+      self%column_scale(3:n:3) = self%model_length
       call select_equations(self, self%q, .true., error)
       if (allocated(error)) return
       self%changing_equations = self%redundant .or. self%system%has_chains()
@@ -222,16 +222,16 @@ contains
       class(cartesian_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: t, scale
+      real(dp) :: t, increment_residual
       integer :: iterations
       self%step = 0
       t = self%analysis%t_start
       self%q = self%system%bodies%q0
-      self%history%count = 0
+      self%history%filled = 0
       self%equations_time = huge(1.0_dp)
       call self%system%residual(self%q, t, self%phi)
-      scale = active_norm(self)
-      call solve_positions(self, t, scale, iterations, error)
+      increment_residual = active_norm(self)
+      call solve_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) then
          error%message = 'the initial configuration cannot be assembled: '//error%message
          return
@@ -251,7 +251,7 @@ contains
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
       type(branch_state_type) :: new
-      real(dp) :: scale, worst, floor
+      real(dp) :: increment_residual, worst, step_floor
       real(dp) :: dd(size(self%system%laws)), dq_old(self%system%n/3), dq_new(self%system%n/3)
       logical :: rotation(size(self%system%laws))
       integer :: where_, b
@@ -275,20 +275,20 @@ contains
       self%q = self%history%q(:, 1)
       call set_driven_angles(self, t)
       call self%system%residual(self%q, t, self%phi)
-      scale = active_norm(self)
+      increment_residual = active_norm(self)
       ! Predictor, with the driven angles set to their values at t (the paper's (8)).
       call self%history%predict(self%analysis%predictor, t, self%q)
       call set_driven_angles(self, t)
-      call solve_positions(self, t, scale, iterations, error)
+      call solve_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) return
       ! Without its redundant equations the system may converge to a
       ! configuration of a mechanism with a joint missing: every equation must hold.
       if (self%redundant) then
          call self%system%residual(self%q, t, self%phi)
-         if (maxval(abs(self%phi)) > redundant_tol*self%size) then
-            call analysis_error(error, 't = '//real_text(t)// &
+         if (maxval(abs(self%phi)) > redundant_tol*self%model_length) then
+            call analysis_error(error, 't = '//short_real_text(t)// &
                & ': Newton converged to a configuration that violates the removed (redundant) equations (residual '// &
-               & real_text(maxval(abs(self%phi)))//'), not a configuration of the mechanism')
+               & short_real_text(maxval(abs(self%phi)))//'), not a configuration of the mechanism')
             return
          end if
       end if
@@ -300,15 +300,15 @@ contains
       self%reference = max(self%reference, new%measure)
       call self%system%drive_increments(self%history%t(1), t, dd, rotation)
       ! The drive increment: radians, or lengths of the shortest link.
-      floor = 0
+      step_floor = 0
       do b = 1, size(dd)
-         floor = max(floor, abs(dd(b))/merge(1.0_dp, self%shortest_link, rotation(b)))
+         step_floor = max(step_floor, abs(dd(b))/merge(1.0_dp, self%shortest_link, rotation(b)))
       end do
       do b = 1, size(dq_old)
          dq_old(b) = dot_product(self%branch%response(3*b, :), dd)
          dq_new(b) = dot_product(new%response(3*b, :), dd)
       end do
-      call magnitude_ratio(self%q(3:self%system%n:3) - self%history%q(3:self%system%n:3, 1), dq_old, dq_new, floor, &
+      call magnitude_ratio(self%q(3:self%system%n:3) - self%history%q(3:self%system%n:3, 1), dq_old, dq_new, step_floor, &
          & worst, where_)
       where_ = max(1, where_)
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
@@ -349,7 +349,7 @@ contains
       state%known = .true.
       call lu_determinant(self%jac, self%ipiv, state%sign, log_det)
       if (state%sign == 0) return
-      state%measure = 10.0_dp**min(0.0_dp, log_det + (self%system%n/3)*log10(self%size) - self%log_rows)
+      state%measure = 10.0_dp**min(0.0_dp, log_det + (self%system%n/3)*log10(self%model_length) - self%log_rows)
       do k = 1, size(self%active)
          j = self%system%eq(self%active(k))%drive
          if (j == 0) cycle
@@ -377,9 +377,9 @@ contains
 
    !> Newton iterations on the active equations from self%q; iterations are
    !> counted as linear solves until the shared convergence test passes.
-   subroutine solve_positions(self, t, scale, iterations, error)
+   subroutine solve_positions(self, t, increment_residual, iterations, error)
       type(cartesian_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t, scale
+      real(dp), intent(in) :: t, increment_residual
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: r, r0, correction
@@ -392,8 +392,8 @@ contains
          self%counts%residual_assemblies = self%counts%residual_assemblies + 1
          r = active_norm(self)
          if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%floor)) then
-            if (is_converged(self%conv, r, r0, scale, 0.0_dp)) exit
+         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
+            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
          end if
          if (iterations >= self%analysis%max_iter) then
             call analysis_error(error, no_convergence_text(t, iterations, r))
@@ -413,13 +413,13 @@ contains
          do k = 1, self%system%n/3
             correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
          end do
-         if (correction > divergence_length*self%size) then
-            call analysis_error(error, 't = '//real_text(t)// &
+         if (correction > divergence_length*self%model_length) then
+            call analysis_error(error, 't = '//short_real_text(t)// &
                & ': Newton diverged at iteration '//int_text(iterations))
             return
          end if
          if (self%conv%mode /= convergence_paper) then
-            if (is_converged(self%conv, r, r0, scale, correction)) exit
+            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
          end if
       end do
    end subroutine solve_positions
@@ -458,7 +458,7 @@ contains
          end do
       end if
       if (info /= 0) then
-         call analysis_error(error, 't = '//real_text(t)//': the constraint Jacobian is singular '// &
+         call analysis_error(error, 't = '//short_real_text(t)//': the constraint Jacobian is singular '// &
             & '(a singular configuration of the mechanism)')
          return
       end if
@@ -475,8 +475,9 @@ contains
       integer :: k, b, l
 
       if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
-      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) &
-         & call new_step_result(result, self%nnode, self%nlink)
+      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) then
+         call new_step_result(result, self%nnode, self%nlink)
+      end if
       result%step = self%step
       result%t = t
       result%iterations = iterations
@@ -517,7 +518,7 @@ contains
       class(cartesian_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: gamma(self%system%m)
+      real(dp) :: gamma_rhs(self%system%m)
       integer :: info
       self%qd = 0
       self%qdd = 0
@@ -533,8 +534,8 @@ contains
       self%qd = self%rhs
       if (.not. self%analysis%accelerations) return
       ! Accelerations (25): Phi_q q'' = gamma, with the factors of the velocity solve.
-      call self%system%acceleration_rhs(self%q, self%qd, t, gamma)
-      self%qdd = gamma(self%active)
+      call self%system%acceleration_rhs(self%q, self%qd, t, gamma_rhs)
+      self%qdd = gamma_rhs(self%active)
       call dense_lu_solve(self%jac, self%ipiv, self%qdd, info)
       self%counts%acceleration_solves = self%counts%acceleration_solves + 1
       call self%history%set_rates(self%qd, self%qdd)

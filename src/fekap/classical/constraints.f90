@@ -516,11 +516,11 @@ contains
    !>  point: phi_i'**2 (A_i s_i)_c - phi_j'**2 (A_j s_j)_c + d'';
    !>  angle: d'';
    !>  slot:  phi_j'**2 n.(e - A_j s_j) + 2 phi_j' u.e' + phi_i'**2 n.(A_i s_i), e = r_i - p.
-   pure subroutine system_acceleration_rhs(self, q, qd, t, gamma)
+   pure subroutine system_acceleration_rhs(self, q, qd, t, gamma_rhs)
       class(constraint_system_type), intent(in) :: self
       real(dp), intent(in) :: q(:), qd(:), t
       !> (m) gamma.
-      real(dp), intent(out) :: gamma(:)
+      real(dp), intent(out) :: gamma_rhs(:)
       integer :: k, i, j
       real(dp) :: f, df, ddf, u(2), p(2), n(2), ai(2), aj(2), wi, wj, ed(2)
       do k = 1, self%m
@@ -534,17 +534,17 @@ contains
             select case (e%kind)
             case (eq_point)
                aj = arm(q, j, e%sj)
-               gamma(k) = wi**2*ai(e%comp) - wj**2*aj(e%comp) + ddf
+               gamma_rhs(k) = wi**2*ai(e%comp) - wj**2*aj(e%comp) + ddf
             case (eq_angle)
-               gamma(k) = ddf
+               gamma_rhs(k) = ddf
             case default
                call master_line(e, q, u, p)
                n = perp(u)
-               gamma(k) = wi**2*dot_product(n, ai)
+               gamma_rhs(k) = wi**2*dot_product(n, ai)
                if (j > 0) then
                   aj = arm(q, j, e%sj)
                   ed = qd(3*i - 2:3*i - 1) + wi*perp(ai) - qd(3*j - 2:3*j - 1) - wj*perp(aj)
-                  gamma(k) = gamma(k) + wj**2*dot_product(n, point(q, i, e%si) - p - aj) + 2*wj*dot_product(u, ed)
+                  gamma_rhs(k) = gamma_rhs(k) + wj**2*dot_product(n, point(q, i, e%si) - p - aj) + 2*wj*dot_product(u, ed)
                end if
             end select
          end associate

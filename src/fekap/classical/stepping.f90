@@ -8,52 +8,26 @@ module fekap_classical_stepping
    use fekap_error, only: error_type, analysis_error, error_analysis
    use fekap_model, only: analysis_type, predictor_previous, predictor_extrapolate, predictor_taylor
    use fekap_model_drive_law, only: law_type
+   use fekap_strings, only: int_text, short_real_text
    use fekap_model_results, only: step_result_type
    use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_convergence, only: convergence_type, extrapolate
+   use fekap_solver_convergence, only: convergence_type
+   use fekap_solver_predictor, only: extrapolate
+   use fekap_solver_step_control, only: step_cuts_type
+   use fekap_solver_branch, only: jump_ratio, jump_bound_ratio
    implicit none
    private
 
-   public :: history_type, new_history, drive_value, new_step_convergence, real_text, no_convergence_text
-   public :: step_cuts_type, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant, int_text
+   public :: history_type, new_history, drive_value, new_step_convergence, no_convergence_text
+   public :: branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
    public :: classical_stepper_type
 
-   !> Step cuts (halvings) allowed within one step before it is given up (as in the FEM).
-   integer, parameter, public :: max_cuts = 8
-   !> A step is rejected as an assembly-mode jump when an angle coordinate
-   !> changes by more than this many times what the linear response to the
-   !> drive increment (at either end of the step), or the increment itself, explains.
-   real(dp), parameter, public :: jump_ratio = 2.0_dp
    !> A change of sign of the Jacobian's determinant over a step is a
    !> legitimate passage through a singular configuration only if one end of
    !> the step is this close to singular: its conditioning measure (see
    !> branch_state_type) below this share of the largest one met in the run
    !> (the cuts close in on a singular configuration the step passed over).
    real(dp), parameter, public :: singular_share = 5.0e-2_dp
-   !> A Newton correction longer than this many model sizes is divergence.
-   real(dp), parameter, public :: divergence_length = 1.0e3_dp
-
-   !> The halvings of one step: the sub-step length, its growth back after a
-   !> success, and the first and last reasons for a rejection (for the listing).
-   type :: step_cuts_type
-      !> The end of the step, the full step and the current sub-step length.
-      real(dp) :: t_end = 0, h_full = 0, h = 0
-      !> Cuts so far in this step.
-      integer :: cuts = 0
-      character(:), allocatable :: first, last
-   contains
-      !> Start a step from t_from to t_end.
-      procedure :: begin => cuts_begin
-      !> The time of the next try from the accepted time t_from.
-      procedure :: next => cuts_next
-      !> A try failed: halve the sub-step, or give up after max_cuts.
-      procedure :: reject => cuts_reject
-      !> A try succeeded at an intermediate time: let the sub-step grow back.
-      procedure :: grow => cuts_grow
-      !> The listing note of a cut step ('' if not cut).
-      procedure :: note => cuts_note
-   end type step_cuts_type
-
    !> What the jump check knows about an accepted configuration.
    type :: branch_state_type
       !> Whether the rest is known.
@@ -71,7 +45,7 @@ module fekap_classical_stepping
    !> rates of the newest one when they were computed.
    type :: history_type
       !> Number of stored configurations (0 to 3).
-      integer :: count = 0
+      integer :: filled = 0
       !> (ncoord, 3): configurations; column 1 is the newest.
       real(dp), allocatable :: q(:, :)
       !> Their times.
@@ -112,6 +86,7 @@ module fekap_classical_stepping
    abstract interface
       subroutine try_step_interface(self, t, iterations, error)
          import :: classical_stepper_type, dp, error_type
+         implicit none
          class(classical_stepper_type), intent(inout) :: self
          real(dp), intent(in) :: t
          integer, intent(out) :: iterations
@@ -120,6 +95,7 @@ module fekap_classical_stepping
 
       subroutine rates_at_interface(self, t, error)
          import :: classical_stepper_type, dp, error_type
+         implicit none
          class(classical_stepper_type), intent(inout) :: self
          real(dp), intent(in) :: t
          type(error_type), allocatable, intent(out) :: error
@@ -127,6 +103,7 @@ module fekap_classical_stepping
 
       subroutine finish_step_interface(self, t, iterations, result, error)
          import :: classical_stepper_type, dp, error_type, step_result_type
+         implicit none
          class(classical_stepper_type), intent(inout) :: self
          real(dp), intent(in) :: t
          integer, intent(in) :: iterations
@@ -197,7 +174,7 @@ contains
       self%t(3) = self%t(2)
       self%t(2) = self%t(1)
       self%t(1) = t
-      self%count = min(3, self%count + 1)
+      self%filled = min(3, self%filled + 1)
       self%has_rates = .false.
    end subroutine history_push
 
@@ -214,18 +191,18 @@ contains
    !> extrapolation through the last (up to) three; predictor_taylor
    !> q + dt q' + dt**2/2 q'' from the last rates, or extrapolation when
    !> velocities and accelerations were not both computed.
-   pure subroutine history_predict(self, kind, t, q)
+   pure subroutine history_predict(self, predictor, t, q)
       class(history_type), intent(in) :: self
       !> predictor_previous, predictor_extrapolate or predictor_taylor.
-      integer, intent(in) :: kind
+      integer, intent(in) :: predictor
       real(dp), intent(in) :: t
       real(dp), intent(out) :: q(:)
       ! The history's columns, newest first.
       integer, parameter :: columns(3) = [1, 2, 3]
       real(dp) :: h
       integer :: k
-      k = max(1, self%count)
-      select case (kind)
+      k = max(1, self%filled)
+      select case (predictor)
       case (predictor_previous)
          q = self%q(:, 1)
       case (predictor_taylor)
@@ -256,15 +233,15 @@ contains
    !> Convergence settings of a step from the analysis: mode and tolerance
    !> as given, the length tolerance scaled by the model size, and an absolute
    !> residual floor at rounding level (a step that starts converged).
-   pure function new_step_convergence(analysis, size_) result(conv)
+   pure function new_step_convergence(analysis, model_length) result(conv)
       type(analysis_type), intent(in) :: analysis
       !> model_size(model).
-      real(dp), intent(in) :: size_
+      real(dp), intent(in) :: model_length
       type(convergence_type) :: conv
       conv%mode = analysis%convergence
       conv%tol = analysis%tol
-      conv%length = analysis%length_tol*size_
-      conv%floor = 1.0e-14_dp*size_
+      conv%length = analysis%length_tol*model_length
+      conv%residual_floor = 1.0e-14_dp*model_length
    end function new_step_convergence
 
    !> The message of a step that hit max_iter.
@@ -272,125 +249,28 @@ contains
       integer, intent(in) :: iterations
       real(dp), intent(in) :: t, residual
       character(:), allocatable :: text
-      text = 't = '//real_text(t)//': Newton did not converge in '//int_text(iterations)//' iterations (residual '// &
-         & real_text(residual)//')'
+      text = 't = '//short_real_text(t)//': Newton did not converge in '//int_text(iterations)//' iterations (residual '// &
+         & short_real_text(residual)//')'
    end function no_convergence_text
 
-   !> An integer as text.
-   pure function int_text(n) result(text)
-      integer, intent(in) :: n
-      character(:), allocatable :: text
-      character(len=16) :: buf
-      write (buf, '(i0)') n
-      text = trim(buf)
-   end function int_text
-
-   !> A short text for a real: fixed notation without trailing zeros for
-   !> moderate magnitudes, otherwise scientific with four digits.
-   pure function real_text(x) result(text)
-      real(dp), intent(in) :: x
-      character(:), allocatable :: text
-      character(len=32) :: buf
-      integer :: k
-      if (abs(x) < tiny(x)) then
-         text = '0'
-         return
-      end if
-      if (abs(x) >= 1.0e-3_dp .and. abs(x) < 1.0e6_dp) then
-         write (buf, '(f0.6)') x
-         text = trim(buf)
-         k = len(text)
-         do while (text(k:k) == '0')
-            k = k - 1
-         end do
-         if (text(k:k) == '.') k = k - 1
-         text = text(1:k)
-         if (text(1:1) == '.') text = '0'//text
-         if (text(1:2) == '-.') text = '-0'//text(2:)
-      else
-         write (buf, '(es11.4)') x
-         text = trim(adjustl(buf))
-      end if
-   end function real_text
-
-   !> Start cutting a step from t_from to t_end.
-   pure subroutine cuts_begin(self, t_from, t_end)
-      class(step_cuts_type), intent(inout) :: self
-      real(dp), intent(in) :: t_from, t_end
-      self%cuts = 0
-      if (allocated(self%first)) deallocate (self%first)
-      if (allocated(self%last)) deallocate (self%last)
-      self%t_end = t_end
-      self%h_full = t_end - t_from
-      self%h = self%h_full
-   end subroutine cuts_begin
-
-   !> The time of the next try from the accepted time t_from (the end of the
-   !> step when within rounding of it).
-   pure real(dp) function cuts_next(self, t_from) result(t_try)
-      class(step_cuts_type), intent(in) :: self
-      real(dp), intent(in) :: t_from
-      t_try = min(t_from + self%h, self%t_end)
-      if (self%t_end - t_try < 1.0e-12_dp*abs(self%h_full)) t_try = self%t_end
-   end function cuts_next
-
-   !> A try failed with `reason`: halve the sub-step; after max_cuts cuts,
-   !> the reason with what to try becomes the step's analysis error.
-   pure subroutine cuts_reject(self, reason, error)
-      class(step_cuts_type), intent(inout) :: self
-      type(error_type), intent(in) :: reason
-      type(error_type), allocatable, intent(out) :: error
-      self%cuts = self%cuts + 1
-      if (self%cuts > max_cuts) then
-         call analysis_error(error, reason%message//' (after '//int_text(max_cuts)// &
-            & ' step cuts; try a smaller time step or another predictor)')
-         return
-      end if
-      if (allocated(self%first)) then
-         self%last = reason%message
-      else
-         self%first = reason%message
-      end if
-      self%h = self%h/2
-   end subroutine cuts_reject
-
-   pure subroutine cuts_grow(self)
-      class(step_cuts_type), intent(inout) :: self
-      self%h = min(2*self%h, self%h_full)
-   end subroutine cuts_grow
-
-   !> 'step cut k time(s); first rejection: ...; last rejection: ...' as in the FEM.
-   pure function cuts_note(self) result(text)
-      class(step_cuts_type), intent(in) :: self
-      character(:), allocatable :: text
-      text = ''
-      if (.not. allocated(self%first)) return
-      text = 'step cut '//int_text(self%cuts)//' time(s); first rejection: '//self%first
-      if (allocated(self%last)) text = text//'; last rejection: '//self%last
-   end function cuts_note
 
    !> Magnitude part of the jump check: the largest ratio of |change| of an
    !> angle coordinate over the step to max(|dq_old|, |dq_new|, floor), the
    !> linear responses to the drive increment at the two ends and the drive
    !> increment itself; and the coordinate where it occurs (0 if none moved).
-   pure subroutine magnitude_ratio(change, dq_old, dq_new, floor, worst, where_)
+   pure subroutine magnitude_ratio(change, dq_old, dq_new, drive_floor, worst, where_)
       !> Changes of the angle coordinates and their linear responses.
       real(dp), intent(in) :: change(:), dq_old(:), dq_new(:)
       !> The drive increment (radians, or lengths of the shortest link).
-      real(dp), intent(in) :: floor
+      real(dp), intent(in) :: drive_floor
       real(dp), intent(out) :: worst
       integer, intent(out) :: where_
-      real(dp) :: bound, ratio
+      real(dp) :: ratio
       integer :: i
       worst = 0
       where_ = 0
       do i = 1, size(change)
-         bound = max(floor, abs(dq_old(i)), abs(dq_new(i)))
-         if (bound > 0) then
-            ratio = abs(change(i))/bound
-         else
-            ratio = merge(0.0_dp, huge(1.0_dp), abs(change(i)) <= 0)
-         end if
+         ratio = jump_bound_ratio(change(i), dq_old(i), dq_new(i), drive_floor)
          if (ratio > worst) then
             worst = ratio
             where_ = i
@@ -414,10 +294,11 @@ contains
       if (worst > jump_ratio) then
          write (msg, '(a,es9.2,a)') ' rad over the step, ', min(worst, huge(1.0_dp)), &
             & ' times what the drive increment explains) at '
-         text = 't = '//real_text(t)//': assembly-mode jump rejected (rotation '//real_text(change)//trim(msg)//' '//what
+         text = 't = '//short_real_text(t)//': assembly-mode jump rejected (rotation '//short_real_text(change)// &
+            & trim(msg)//' '//what
       else if (old%known .and. new%known) then
          if (old%sign*new%sign < 0 .and. min(old%measure, new%measure) >= singular_share*reference) then
-            text = 't = '//real_text(t)//': assembly-mode jump rejected (the determinant of the Jacobian '// &
+            text = 't = '//short_real_text(t)//': assembly-mode jump rejected (the determinant of the Jacobian '// &
                & 'changed sign over the step, away from any singular configuration)'
          end if
       end if

@@ -295,32 +295,32 @@ contains
    !> first strains the links and needs more iterations; too large a k_p dominates K - K^c
    !> and ill-conditions it. The stiffest axial stiffness it couples is the largest scale
    !> already present in K, so it adds no new one to the condition number.
-   pure function default_penalty(ea_master, ea_slave, l_master, l_slave, scale) result(kp)
+   pure function default_penalty(ea_master, ea_slave, l_master, l_slave, factor) result(kp)
       !> Axial stiffness EA of the master element and of the slave node's element.
       real(dp), intent(in) :: ea_master, ea_slave
       !> Lengths of the master element and of the slave node's element.
       real(dp), intent(in) :: l_master, l_slave
       !> Factor on the stiffness; default 1.
-      real(dp), intent(in), optional :: scale
+      real(dp), intent(in), optional :: factor
       real(dp) :: kp
       kp = 0
       if (l_master > 0) kp = max(kp, ea_master/l_master)
       if (l_slave > 0) kp = max(kp, ea_slave/l_slave)
-      if (present(scale)) kp = scale*kp
+      if (present(factor)) kp = factor*kp
    end function default_penalty
 
    !> Default rotational penalty k_r = scale * max(EI/L) of the master element and the
    !> slave link's element (moment per radian), by the same reasoning as default_penalty:
    !> EI/L is the scale of the beams' own rotational stiffness.
-   pure function default_tie_penalty(ei_master, ei_slave, l_master, l_slave, scale) result(kr)
+   pure function default_tie_penalty(ei_master, ei_slave, l_master, l_slave, factor) result(kr)
       !> Bending stiffness EI of the master element and of the slave link's element.
       real(dp), intent(in) :: ei_master, ei_slave
       !> Lengths of the master element and of the slave link's element.
       real(dp), intent(in) :: l_master, l_slave
       !> Factor on the stiffness; default 1.
-      real(dp), intent(in), optional :: scale
+      real(dp), intent(in), optional :: factor
       real(dp) :: kr
-      kr = default_penalty(ei_master, ei_slave, l_master, l_slave, scale)
+      kr = default_penalty(ei_master, ei_slave, l_master, l_slave, factor)
    end function default_tie_penalty
 
 end module fekap_contact_slideline

@@ -3,7 +3,7 @@
 !> (COOR, COORD and COORDINATES all match COORDINATES; COORX does not). END is
 !> matched in full.
 module fekap_deck_card
-   use fekap_strings, only: lower, upper
+   use fekap_strings, only: lower, upper, is_word_of
    implicit none
    private
 
@@ -70,17 +70,5 @@ contains
       list = 'TITLe SECTions NODEs (COORdinates) LINKs (ELEMents) WELDs SUPPorts (BOUNdary) DRIVes LOADs ' &
          & //'MASSes GRAVity SLIDelines ANALysis OUTPut INCLude END'
    end function card_list
-
-   !> Whether `field` names the word `word` (case-insensitive): in full, or as a
-   !> prefix of at least `shortest` letters.
-   pure logical function is_word_of(field, word, shortest)
-      character(*), intent(in) :: field, word
-      integer, intent(in) :: shortest
-      is_word_of = .false.
-      if (len(field) > len(word) .or. len(field) < min(shortest, len(word))) return
-      is_word_of = lower(field) == lower(word(1:len(field)))
-   end function is_word_of
-
-
 
 end module fekap_deck_card

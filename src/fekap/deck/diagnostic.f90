@@ -42,7 +42,10 @@ module fekap_deck_diagnostic
 
    !> The diagnostics of one deck.
    type :: diagnostics_type
+      !> items(1:kept): the first diagnostics in deck order, at most max_shown.
       type(diagnostic_type), allocatable :: items(:)
+      integer :: kept = 0
+      !> Number of diagnostics reported, kept or not.
       integer :: count = 0
    contains
       !> Record an error at a place, with optional label and note.
@@ -64,14 +67,28 @@ contains
       type(mark_type), intent(in), optional :: note_at
       character(*), intent(in), optional :: note
       type(diagnostic_type), allocatable :: grown(:)
+      integer :: slot, i
       if (.not. allocated(self%items)) allocate (self%items(16))
-      if (self%count == size(self%items)) then
-         allocate (grown(2*size(self%items)))
-         grown(1:self%count) = self%items(1:self%count)
-         call move_alloc(grown, self%items)
-      end if
       self%count = self%count + 1
-      associate (d => self%items(self%count))
+      if (self%kept < max_shown) then
+         if (self%kept == size(self%items)) then
+            allocate (grown(2*size(self%items)))
+            grown(1:self%kept) = self%items(1:self%kept)
+            call move_alloc(grown, self%items)
+         end if
+         self%kept = self%kept + 1
+         slot = self%kept
+      else
+         ! Only the first max_shown in deck order are shown: a deck of a
+         ! million bad lines keeps 100 diagnostics, not a million. The new one
+         ! replaces the last kept if it comes before it.
+         slot = 1
+         do i = 2, self%kept
+            if (before(self%items(slot)%at, self%items(i)%at)) slot = i
+         end do
+         if (.not. before(at, self%items(slot)%at)) return
+      end if
+      associate (d => self%items(slot))
          d%at = at
          d%message = message
          d%label = ''
@@ -93,8 +110,8 @@ contains
       text = ''
       if (self%count == 0) return
       ! Stable insertion sort by place in the deck.
-      order = [(i, i=1, self%count)]
-      do i = 2, self%count
+      order = [(i, i=1, self%kept)]
+      do i = 2, self%kept
          k = order(i)
          j = i - 1
          do while (j >= 1)
@@ -104,7 +121,7 @@ contains
          end do
          order(j + 1) = k
       end do
-      do i = 1, min(self%count, max_shown)
+      do i = 1, self%kept
          associate (d => self%items(order(i)))
             text = text//render_one(d%at, 'error', d%message, d%label)
             if (d%has_note) text = text//render_one(d%note_at, 'note', d%note, '')

@@ -285,9 +285,12 @@ contains
          end if
          if (ctx%nfields(iline) >= 5) then
             call ctx%integer_field(iline, 5, list(n)%nelem, fine)
-            if (fine .and. (list(n)%nelem < 1 .or. list(n)%nelem > max_elements)) then
+            if (fine .and. list(n)%nelem < 1) then
                call ctx%error(iline, 5, 'number of elements must be at least 1', &
-                  & label='give a whole number from 1 to 100000')
+                  & label='give a whole number from 1 to '//limit_text(max_elements))
+            else if (fine .and. list(n)%nelem > max_elements) then
+               call ctx%error(iline, 5, 'too many elements: a link has at most '//limit_text(max_elements), &
+                  & label='give a whole number from 1 to '//limit_text(max_elements))
             end if
          end if
          if (ok .and. list(n)%node(1) == list(n)%node(2)) then
@@ -322,9 +325,13 @@ contains
       integer, intent(in) :: lines(:)
       character(*), parameter :: form = 'node link link [link ...]'
       type(weld_type), allocatable :: list(:)
-      integer :: n, i, iline, k, j, m, link, node
+      !> (2, nlink): the weld (index in list) that holds each link end, 0 if none,
+      !> so that a link welded twice at one node is found in constant time.
+      integer, allocatable :: weld_of_end(:, :)
+      integer :: n, i, iline, k, j, link, node, e
       logical :: ok
       allocate (list(size(lines)))
+      allocate (weld_of_end(2, size(model%links)), source=0)
       n = 0
       do i = 1, size(lines)
          iline = lines(i)
@@ -354,24 +361,28 @@ contains
                ok = .false.
                cycle
             end if
-            do j = 1, n - 1
-               if (list(j)%node /= node) cycle
-               do m = 1, size(list(j)%links)
-                  if (list(j)%links(m) == link) then
-                     call ctx%error_at(ctx%loc(iline, k), 'link '//model%links(link)%name//' is already welded at node '// &
-                        & model%nodes(node)%name, label='list all links of one rigid joint on one WELDs line', &
-                        & note_loc=list(j)%loc, note='welded here')
-                     ok = .false.
-                  end if
-               end do
-            end do
+            e = merge(1, 2, model%links(link)%node(1) == node)
+            j = weld_of_end(e, link)
+            if (j > 0) then
+               call ctx%error_at(ctx%loc(iline, k), 'link '//model%links(link)%name//' is already welded at node '// &
+                  & model%nodes(node)%name, label='list all links of one rigid joint on one WELDs line', &
+                  & note_loc=list(j)%loc, note='welded here')
+               ok = .false.
+            end if
             list(n)%links = [list(n)%links, link]
          end do
          if (ok .and. size(list(n)%links) < 2) then
             call ctx%error(iline, 3, 'a weld joins at least two links', label=form)
             ok = .false.
          end if
-         if (.not. ok) n = n - 1
+         if (ok) then
+            do k = 1, size(list(n)%links)
+               link = list(n)%links(k)
+               weld_of_end(merge(1, 2, model%links(link)%node(1) == node), link) = n
+            end do
+         else
+            n = n - 1
+         end if
       end do
       model%welds = list(:n)
    end subroutine read_welds
@@ -482,6 +493,15 @@ contains
       if (link == 0) call ctx%error(iline, itok, "undefined link '"//ctx%field(iline, itok)//"'", &
          & label='define it in LINKs')
    end function lookup_link
+
+   !> A limit as text.
+   pure function limit_text(limit) result(text)
+      integer, intent(in) :: limit
+      character(:), allocatable :: text
+      character(len=12) :: digits
+      write (digits, '(i0)') limit
+      text = trim(digits)
+   end function limit_text
 
    !> Whether link has an end at node.
    pure logical function has_end(model, link, node)

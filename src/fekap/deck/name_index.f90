@@ -2,6 +2,7 @@
 !> that a deck of tens of thousands of nodes and links reads in linear time:
 !> every link names two nodes, and every name must be checked for duplicates.
 module fekap_deck_name_index
+   use, intrinsic :: iso_fortran_env, only: int64
    use fekap_strings, only: lower
    implicit none
    private
@@ -44,14 +45,14 @@ contains
    pure integer function slot_of(text, n) result(slot)
       character(*), intent(in) :: text
       integer, intent(in) :: n
-      integer(8) :: h
+      integer(int64) :: h
       integer :: i
-      h = 2166136261_8
+      h = 2166136261_int64
       do i = 1, len(text)
-         h = ieor(h, int(iachar(text(i:i)), 8))
-         h = modulo(h*16777619_8, 4294967296_8)
+         h = ieor(h, int(iachar(text(i:i)), int64))
+         h = modulo(h*16777619_int64, 4294967296_int64)
       end do
-      slot = int(modulo(h, int(n, 8))) + 1
+      slot = int(modulo(h, int(n, int64))) + 1
    end function slot_of
 
    pure subroutine index_insert(self, name, position, previous)

@@ -3,12 +3,13 @@
 !> INCLude a base deck and then override it).
 module fekap_deck_settings
    use fekap_kinds, only: dp
-   use fekap_model, only: model_type, method_fem, method_cartesian, method_angles, predictor_previous, &
+   use fekap_model, only: model_type, method_names, predictor_names, method_fem, method_cartesian, method_angles, &
+      & predictor_previous, &
       & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, &
       & solver_band, solver_dense, effects_auto, effects_kinematics, effects_kinetostatics, effects_statics, &
       & effects_dynamics
    use fekap_deck_card, only: is_word_of
-   use fekap_strings, only: lower
+   use fekap_strings, only: lower, word_index
    use fekap_deck_context, only: context_type
    use fekap_deck_geometry, only: lookup_node, lookup_link
    use fekap_deck_expression, only: safe_add
@@ -16,6 +17,10 @@ module fekap_deck_settings
    private
 
    public :: read_title, read_analysis, read_output
+
+   !> Largest start or end time: the drive laws' values stay far from overflow
+   !> (and keep their precision) below it.
+   real(dp), parameter :: max_time = 1.0e9_dp
 
    !> Most time steps of one run.
    real(dp), parameter :: max_steps = 1.0e7_dp
@@ -61,7 +66,7 @@ contains
          key = lower(ctx%field(iline, 1))
          if (is_word_of(key, 'method', 4)) then
             if (.not. one_value('method fem|cartesian|angles')) cycle
-            select case (choice(2, 'fem cartesian angles'))
+            select case (choice(2, method_names))
             case (1)
                model%analysis%method = method_fem
             case (2)
@@ -126,7 +131,7 @@ contains
             model%analysis%max_iter = ivalue
          else if (is_word_of(key, 'predictor', 4)) then
             if (.not. one_value('predictor previous|extrapolate|taylor')) cycle
-            select case (choice(2, 'previous extrapolate taylor'))
+            select case (choice(2, predictor_names))
             case (1)
                model%analysis%predictor = predictor_previous
             case (2)
@@ -224,6 +229,15 @@ contains
                call ctx%error(iline_, 3, 'the end time must be after the start time', &
                   & label='time START END STEP with END > START')
             end if
+            ! Drive values of times like 1e300 overflow in the tangent's products.
+            if (abs(a%t_start) > max_time) then
+               call ctx%error(iline_, 2, 'the start time is beyond 1e9', label='times from -1e9 to 1e9')
+               return
+            end if
+            if (abs(a%t_end) > max_time) then
+               call ctx%error(iline_, 3, 'the end time is beyond 1e9', label='times from -1e9 to 1e9')
+               return
+            end if
             if (a%dt <= 0 .or. a%t_end <= a%t_start) return
             call safe_add(a%t_end, -a%t_start, span, fine)
             if (.not. fine .or. span/max_steps > a%dt) then
@@ -310,26 +324,5 @@ contains
       model%output%points = points
       model%output%links = links
    end subroutine read_output
-
-   !> Position (1, 2, ...) of field among the blank-separated `words`; a word may be
-   !> shortened to 4 letters. 0 if it is none of them.
-   pure integer function word_index(field, words) result(idx)
-      character(*), intent(in) :: field, words
-      integer :: start, i, n
-      idx = 0
-      n = 0
-      start = 1
-      do i = 1, len(words) + 1
-         if (i <= len(words)) then
-            if (words(i:i) /= ' ') cycle
-         end if
-         n = n + 1
-         if (is_word_of(field, words(start:i - 1), 4)) then
-            idx = n
-            return
-         end if
-         start = i + 1
-      end do
-   end function word_index
 
 end module fekap_deck_settings

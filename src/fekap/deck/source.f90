@@ -11,6 +11,7 @@ module fekap_deck_source
    use fekap_deck_card, only: card_of, card_none, card_include, card_end
    use fekap_deck_diagnostic, only: diagnostics_type, mark_type
    use fekap_deck_lexer, only: token_type, text_type, split_lines, lex_line, find_control
+   use fekap_posix, only: os_read_all, os_error_text
    implicit none
    private
 
@@ -89,7 +90,20 @@ contains
       character(:), allocatable :: target, included, message, included_text
       character(len=40) :: where
       logical :: main, ok, ended
+      character(*), parameter :: bom = achar(239)//achar(187)//achar(191), cr = achar(13), lf = achar(10)
       main = size(stack) == 0
+      ! A UTF-8 byte order mark (some Windows editors write one) is not part of the text.
+      if (len(buffer) >= 3) then
+         if (buffer(1:3) == bom) then
+            call load_text(source, diagnostics, buffer(4:), name, directory, stack)
+            return
+         end if
+      end if
+      ! Line ends of carriage returns alone (classic Mac OS files) are line ends.
+      if (index(buffer, cr) > 0 .and. index(buffer, lf) == 0) then
+         call load_text(source, diagnostics, replace_cr(buffer), name, directory, stack)
+         return
+      end if
       call add_file(source, name, ifile)
       bad = find_control(buffer)
       if (bad > 0) then
@@ -106,7 +120,8 @@ contains
       do k = 1, size(lines)
          line%file = ifile
          line%number = k
-         line%text = lines(k)%s
+         ! Each split line is freed as it is taken.
+         call move_alloc(lines(k)%s, line%text)
          call lex_line(line%text, line%code, line%tokens, empty_col)
          if (size(line%tokens) == 0 .and. empty_col == 0) cycle
          if (main) source%last_line = k
@@ -200,6 +215,17 @@ contains
       directory = path(:index(path, '/', back=.true.))
    end function directory_of
 
+   !> `text` with every carriage return made a line feed.
+   pure function replace_cr(text) result(out)
+      character(*), intent(in) :: text
+      character(len=len(text)) :: out
+      integer :: i
+      out = text
+      do i = 1, len(out)
+         if (out(i:i) == achar(13)) out(i:i) = achar(10)
+      end do
+   end function replace_cr
+
    pure integer function count_lf(text) result(n)
       character(*), intent(in) :: text
       integer :: i
@@ -229,10 +255,20 @@ contains
       type(source_type), intent(inout) :: source
       type(line_type), intent(in) :: line
       type(line_type), allocatable :: grown(:)
+      integer :: i
       if (.not. allocated(source%lines)) allocate (source%lines(64))
       if (source%nlines == size(source%lines)) then
          allocate (grown(2*size(source%lines)))
-         grown(1:source%nlines) = source%lines(1:source%nlines)
+         ! Moved, not copied: a copy of every line's texts doubled the
+         ! memory of a large deck at each growth.
+         do i = 1, source%nlines
+            grown(i)%file = source%lines(i)%file
+            grown(i)%number = source%lines(i)%number
+            grown(i)%card = source%lines(i)%card
+            call move_alloc(source%lines(i)%text, grown(i)%text)
+            call move_alloc(source%lines(i)%code, grown(i)%code)
+            call move_alloc(source%lines(i)%tokens, grown(i)%tokens)
+         end do
          call move_alloc(grown, source%lines)
       end if
       source%nlines = source%nlines + 1
@@ -262,9 +298,16 @@ contains
          return
       end if
       inquire (unit=unit, size=n)
-      if (n < 0) then
+      if (n <= 0) then
+         ! Not a regular file with text in it: a pipe (`... | fekap /dev/stdin`),
+         ! a terminal, an empty file or a directory, read to its end.
          close (unit)
-         message = "cannot read '"//path//"': its size is unknown (is it a directory?)"
+         ios = os_read_all(path, buffer)
+         if (ios /= 0) then
+            message = "cannot read '"//path//"': "//os_error_text(ios)
+            return
+         end if
+         ok = .true.
          return
       end if
       deallocate (buffer)

@@ -25,6 +25,7 @@ module fekap_effects_kinetostatic_stepper
    contains
       procedure :: start => kinetostatic_start
       procedure :: advance => kinetostatic_advance
+      procedure :: plan_text => kinetostatic_plan_text
    end type kinetostatic_stepper_type
 
 contains
@@ -38,6 +39,13 @@ contains
       allocate (self%f(self%fem%mesh%ndof), self%u(self%fem%mesh%ndof), source=0.0_dp)
       allocate (self%rhs(self%fem%mesh%nfree, 1), source=0.0_dp)
    end subroutine new_kinetostatic_stepper
+
+   !> The FEM's plan lines.
+   function kinetostatic_plan_text(self) result(text)
+      class(kinetostatic_stepper_type), intent(in) :: self
+      character(:), allocatable :: text
+      text = self%fem%plan_text()
+   end function kinetostatic_plan_text
 
    subroutine kinetostatic_start(self, result, error)
       class(kinetostatic_stepper_type), intent(inout) :: self
@@ -67,19 +75,19 @@ contains
       type(step_result_type), intent(inout) :: result
       integer :: k
       if (.not. allocated(result%reactions)) allocate (result%reactions(3, reaction_count(self%fem%model)))
-      result%has_reactions = self%fem%has_acceleration .and. self%fem%factor_current
+      result%has_reactions = self%fem%state%has_acceleration .and. self%fem%factor_current
       if (.not. result%has_reactions) return
       associate (mesh => self%fem%mesh)
-         call kinetostatic_loads(self%kinetostatics, mesh, self%fem%a, self%f)
+         call kinetostatic_loads(self%kinetostatics, mesh, self%fem%state%a, self%f)
          do k = 1, mesh%nfree
             self%rhs(k, 1) = self%f(mesh%eq_dof(k))
          end do
-         call self%fem%kff%solve(self%rhs)
+         call self%fem%system%kff%solve(self%rhs)
          self%u = 0
          do k = 1, mesh%nfree
             self%u(mesh%eq_dof(k)) = self%rhs(k, 1)
          end do
-         call kinetostatic_reactions(self%kinetostatics, mesh, self%fem%q, self%fem%a, self%f, self%u, &
+         call kinetostatic_reactions(self%kinetostatics, mesh, self%fem%state%q, self%fem%state%a, self%f, self%u, &
             & result%reactions)
       end associate
    end subroutine add_reactions

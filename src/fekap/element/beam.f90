@@ -25,22 +25,26 @@ module fekap_element_beam
       !> Reference length and initial angle (from +x, radians).
       real(dp) :: length = 1
       real(dp) :: angle = 0
-      !> EA, kGA, EI: the diagonal of C in (30).
-      real(dp) :: c(3) = 1
+      !> Axial, shear and bending stiffness of the section, EA, kGA, EI: the
+      !> diagonal of C in (30).
+      real(dp) :: ea = 1, kga = 1, ei = 1
       !> Gauss points: 1 (reduced, avoids shear locking) or 2 (full).
       integer :: ngauss = 1
    end type beam_type
 
 contains
 
-   !> Element from its initial end points, section stiffnesses and quadrature.
-   pure subroutine new_beam(self, x1, x2, c, ngauss)
+   !> Element from its initial end points, section stiffnesses (EA, kGA, EI)
+   !> and quadrature.
+   pure subroutine new_beam(self, x1, x2, stiffness, ngauss)
       type(beam_type), intent(out) :: self
-      real(dp), intent(in) :: x1(2), x2(2), c(3)
+      real(dp), intent(in) :: x1(2), x2(2), stiffness(3)
       integer, intent(in) :: ngauss
       self%length = norm2(x2 - x1)
       self%angle = atan2(x2(2) - x1(2), x2(1) - x1(1))
-      self%c = c
+      self%ea = stiffness(1)
+      self%kga = stiffness(2)
+      self%ei = stiffness(3)
       self%ngauss = ngauss
    end subroutine new_beam
 
@@ -120,8 +124,8 @@ contains
       if (present(geometric_above)) kg_strain = geometric_above
       rl = 1/self%length
       kap = (xe(6) - xe(3))*rl
-      ea = self%c(1)
-      ga = self%c(2)
+      ea = self%ea
+      ga = self%kga
       p = 0
       m11 = 0
       m12 = 0
@@ -141,7 +145,7 @@ contains
          if (present(section)) section(:, ig) = [c, s]
          sp = ea*g1                                                ! (30)
          sv = ga*g2
-         sm = self%c(3)*kap
+         sm = self%ei*kap
          ! (38): p = wl (P b1 + V b2 + M bk), by parts.
          fx = wl*rl*(sp*c - sv*s)
          fy = wl*rl*(sp*s + sv*c)
@@ -174,7 +178,7 @@ contains
          th(:, 2) = th(:, 2) + [hx, hy]*n2
          r = wl*(ea*g2*g2 + ga*(1 + g1)**2 + g33)
          rr = rr + r*[n1*n1, n1*n2, n2*n2]
-         ei = ei + wl*self%c(3)*rl*rl
+         ei = ei + wl*self%ei*rl*rl
       end do
       if (present(k)) call spread_tangent(m11, m12, m22, th, rr, ei, k)
    end subroutine beam_residual
@@ -242,8 +246,8 @@ contains
          else
             call point_strain(self, xe, n1, n2, rl, c, s, g1, g2)
          end if
-         sp = self%c(1)*g1
-         sv = self%c(2)*g2
+         sp = self%ea*g1
+         sv = self%kga*g2
          vp = n1*v(3) + n2*v(6)
          vp2 = vp*vp
          ! vw in the section's frame (e1, e2).
@@ -255,13 +259,13 @@ contains
          q1 = 2*vp*d2 - (1 + g1)*vp2
          q2 = -2*vp*d1 - g2*vp2
          ! Gamma1: T_1 = (-c vp^2, -s vp^2, -2 vp d1 - Gamma2 vp^2), H_1 vw = (-s vp, c vp, gv2).
-         y(1) = sp*(-c*vp2) + 2*self%c(1)*gv1*(-s*vp) + self%c(1)*q1*c
-         y(2) = sp*(-s*vp2) + 2*self%c(1)*gv1*(c*vp) + self%c(1)*q1*s
-         y(3) = sp*(-2*vp*d1 - g2*vp2) + 2*self%c(1)*gv1*gv2 + self%c(1)*q1*g2
+         y(1) = sp*(-c*vp2) + 2*self%ea*gv1*(-s*vp) + self%ea*q1*c
+         y(2) = sp*(-s*vp2) + 2*self%ea*gv1*(c*vp) + self%ea*q1*s
+         y(3) = sp*(-2*vp*d1 - g2*vp2) + 2*self%ea*gv1*gv2 + self%ea*q1*g2
          ! Gamma2: T_2 = (s vp^2, -c vp^2, -2 vp d2 + (1 + Gamma1) vp^2), H_2 vw = (-c vp, -s vp, -gv1).
-         y(1) = y(1) + sv*(s*vp2) + 2*self%c(2)*gv2*(-c*vp) - self%c(2)*q2*s
-         y(2) = y(2) + sv*(-c*vp2) + 2*self%c(2)*gv2*(-s*vp) + self%c(2)*q2*c
-         y(3) = y(3) + sv*(-2*vp*d2 + (1 + g1)*vp2) - 2*self%c(2)*gv2*gv1 - self%c(2)*q2*(1 + g1)
+         y(1) = y(1) + sv*(s*vp2) + 2*self%kga*gv2*(-c*vp) - self%kga*q2*s
+         y(2) = y(2) + sv*(-c*vp2) + 2*self%kga*gv2*(-s*vp) + self%kga*q2*c
+         y(3) = y(3) + sv*(-2*vp*d2 + (1 + g1)*vp2) - 2*self%kga*gv2*gv1 - self%kga*q2*(1 + g1)
          y = wl*y
          d2p(1) = d2p(1) - rl*y(1)
          d2p(2) = d2p(2) - rl*y(2)
@@ -300,7 +304,7 @@ contains
       do ig = 1, self%ngauss
          call gauss_point(self%ngauss, ig, xi, w)
          call point_strain(self, xe, (1 - xi)/2, (1 + xi)/2, rl, c, s, g1, g2)
-         sig = sig + self%c*[g1, g2, (xe(6) - xe(3))*rl]/self%ngauss
+         sig = sig + [self%ea*g1, self%kga*g2, self%ei*((xe(6) - xe(3))*rl)]/self%ngauss
       end do
    end function beam_resultants
 

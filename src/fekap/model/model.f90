@@ -19,10 +19,16 @@ module fekap_model
 
    !> Analysis methods.
    integer, parameter, public :: method_fem = 1, method_cartesian = 2, method_angles = 3
+   !> The methods' names, each at the position of its code: the deck and the
+   !> command line both take a name, or a prefix of at least 4 letters of it,
+   !> through word_index.
+   character(*), parameter, public :: method_names = 'fem cartesian angles'
    !> Predictors: last converged configuration (the paper's), polynomial
    !> extrapolation of the last converged configurations (default), Taylor
    !> series from the last velocities and accelerations.
    integer, parameter, public :: predictor_previous = 1, predictor_extrapolate = 2, predictor_taylor = 3
+   !> The predictors' names, each at the position of its code (as method_names).
+   character(*), parameter, public :: predictor_names = 'previous extrapolate taylor'
    !> Convergence tests: the paper's ||P(i)||/||P(0)|| < tol, or FEKAP's
    !> default (residual against the drive-increment scale and a correction length test).
    integer, parameter, public :: convergence_paper = 1, convergence_default = 2

@@ -2,12 +2,18 @@
 !> pieces. A Fortran write statement costs 0.2 to 0.5 us however short its
 !> text, as much as the text of several numbers, so the per-step rows are
 !> appended here (whole lines) and written when the buffer is full and when
-!> the run flushes its files.
+!> the run flushes its files. A flush checks that the file on disk holds all
+!> that was written (fekap_output_checked_file); after a failed write the
+!> file is cut back to its length at the last good flush, which ends with a
+!> whole line.
 module fekap_output_buffer
+   use, intrinsic :: iso_fortran_env, only: int64
+   use fekap_error, only: error_type
+   use fekap_output_checked_file, only: unit_path, verified_length, write_failure
    implicit none
    private
 
-   public :: text_buffer_type, new_text_buffer, reserve_text, write_buffered
+   public :: text_buffer_type, new_text_buffer, reserve_text, write_buffered, flush_text_buffer
 
    !> Starting capacity in characters: a write holds hundreds of rows, and
    !> pieces over 64 KiB skip gfortran's own unit buffer (128 KiB for
@@ -23,12 +29,21 @@ module fekap_output_buffer
       !> text(1:n) is held: whole lines, each ending in new_line('a').
       character(:), allocatable :: text
       integer :: n = 0
+      !> The file's name, for messages and to cut it back after a failed write.
+      character(:), allocatable :: path
+      !> Length of the file at the last flush that found all of it on disk.
+      integer(int64) :: verified = 0
+      !> A write statement failed: nothing more is written (the next flush
+      !> reports it).
+      logical :: failed = .false.
+      !> The failure was reported and the unit closed.
+      logical :: closed = .false.
    end type text_buffer_type
 
 contains
 
    !> An empty buffer for `unit`.
-   pure subroutine new_text_buffer(self, unit, formatted)
+   subroutine new_text_buffer(self, unit, formatted)
       type(text_buffer_type), intent(out) :: self
       !> A unit open for stream access.
       integer, intent(in) :: unit
@@ -38,6 +53,7 @@ contains
       self%formatted = formatted
       allocate (character(len=default_capacity) :: self%text)
       self%n = 0
+      self%path = unit_path(unit)
    end subroutine new_text_buffer
 
    !> Make room for `length` more characters after text(1:n): write what is
@@ -57,14 +73,42 @@ contains
    !> buffer is not flushed).
    subroutine write_buffered(self)
       type(text_buffer_type), intent(inout) :: self
+      integer :: ios
       if (self%n == 0) return
-      if (self%formatted) then
+      ios = 0
+      if (self%failed) then
+         continue
+      else if (self%formatted) then
          ! The record end of the write is the last newline.
-         write (self%unit, '(a)') self%text(1:self%n - 1)
+         write (self%unit, '(a)', iostat=ios) self%text(1:self%n - 1)
       else
-         write (self%unit) self%text(1:self%n)
+         write (self%unit, iostat=ios) self%text(1:self%n)
       end if
+      if (ios /= 0) self%failed = .true.
       self%n = 0
    end subroutine write_buffered
+
+   !> Write the held text, flush the unit and check that the file on disk
+   !> holds everything written to it. If not, the unit is closed, the file
+   !> cut back to its length at the last good flush, and the error names the
+   !> file and the reason.
+   subroutine flush_text_buffer(self, error)
+      type(text_buffer_type), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      integer(int64) :: length
+      integer :: ios
+      if (self%closed) return
+      call write_buffered(self)
+      length = -1
+      if (.not. self%failed) length = verified_length(self%unit, self%path)
+      if (length >= 0) then
+         self%verified = length
+         return
+      end if
+      self%failed = .true.
+      self%closed = .true.
+      close (self%unit, iostat=ios)
+      call write_failure(self%path, self%verified, error)
+   end subroutine flush_text_buffer
 
 end module fekap_output_buffer

@@ -19,12 +19,17 @@
 !> k = 54 (|x| down to about 1e-38), a 128-bit division for k < 0 (down to
 !> -21, |x| < 1e38). Other values (subnormals, NaN, infinities, magnitudes
 !> beyond these) go through the formatted write.
+!>
+!> Why one module of over 600 lines (just over): the exact digit paths, their
+!> tables of powers and the writers that call them share private constants
+!> and are tested together against the formatted write; split, the tables
+!> would have to be public.
 module fekap_output_format
    use fekap_kinds, only: dp
    implicit none
    private
 
-   public :: real_text, integer_text, append_real, append_integer, append_es, append_i, append_text
+   public :: real_text, integer_text, append_real, append_integer, append_es, append_i, append_text, es_text
 
    integer, parameter :: i8 = selected_int_kind(18), i16 = selected_int_kind(38)
    !> The exact path reads the significand and exponent from the bits of an
@@ -187,12 +192,33 @@ contains
       if (done) return
       if (exponent_digits > 0) then
          write (form, '(a,i0,a,i0,a,i0,a)') '(es', width, '.', decimals, 'e', exponent_digits, ')'
+         write (buffer(1:width), form) x
+         call append_text(line, n, buffer(1:width))
       else
-         write (form, '(a,i0,a,i0,a)') '(es', width, '.', decimals, ')'
+         call append_text(line, n, es_text(x, width, decimals))
       end if
-      write (buffer(1:width), form) x
-      call append_text(line, n, buffer(1:width))
    end subroutine append_es
+
+   !> x as esW.D writes it, except that an exponent of three digits keeps its
+   !> E (esW.D writes 1e300 as 1.00000+300): then the text is esW.De3's,
+   !> without its leading blank, and one character wider than W when it needs
+   !> to be, rather than asterisks.
+   pure function es_text(x, width, decimals) result(text)
+      real(dp), intent(in) :: x
+      integer, intent(in) :: width, decimals
+      character(:), allocatable :: text
+      character(len=80) :: buffer
+      character(len=24) :: form
+      write (form, '(a,i0,a,i0,a)') '(es', width, '.', decimals, ')'
+      write (buffer(1:width), form) x
+      text = buffer(1:width)
+      ! Not a finite number, or an exponent of two digits: the E is there.
+      if (.not. (x == x .and. abs(x) <= huge(x)) .or. index(text, 'E') > 0) return
+      write (form, '(a,i0,a,i0,a)') '(es', width + 1, '.', decimals, 'e3)'
+      write (buffer(1:width + 1), form) x
+      text = buffer(1:width + 1)
+      if (text(1:1) == ' ') text = text(2:)
+   end function es_text
 
    !> Write i as the edit descriptor iW writes it after position n; advance n.
    pure subroutine append_i(line, n, i, width)
@@ -333,7 +359,7 @@ contains
       integer(i8), intent(out) :: significand
       integer, intent(out) :: e10
       logical, intent(out) :: done
-      integer(i16) :: product
+      integer(i16) :: wide_product
       integer(i8) :: bits, q2, sticky
       integer :: biased, e, k, s
       bits = transfer(x, 0_i8)
@@ -355,18 +381,18 @@ contains
       if (.not. done) return
       ! m 5**k < 2**125, in one 64-by-64-bit multiplication where 5**k fits.
       if (k <= max_k_64) then
-         product = int(ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52)), i16)*int(power5_64(k), i16)
+         wide_product = int(ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52)), i16)*int(power5_64(k), i16)
       else
-         product = ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52))*power5(k)
+         wide_product = ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52))*power5(k)
       end if
       ! x 10**k times two, floored (< 2 10**ndigits): its last bit is the
       ! rounding bit; sticky (0 or 1) tells whether anything lies below.
-      q2 = int(shiftr(product, s - 1), i8)
+      q2 = int(shiftr(wide_product, s - 1), i8)
       if (s <= 63) then
          ! The bits below the rounding bit are in the low 62 (64-bit work).
-         sticky = merge(1_i8, 0_i8, iand(int(iand(product, low62_mask), i8), shiftl(1_i8, s - 1) - 1) /= 0)
+         sticky = merge(1_i8, 0_i8, iand(int(iand(wide_product, low62_mask), i8), shiftl(1_i8, s - 1) - 1) /= 0)
       else
-         sticky = merge(1_i8, 0_i8, iand(product, shiftl(1_i16, s - 1) - 1) /= 0)
+         sticky = merge(1_i8, 0_i8, iand(wide_product, shiftl(1_i16, s - 1) - 1) /= 0)
       end if
       ! Up on more than half, or on half with an odd last digit (computed,
       ! not branched on: the outcome is as random as the digits).
@@ -446,7 +472,7 @@ contains
       integer(i8), intent(out) :: q
       integer, intent(out) :: tail
       logical, intent(out) :: ok
-      integer(i16) :: product, upper, lower, quotient, remainder, half, num, den
+      integer(i16) :: wide_product, upper, lower, quotient, remainder, half, num, den
       integer :: s
       ok = .false.
       q = 0
@@ -473,16 +499,16 @@ contains
          end if
       else if (k >= 0) then
          ! A power of two divides: a shift.
-         product = m*power5(k)
+         wide_product = m*power5(k)
          if (s <= 0) then
             ! An exact integer; it must stay below 2**126.
             if (-s >= 64) return
-            if (shiftr(product, 126 + s) /= 0) return
-            quotient = shiftl(product, -s)
+            if (shiftr(wide_product, 126 + s) /= 0) return
+            quotient = shiftl(wide_product, -s)
          else
             if (s > 126) return
-            quotient = shiftr(product, s)
-            remainder = product - shiftl(quotient, s)
+            quotient = shiftr(wide_product, s)
+            remainder = wide_product - shiftl(quotient, s)
             half = shiftl(1_i16, s - 1)
             if (remainder > half) then
                tail = tail_above_half
@@ -560,10 +586,10 @@ contains
    pure subroutine put_8_digits(text, v)
       character(len=8), intent(inout) :: text
       integer, intent(in) :: v
-      integer(i8), parameter :: fraction_mask = shiftl(1_i8, 52) - 1, scale = 4503599628_i8
+      integer(i8), parameter :: fraction_mask = shiftl(1_i8, 52) - 1, multiplier = 4503599628_i8
       integer(i8) :: y
       integer :: pair
-      y = int(v, i8)*scale
+      y = int(v, i8)*multiplier
       pair = int(shiftr(y, 52))
       text(1:2) = digit_pairs(2*pair + 1:2*pair + 2)
       y = iand(y, fraction_mask)*100
@@ -577,28 +603,28 @@ contains
       text(7:8) = digit_pairs(2*pair + 1:2*pair + 2)
    end subroutine put_8_digits
 
-   !> Write the last `count` decimal digits of v >= 0 after position n; advance n.
-   pure subroutine put_decimal(line, n, v, count)
+   !> Write the last `width` decimal digits of v >= 0 after position n; advance n.
+   pure subroutine put_decimal(line, n, v, width)
       character(*), intent(inout) :: line
       integer, intent(inout) :: n
-      integer, intent(in) :: v, count
+      integer, intent(in) :: v, width
       integer :: k, rest
-      if (count == 2 .and. v < 100) then
+      if (width == 2 .and. v < 100) then
          line(n + 1:n + 2) = digit_pairs(2*v + 1:2*v + 2)
          n = n + 2
          return
-      else if (count == 3 .and. v < 1000) then
+      else if (width == 3 .and. v < 1000) then
          line(n + 1:n + 1) = achar(iachar('0') + v/100)
          line(n + 2:n + 3) = digit_pairs(2*mod(v, 100) + 1:2*mod(v, 100) + 2)
          n = n + 3
          return
       end if
       rest = v
-      do k = n + count, n + 1, -1
+      do k = n + width, n + 1, -1
          line(k:k) = achar(iachar('0') + mod(rest, 10))
          rest = rest/10
       end do
-      n = n + count
+      n = n + width
    end subroutine put_decimal
 
 end module fekap_output_format

@@ -6,8 +6,8 @@ module fekap_output_listing
       & predictor_previous, predictor_extrapolate, convergence_paper, joint_prismatic
    use fekap_model_results, only: step_result_type
    use fekap_model_effects, only: effects_plan_type, plan_effects, effects_name
-   use fekap_solver_stepper, only: work_counts_type, phase_seconds
-   use fekap_output_format, only: append_es, append_i, append_integer, append_text
+   use fekap_model_work, only: work_counts_type, phase_seconds
+   use fekap_output_format, only: append_es, append_i, append_integer, append_text, es_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
    implicit none
    private
@@ -33,13 +33,14 @@ contains
       write (unit, '(/,a)') 'NODES'
       write (unit, '(2x,a12,2a24)') 'name', 'x', 'y'
       do i = 1, size(model%nodes)
-         write (unit, '(2x,a12,2es24.15)') model%nodes(i)%name, model%nodes(i)%x
+         write (unit, '(2x,a12,2a)') model%nodes(i)%name, es_text(model%nodes(i)%x(1), 24, 15), &
+            & es_text(model%nodes(i)%x(2), 24, 15)
       end do
       write (unit, '(/,a)') 'SECTIONS'
       write (unit, '(2x,a12,3a16)') 'name', 'EA', 'kGA', 'EI'
       do i = 1, size(model%sections)
-         write (unit, '(2x,a12,3es16.7)') model%sections(i)%name, model%sections(i)%ea, model%sections(i)%kga, &
-            & model%sections(i)%ei
+         write (unit, '(2x,a12,3a)') model%sections(i)%name, es_text(model%sections(i)%ea, 16, 7), &
+            & es_text(model%sections(i)%kga, 16, 7), es_text(model%sections(i)%ei, 16, 7)
       end do
       write (unit, '(/,a)') 'LINKS'
       write (unit, '(2x,a12,2a8,a12,a9,2a20)') 'name', 'first', 'second', 'section', 'elements', 'length', &
@@ -47,9 +48,9 @@ contains
       do i = 1, size(model%links)
          associate (l => model%links(i))
             d = model%nodes(l%node(2))%x - model%nodes(l%node(1))%x
-            write (unit, '(2x,a12,2a8,a12,i9,2es20.11)') l%name, model%nodes(l%node(1))%name, &
-               & model%nodes(l%node(2))%name, model%sections(l%section)%name, l%nelem, norm2(d), &
-               & atan2(d(2), d(1))*rad2deg
+            write (unit, '(2x,a12,2a8,a12,i9,2a)') l%name, model%nodes(l%node(1))%name, &
+               & model%nodes(l%node(2))%name, model%sections(l%section)%name, l%nelem, es_text(norm2(d), 20, 11), &
+               & es_text(atan2(d(2), d(1))*rad2deg, 20, 11)
          end associate
       end do
       if (allocated(model%welds)) then
@@ -90,8 +91,8 @@ contains
       if (allocated(model%loads)) then
          if (size(model%loads) > 0) write (unit, '(/,a)') 'LOADS (times the load factor t)'
          do i = 1, size(model%loads)
-            write (unit, '(2x,a12,3es16.7)') model%nodes(model%loads(i)%node)%name, model%loads(i)%force, &
-               & model%loads(i)%moment
+            write (unit, '(2x,a12,3a)') model%nodes(model%loads(i)%node)%name, es_text(model%loads(i)%force(1), 16, 7), &
+               & es_text(model%loads(i)%force(2), 16, 7), es_text(model%loads(i)%moment, 16, 7)
          end do
       end if
       if (allocated(model%slidelines)) then
@@ -204,10 +205,11 @@ contains
       case default
          pred = 'taylor'
       end select
-      write (unit, '(2x,a,es12.5,a,es12.5,a,es12.5)') 'time from ', model%analysis%t_start, ' to ', &
-         & model%analysis%t_end, ' step ', model%analysis%dt
-      write (unit, '(2x,a,es9.2,a,es9.2,a,i0,a)') 'Newton: tolerance ', model%analysis%tol, ', length ', &
-         & model%analysis%length_tol, ' x model size, at most ', model%analysis%max_iter, ' iterations'
+      ! es_text: 1e300 keeps its E (es12.5 writes 1.00000+300).
+      write (unit, '(2x,a)') 'time from '//es_text(model%analysis%t_start, 12, 5)//' to '// &
+         & es_text(model%analysis%t_end, 12, 5)//' step '//es_text(model%analysis%dt, 12, 5)
+      write (unit, '(2x,a,a,a,i0,a)') 'Newton: tolerance '//es_text(model%analysis%tol, 9, 2)//', length ', &
+         & es_text(model%analysis%length_tol, 9, 2), ' x model size, at most ', model%analysis%max_iter, ' iterations'
       write (unit, '(2x,a)') 'predictor '//trim(pred)//', convergence test '// &
          & trim(merge('paper  ', 'default', model%analysis%convergence == convergence_paper))
    end subroutine write_listing_plan
@@ -269,7 +271,7 @@ contains
       write (unit, '(2x,a30,i12)') 'velocity solves', counts%velocity_solves
       write (unit, '(2x,a30,i12)') 'acceleration solves', counts%acceleration_solves
       write (unit, '(2x,a30,i12)') 'slideline evaluations', counts%slideline_evaluations
-      write (unit, '(2x,a30,es12.3)') 'smallest pivot ratio', counts%min_pivot_ratio
+      write (unit, '(2x,a30,a)') 'smallest pivot ratio', es_text(counts%min_pivot_ratio, 12, 3)
       write (unit, '(2x,a30,i12)') 'rows written', rows
       if (present(vtk_files)) write (unit, '(2x,a30,i12)') 'VTK files written', vtk_files
       phases = phase_seconds(counts, seconds(1))

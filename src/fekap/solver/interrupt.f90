@@ -1,4 +1,4 @@
-!> A stop requested by a signal (SIGINT, SIGTERM): the handler only records
+!> A stop requested by a signal (SIGINT, SIGTERM, SIGHUP): the handler only records
 !> it, which is all a signal handler may safely do; the time loop looks at the
 !> record after every step and stops there, so the listing and stderr can say
 !> where and why, and every completed step's rows stay.
@@ -12,14 +12,15 @@ module fekap_solver_interrupt
 
    public :: catch_interrupts, interrupt_signal
 
-   integer(c_int), parameter :: sigint = 2, sigterm = 15
+   integer(c_int), parameter :: sighup = 1, sigint = 2, sigterm = 15
 
    !> The signal received, 0 if none.
-   integer(c_int), volatile, save :: received = 0
+   integer(c_int), volatile :: received = 0
 
    interface
       function c_signal(signum, handler) bind(C, name='signal') result(previous)
          import :: c_int, c_funptr
+         implicit none
          integer(c_int), value :: signum
          type(c_funptr), value :: handler
          type(c_funptr) :: previous
@@ -28,9 +29,10 @@ module fekap_solver_interrupt
 
 contains
 
-   !> Route SIGINT and SIGTERM to the recorder.
+   !> Route SIGINT, SIGTERM and SIGHUP (the terminal closed) to the recorder.
    subroutine catch_interrupts()
       type(c_funptr) :: previous
+      previous = c_signal(sighup, c_funloc(record_signal))
       previous = c_signal(sigint, c_funloc(record_signal))
       previous = c_signal(sigterm, c_funloc(record_signal))
    end subroutine catch_interrupts
@@ -40,7 +42,7 @@ contains
       received = signum
    end subroutine record_signal
 
-   !> The signal that asked the run to stop (2 SIGINT, 15 SIGTERM), or 0.
+   !> The signal that asked the run to stop (1 SIGHUP, 2 SIGINT, 15 SIGTERM), or 0.
    integer function interrupt_signal()
       interrupt_signal = received
    end function interrupt_signal

@@ -3,13 +3,17 @@
 !> method and both constraint-equation methods extend `stepper_type`.
 module fekap_solver_stepper
    use, intrinsic :: iso_c_binding, only: c_int, c_long
+   use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
    use fekap_error, only: error_type
    use fekap_model_results, only: step_result_type
+   use fekap_model_work, only: work_counts_type
    implicit none
    private
 
-   public :: stepper_type, work_counts_type, clock_seconds, coarse_clock_seconds, phase_seconds, split_seconds
+   public :: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds
+   ! The type of stepper_type's counts, for its users.
+   public :: work_counts_type
    public :: phase_timed, split_timed
 
    !> The two samples of steps that the timers read the precise clock on (a
@@ -36,35 +40,11 @@ module fekap_solver_stepper
       !> clock_gettime(2) of the C library.
       integer(c_int) function clock_gettime(clock, time) bind(C, name='clock_gettime')
          import :: c_int, timespec_type
+         implicit none
          integer(c_int), value :: clock
          type(timespec_type), intent(out) :: time
       end function clock_gettime
    end interface
-
-   !> Counts of the work done, for the listing's closing summary.
-   type :: work_counts_type
-      integer :: steps = 0
-      integer :: iterations = 0
-      integer :: residual_assemblies = 0
-      integer :: tangent_assemblies = 0
-      integer :: cholesky_factorisations = 0
-      integer :: lu_factorisations = 0
-      integer :: velocity_solves = 0
-      integer :: acceleration_solves = 0
-      integer :: slideline_evaluations = 0
-      !> Smallest pivot ratio of the tangents used for velocities (1: none computed),
-      !> a measure of how close the run came to a singular configuration.
-      real(dp) :: min_pivot_ratio = 1
-      !> Wall-clock seconds in residual/tangent assembly, factorisations and
-      !> solves, measured on a sample of the steps (a clock read costs about
-      !> 40 ns, a step of a small mechanism about 2 us), and the analysis
-      !> seconds of those steps (0: no sample, the phases were not timed).
-      !> phase_seconds scales them to the whole run.
-      real(dp) :: seconds_assembly = 0
-      real(dp) :: seconds_factorisation = 0
-      real(dp) :: seconds_solves = 0
-      real(dp) :: seconds_sampled = 0
-   end type work_counts_type
 
    type, abstract :: stepper_type
       type(work_counts_type) :: counts
@@ -74,11 +54,14 @@ module fekap_solver_stepper
       procedure(start_interface), deferred :: start
       !> Solve for the configuration at time t from the last accepted one.
       procedure(advance_interface), deferred :: advance
+      !> Lines on the method's discretisation for the listing's plan ('' if none).
+      procedure :: plan_text => stepper_plan_text
    end type stepper_type
 
    abstract interface
       subroutine start_interface(self, result, error)
          import :: stepper_type, step_result_type, error_type
+         implicit none
          class(stepper_type), intent(inout) :: self
          type(step_result_type), intent(inout) :: result
          type(error_type), allocatable, intent(out) :: error
@@ -86,6 +69,7 @@ module fekap_solver_stepper
 
       subroutine advance_interface(self, t, result, error)
          import :: stepper_type, step_result_type, error_type, dp
+         implicit none
          class(stepper_type), intent(inout) :: self
          real(dp), intent(in) :: t
          type(step_result_type), intent(inout) :: result
@@ -95,17 +79,12 @@ module fekap_solver_stepper
 
 contains
 
-   !> Seconds in assembly, factorisation and solves over a run whose analysis
-   !> took `analysis` seconds: the sampled steps' phase times times the ratio
-   !> of the whole analysis time to theirs (zeros without a sample).
-   pure function phase_seconds(counts, analysis) result(seconds)
-      type(work_counts_type), intent(in) :: counts
-      real(dp), intent(in) :: analysis
-      real(dp) :: seconds(3)
-      seconds = 0
-      if (counts%seconds_sampled > 0) seconds = [counts%seconds_assembly, counts%seconds_factorisation, &
-         & counts%seconds_solves]*(analysis/counts%seconds_sampled)
-   end function phase_seconds
+   !> No discretisation to describe: the default of plan_text.
+   function stepper_plan_text(self) result(text)
+      class(stepper_type), intent(in) :: self
+      character(:), allocatable :: text
+      text = ''
+   end function stepper_plan_text
 
    !> Whether the phases of a method's n-th step (n >= 1) are timed.
    pure logical function phase_timed(n)
@@ -133,9 +112,9 @@ contains
 
    !> Wall-clock time in seconds, for the phase timers (30-60 ns a read here).
    real(dp) function clock_seconds() result(seconds)
-      integer(8) :: count, rate
-      call system_clock(count, rate)
-      seconds = real(count, dp)/real(rate, dp)
+      integer(int64) :: ticks, rate
+      call system_clock(ticks, rate)
+      seconds = real(ticks, dp)/real(rate, dp)
    end function clock_seconds
 
    !> Wall-clock time in seconds to a few milliseconds (the kernel's tick),

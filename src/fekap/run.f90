@@ -6,9 +6,10 @@
 !> cost about 2.3 us a step (docs/performance.md), more than the 2 us the
 !> analysis of a step aims at. The loop's time is measured whole and split
 !> into analysis and output as in a sample of its steps.
-module fekap_solver_run
+module fekap_run
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, analysis_error, fatal_error
+   use, intrinsic :: iso_fortran_env, only: int64
+   use fekap_error, only: error_type, analysis_error, fatal_error, output_error
    use fekap_solver_interrupt, only: interrupt_signal
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes, has_note
@@ -19,7 +20,9 @@ module fekap_solver_run
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop, write_listing_note
    use fekap_output_vtk, only: write_vtu, write_pvd
-   use fekap_output_buffer, only: text_buffer_type, new_text_buffer, write_buffered
+   use fekap_output_buffer, only: text_buffer_type, new_text_buffer, flush_text_buffer
+   use fekap_output_format, only: es_text
+   use fekap_output_checked_file, only: close_checked, replace_checked
    implicit none
    private
 
@@ -33,6 +36,10 @@ module fekap_solver_run
    !> stretch (those not yet handed to the system); every other stop
    !> flushes all rows.
    real(dp), parameter, public :: flush_interval = 0.1_dp
+
+   !> Added to a file's name while it is written whole before replacing the
+   !> file (removed at the start of a run with the other files of FEKAP).
+   character(*), parameter, public :: temporary_suffix = '.fekap-tmp'
 
    !> Open units of the output files; no_unit for a file that is not written.
    !> The CSV files are open for unformatted stream access, the listing for
@@ -102,7 +109,7 @@ contains
       type(run_units_type), intent(in) :: units
       type(error_type), allocatable, intent(out) :: error
       type(step_result_type) :: result
-      type(error_type), allocatable :: step_error
+      type(error_type), allocatable :: step_error, write_error
       type(vtk_state_type) :: vtk
       type(run_buffers_type) :: out
       type(row_prefix_type) :: prefix
@@ -153,7 +160,7 @@ contains
          end if
          if (timed) c1 = clock_seconds()
          if (allocated(step_error)) then
-            write (where_, '(a,i0,a,es12.5,a)') 'step ', n, ' (t = ', step_time(model, n, nsteps), '): '
+            write (where_, '(a,i0,a,a,a)') 'step ', n, ' (t = ', es_text(step_time(model, n, nsteps), 12, 5), '): '
             call analysis_error(error, trim(where_)//' '//step_error%message)
             exit
          end if
@@ -195,7 +202,11 @@ contains
          end if
          now = coarse_clock_seconds()
          if (now - last_flush >= flush_interval) then
-            call flush_all(units, out)
+            call flush_all(units, out, error)
+            if (allocated(error)) then
+               call tell_step(error, n, result%t)
+               exit
+            end if
             last_flush = now
          end if
          if (timed) then
@@ -208,8 +219,8 @@ contains
             end if
          end if
          if (interrupt_signal() /= 0 .and. n < nsteps) then
-            write (where_, '(a,i0,a,i0,a,es12.5,a)') 'interrupted by signal ', interrupt_signal(), ' after step ', n, &
-               & ' (t = ', result%t, ')'
+            write (where_, '(a,i0,a,i0,a,a,a)') 'interrupted by signal ', interrupt_signal(), ' after step ', n, &
+               & ' (t = ', es_text(result%t, 12, 5), ')'
             call fatal_error(error, trim(where_)//'; the rows of the completed steps are kept')
             exit
          end if
@@ -219,22 +230,48 @@ contains
       ! every completed step reach the files, before the listing's summary.
       c0 = clock_seconds()
       seconds(1:2) = start + split_seconds(sampled, c0 - c_loop)
-      call flush_all(units, out)
+      call flush_all(units, out, write_error)
+      if (allocated(write_error)) call add_error(error, write_error)
       c1 = clock_seconds()
       seconds(2) = seconds(2) + (c1 - c0)
       seconds(3) = c1 - c_start
-      if (units%listing /= no_unit) then
-         ! Whatever stopped the run (analysis failure, VTK file, signal) is
-         ! told before the summary.
+      ! A listing that could not be written is left as cut back by its flush.
+      if (units%listing /= no_unit .and. .not. out%listing%failed) then
+         ! Whatever stopped the run (analysis failure, VTK file, signal, an
+         ! output file that cannot be written) is told before the summary.
          if (allocated(error)) call write_listing_stop(units%listing, error%message)
          if (units%vtk) then
             call write_listing_summary(units%listing, stepper%counts, rows, seconds, vtk_files=size(vtk%steps))
          else
             call write_listing_summary(units%listing, stepper%counts, rows, seconds)
          end if
-         flush (units%listing)
+         call close_checked(units%listing, out%listing%verified, write_error)
+         if (allocated(write_error)) call add_error(error, write_error)
       end if
    end subroutine run_analysis
+
+   !> Say after which step an output file failed.
+   subroutine tell_step(error, n, t)
+      type(error_type), intent(inout) :: error
+      integer, intent(in) :: n
+      real(dp), intent(in) :: t
+      character(len=100) :: where_
+      write (where_, '(a,i0,a,a,a)') ' (after step ', n, ', t = ', es_text(t, 12, 5), &
+         & '); the files hold whole rows of the steps written before'
+      error%message = error%message//trim(where_)
+   end subroutine tell_step
+
+   !> Keep the first error of a run and add a later one's message to it; an
+   !> output error after a completed run is the run's error.
+   subroutine add_error(error, later)
+      type(error_type), allocatable, intent(inout) :: error
+      type(error_type), allocatable, intent(inout) :: later
+      if (allocated(error)) then
+         error%message = error%message//new_line('a')//later%message
+      else
+         call move_alloc(later, error)
+      end if
+   end subroutine add_error
 
    !> Write the step's .vtu file and rewrite the .pvd collection with it added.
    subroutine write_vtk_step(units, model, result, vtk, error)
@@ -251,14 +288,19 @@ contains
       do i = 1, size(vtk%steps)
          files(i) = vtu_name(units%stem, vtk%steps(i))
       end do
-      call open_replace(units%outdir//'/'//trim(files(size(files))), unit, error)
+      call open_replace(units%outdir//'/'//trim(files(size(files))), unit, error, stream=.true., formatted=.true.)
       if (allocated(error)) return
       call write_vtu(unit, model, result, vtk%initial_pos)
-      close (unit)
-      call open_replace(units%outdir//'/'//units%stem//'.pvd', unit, error)
+      ! A .vtu that did not fit is removed, not left cut.
+      call close_checked(unit, -1_int64, error)
+      if (allocated(error)) return
+      ! The collection is replaced whole: a reader never sees part of it.
+      call open_replace(units%outdir//'/'//units%stem//'.pvd'//temporary_suffix, unit, error, stream=.true., &
+         & formatted=.true.)
       if (allocated(error)) return
       call write_pvd(unit, vtk%times, files)
-      close (unit)
+      call replace_checked(unit, units%outdir//'/'//units%stem//'.pvd'//temporary_suffix, &
+         & units%outdir//'/'//units%stem//'.pvd', error)
    end subroutine write_vtk_step
 
    !> `vtk/<stem>_<step, at least 6 digits>.vtu`, relative to the output directory.
@@ -266,9 +308,9 @@ contains
       character(*), intent(in) :: stem
       integer, intent(in) :: step
       character(:), allocatable :: name
-      character(len=12) :: digits
-      write (digits, '(i0.6)') step
-      name = 'vtk/'//stem//'_'//trim(digits)//'.vtu'
+      character(len=12) :: number
+      write (number, '(i0.6)') step
+      name = 'vtk/'//stem//'_'//trim(number)//'.vtu'
    end function vtu_name
 
    !> Open a file for writing, replacing it (no_unit and an error if it cannot
@@ -282,6 +324,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       logical, intent(in), optional :: stream, formatted
       integer :: ios
+      character(len=512) :: message
       logical :: as_stream, as_formatted
       as_stream = .false.
       if (present(stream)) as_stream = stream
@@ -289,16 +332,16 @@ contains
       if (present(formatted)) as_formatted = formatted
       if (as_stream .and. as_formatted) then
          open (newunit=unit, file=path, status='replace', action='write', access='stream', &
-            & form='formatted', iostat=ios)
+            & form='formatted', iostat=ios, iomsg=message)
       else if (as_stream) then
          open (newunit=unit, file=path, status='replace', action='write', access='stream', &
-            & form='unformatted', iostat=ios)
+            & form='unformatted', iostat=ios, iomsg=message)
       else
-         open (newunit=unit, file=path, status='replace', action='write', iostat=ios)
+         open (newunit=unit, file=path, status='replace', action='write', iostat=ios, iomsg=message)
       end if
       if (ios /= 0) then
          unit = no_unit
-         call fatal_error(error, path//': cannot write this file')
+         call output_error(error, path//': cannot write this file: '//trim(message))
       end if
    end subroutine open_replace
 
@@ -313,21 +356,27 @@ contains
       if (units%listing /= no_unit) call new_text_buffer(out%listing, units%listing, formatted=.true.)
    end subroutine new_run_buffers
 
-   !> Write the held rows and flush every file: what is written so far is on disk.
-   subroutine flush_all(units, out)
+   !> Write the held rows and flush every file: what is written so far is on
+   !> disk, checked. A file that cannot be written is cut back to whole rows
+   !> and not written again; the others are still flushed (nothing is left in
+   !> a unit's buffer for the exit to write unchecked). The error is the
+   !> first file's.
+   subroutine flush_all(units, out, error)
       type(run_units_type), intent(in) :: units
       type(run_buffers_type), intent(inout) :: out
-      if (units%points /= no_unit) call flush_buffer(out%points)
-      if (units%links /= no_unit) call flush_buffer(out%links)
-      if (units%steps /= no_unit) call flush_buffer(out%steps)
-      if (units%reactions /= no_unit) call flush_buffer(out%reactions)
-      if (units%listing /= no_unit) call flush_buffer(out%listing)
+      type(error_type), allocatable, intent(out) :: error
+      if (units%points /= no_unit) call flush_one(out%points)
+      if (units%links /= no_unit) call flush_one(out%links)
+      if (units%steps /= no_unit) call flush_one(out%steps)
+      if (units%reactions /= no_unit) call flush_one(out%reactions)
+      if (units%listing /= no_unit) call flush_one(out%listing)
+   contains
+      subroutine flush_one(buffer)
+         type(text_buffer_type), intent(inout) :: buffer
+         type(error_type), allocatable :: failure
+         call flush_text_buffer(buffer, failure)
+         if (allocated(failure) .and. .not. allocated(error)) call move_alloc(failure, error)
+      end subroutine flush_one
    end subroutine flush_all
 
-   subroutine flush_buffer(buffer)
-      type(text_buffer_type), intent(inout) :: buffer
-      call write_buffered(buffer)
-      flush (buffer%unit)
-   end subroutine flush_buffer
-
-end module fekap_solver_run
+end module fekap_run

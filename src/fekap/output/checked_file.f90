@@ -1,0 +1,100 @@
+!> Writes that are checked. gfortran's I/O library loses a failed write(2)
+!> without a word (on a full file system a write statement, a flush and a
+!> close all report success, and the file simply ends short: measured with
+!> gfortran 12 on a full tmpfs), so a file is taken as written only when its
+!> size on disk equals the position its unit has reached. A file that came
+!> out short is cut back to the length last verified (whole lines: the
+!> writers hand over whole lines only), and the error names the file and
+!> the operating system's reason, found by appending one byte with write(2).
+module fekap_output_checked_file
+   use, intrinsic :: iso_fortran_env, only: int64
+   use fekap_error, only: error_type, output_error
+   use fekap_posix, only: os_append_probe, os_truncate, os_unlink, os_error_text, os_rename, os_file_size
+   implicit none
+   private
+
+   public :: unit_path, verified_length, write_failure, close_checked, replace_checked
+
+contains
+
+   !> The file name a unit was opened with.
+   function unit_path(unit) result(path)
+      integer, intent(in) :: unit
+      character(:), allocatable :: path
+      character(len=4096) :: name
+      inquire (unit=unit, name=name)
+      path = trim(name)
+   end function unit_path
+
+   !> Flush `unit` and return the length of its file if every byte written to
+   !> it is on disk, else -1.
+   integer(int64) function verified_length(unit, path) result(length)
+      integer, intent(in) :: unit
+      character(*), intent(in) :: path
+      integer :: ios
+      integer(int64) :: pos, size_
+      length = -1
+      flush (unit, iostat=ios)
+      if (ios /= 0) return
+      inquire (unit=unit, pos=pos, iostat=ios)
+      if (ios /= 0) return
+      ! From the file itself: INQUIRE (file=..., size=) answers from the unit.
+      size_ = os_file_size(path)
+      if (size_ == pos - 1) length = size_
+   end function verified_length
+
+   !> After a failed write to `path`: why it failed (the OS error), with the
+   !> file cut back to `keep` bytes, or removed when keep < 0. The file's unit
+   !> must be closed first (its library buffer would land after the cut).
+   subroutine write_failure(path, keep, error)
+      character(*), intent(in) :: path
+      integer(int64), intent(in) :: keep
+      type(error_type), allocatable, intent(out) :: error
+      integer :: code, status
+      code = os_append_probe(path)
+      if (keep >= 0) then
+         status = os_truncate(path, keep)
+      else
+         status = os_unlink(path)
+      end if
+      if (code /= 0) then
+         call output_error(error, path//': cannot write: '//os_error_text(code))
+      else
+         call output_error(error, path//': cannot write: the file system took fewer bytes than were written')
+      end if
+   end subroutine write_failure
+
+   !> Close a unit whose whole file has just been written and check that all
+   !> of it is on disk. On failure the file is cut back to `keep` bytes
+   !> (removed when keep < 0) and the error says why.
+   subroutine close_checked(unit, keep, error)
+      integer, intent(in) :: unit
+      integer(int64), intent(in) :: keep
+      type(error_type), allocatable, intent(out) :: error
+      character(:), allocatable :: path
+      integer(int64) :: length
+      integer :: ios
+      path = unit_path(unit)
+      length = verified_length(unit, path)
+      close (unit, iostat=ios)
+      if (length < 0 .or. ios /= 0) call write_failure(path, keep, error)
+   end subroutine close_checked
+
+   !> Close a unit open on `temporary`, check it, and rename it to `path`
+   !> (replacing an earlier `path` in one step, so a reader sees the old file
+   !> or the new one, never a part). On failure the temporary is removed.
+   subroutine replace_checked(unit, temporary, path, error)
+      integer, intent(in) :: unit
+      character(*), intent(in) :: temporary, path
+      type(error_type), allocatable, intent(out) :: error
+      integer :: code
+      call close_checked(unit, -1_int64, error)
+      if (allocated(error)) return
+      code = os_rename(temporary, path)
+      if (code /= 0) then
+         call output_error(error, path//': cannot write: '//os_error_text(code))
+         code = os_unlink(temporary)
+      end if
+   end subroutine replace_checked
+
+end module fekap_output_checked_file
