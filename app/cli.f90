@@ -5,6 +5,7 @@ module fekap_app_cli
    use fekap_model, only: model_type, method_names, predictor_names
    use fekap_strings, only: lower, word_index
    use fekap_deck_expression, only: evaluate_expression
+   use fekap_deck, only: override_type
    implicit none
    private
 
@@ -21,6 +22,8 @@ module fekap_app_cli
       !> Print the output directory and exit (used by scripts/fekap).
       logical :: print_outdir = .false.
       character(:), allocatable :: method, dt, tol, predictor, compute
+      !> `--set name=value` values of deck parameters, in the order given.
+      type(override_type), allocatable :: sets(:)
    end type cli_type
 
 contains
@@ -40,6 +43,7 @@ contains
          & '  --tol VALUE         Newton tolerance (overrides the deck; an expression)'//nl// &
          & '  --predictor NAME    previous | extrapolate | taylor (overrides the deck)'//nl// &
          & '  --compute LIST      positions[,velocities[,accelerations]] (overrides the deck)'//nl// &
+         & '  --set NAME=VALUE    value of the deck parameter NAME (PARAmeters block); repeatable'//nl// &
          & '  --print-outdir      print the output directory and exit'//nl// &
          & '  --version           print the version and exit'//nl// &
          & '  --help              print this help and exit'//nl//nl// &
@@ -56,6 +60,7 @@ contains
       integer :: i, n
       character(:), allocatable :: arg
       n = command_argument_count()
+      allocate (cli%sets(0))
       i = 0
       do while (i < n)
          i = i + 1
@@ -69,6 +74,14 @@ contains
             cli%quiet = .true.
          case ('--print-outdir')
             cli%print_outdir = .true.
+         case ('--set')
+            if (i == n) then
+               call input_error(error, 'fekap: option --set needs a value NAME=VALUE (see fekap --help)')
+               return
+            end if
+            i = i + 1
+            cli%sets = [cli%sets, override_type('')]
+            call argument(i, cli%sets(size(cli%sets))%text)
          case ('-o', '--method', '--dt', '--tol', '--predictor', '--compute')
             if (i == n) then
                call input_error(error, 'fekap: option '//arg//' needs a value (see fekap --help)')

@@ -57,7 +57,7 @@ program fekap_main
       call c_exit(0_c_int)
    end if
 
-   call read_deck(model, cli%deck, error)
+   call read_deck(model, cli%deck, error, cli%sets)
    if (allocated(error)) call finish(error)
    call apply_overrides(cli, model, error)
    if (allocated(error)) call finish(error)

@@ -4,7 +4,7 @@
 module fekap_deck_context
    use fekap_kinds, only: dp
    use fekap_error, only: error_type
-   use fekap_model, only: source_loc_type
+   use fekap_model, only: source_loc_type, parameter_type
    use fekap_deck_card, only: card_of, card_none, card_name
    use fekap_strings, only: lower
    use fekap_deck_name_index, only: name_index_type
@@ -22,6 +22,8 @@ module fekap_deck_context
       type(diagnostics_type) :: diagnostics
       !> Indexes of the model's node and link names, built as they are read.
       type(name_index_type) :: nodes, links
+      !> The deck's parameters read so far, which numeric fields may use.
+      type(parameter_type), allocatable :: parameters(:)
    contains
       !> Report an error at field `itok` of line `iline` (past the end: at the end of the line).
       procedure :: error => context_error
@@ -147,10 +149,16 @@ contains
       character(*), intent(in), optional :: text
       type(error_type), allocatable :: error
       character(:), allocatable :: detail
-      if (present(text)) then
-         call evaluate_expression(text, value, error, detail)
+      if (.not. allocated(self%parameters)) then
+         if (present(text)) then
+            call evaluate_expression(text, value, error, detail)
+         else
+            call evaluate_expression(self%field(iline, itok), value, error, detail)
+         end if
+      else if (present(text)) then
+         call evaluate_expression(text, value, error, detail, self%parameters)
       else
-         call evaluate_expression(self%field(iline, itok), value, error, detail)
+         call evaluate_expression(self%field(iline, itok), value, error, detail, self%parameters)
       end if
       ok = .not. allocated(error)
       if (.not. ok) call self%error(iline, itok, error%message, detail)
@@ -163,7 +171,11 @@ contains
       logical, intent(out) :: ok
       type(error_type), allocatable :: error
       character(:), allocatable :: detail
-      call evaluate_integer(self%field(iline, itok), value, error, detail)
+      if (allocated(self%parameters)) then
+         call evaluate_integer(self%field(iline, itok), value, error, detail, self%parameters)
+      else
+         call evaluate_integer(self%field(iline, itok), value, error, detail)
+      end if
       ok = .not. allocated(error)
       if (.not. ok) call self%error(iline, itok, error%message, detail)
    end subroutine context_integer_field

@@ -6,7 +6,7 @@ module fekap_deck
    use fekap_model, only: model_type
    use fekap_deck_card, only: card_none, card_title, card_sections, card_nodes, card_links, card_welds, &
       & card_supports, card_drives, card_loads, card_slidelines, card_analysis, card_output, card_include, &
-      & card_end, ncards, card_name, card_list, card_of, card_masses, card_gravity
+      & card_end, card_parameters, ncards, card_name, card_list, card_of, card_masses, card_gravity
    use fekap_deck_context, only: context_type
    use fekap_deck_diagnostic, only: mark_type
    use fekap_deck_source, only: load_file, load_string
@@ -14,10 +14,11 @@ module fekap_deck
    use fekap_deck_motion, only: read_drives, read_loads, read_slidelines
    use fekap_deck_settings, only: read_title, read_analysis, read_output
    use fekap_deck_inertia, only: read_masses, read_gravity, check_effects
+   use fekap_deck_parameters, only: override_type, read_parameters
    implicit none
    private
 
-   public :: read_deck, read_deck_string
+   public :: read_deck, read_deck_string, override_type
 
    !> A block whose lines are skipped (after an unknown card or stray data).
    integer, parameter :: card_skip = -1
@@ -25,34 +26,38 @@ module fekap_deck
 contains
 
    !> Read the deck file `filename` (and the files it INCLUDEs) into `model`.
-   subroutine read_deck(model, filename, error)
+   subroutine read_deck(model, filename, error, overrides)
       type(model_type), intent(out) :: model
       !> Path of the deck, also its name in diagnostics.
       character(*), intent(in) :: filename
       !> An input error whose message lists every problem of the deck.
       type(error_type), allocatable, intent(out) :: error
+      !> Values of deck parameters that replace the deck's (`fekap --set name=value`).
+      type(override_type), intent(in), optional :: overrides(:)
       type(context_type) :: ctx
       call load_file(ctx%source, ctx%diagnostics, filename)
-      call finish(ctx, model, filename, error)
+      call finish(ctx, model, filename, error, overrides)
    end subroutine read_deck
 
    !> Read a deck given as text, lines separated by new_line('a'); `name` stands
    !> for the file name in diagnostics and INCLude is relative to the current directory.
-   subroutine read_deck_string(model, text, name, error)
+   subroutine read_deck_string(model, text, name, error, overrides)
       type(model_type), intent(out) :: model
       character(*), intent(in) :: text
       character(*), intent(in) :: name
       type(error_type), allocatable, intent(out) :: error
+      type(override_type), intent(in), optional :: overrides(:)
       type(context_type) :: ctx
       call load_string(ctx%source, ctx%diagnostics, text, name)
-      call finish(ctx, model, name, error)
+      call finish(ctx, model, name, error, overrides)
    end subroutine read_deck_string
 
-   subroutine finish(ctx, model, name, error)
+   subroutine finish(ctx, model, name, error, overrides)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       character(*), intent(in) :: name
       type(error_type), allocatable, intent(out) :: error
+      type(override_type), intent(in), optional :: overrides(:)
       model%file = name
       model%title = ''
       if (ctx%source%readable) then
@@ -60,16 +65,21 @@ contains
             call ctx%diagnostics%add(mark_type(file=name, line=1, text=''), &
                & 'empty deck: there are no cards in it; a deck has NODEs, SECTions, LINKs, DRIVes or LOADs, and END')
          else
-            call interpret(ctx, model)
+            if (present(overrides)) then
+               call interpret(ctx, model, overrides)
+            else
+               call interpret(ctx, model, [override_type ::])
+            end if
          end if
       end if
       if (ctx%diagnostics%count > 0) call input_error(error, ctx%diagnostics%render())
    end subroutine finish
 
    !> Sort the lines into the cards' blocks, read the cards in dependency order, check the whole.
-   subroutine interpret(ctx, model)
+   subroutine interpret(ctx, model, overrides)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
+      type(override_type), intent(in) :: overrides(:)
       integer, allocatable :: block(:)
       integer :: i, card, current, nfields, last
       logical :: seen(ncards)
@@ -120,6 +130,9 @@ contains
          end associate
       end do
 
+      ! Parameters first: every numeric field after them may use them.
+      call read_parameters(ctx, lines_of(card_parameters), overrides)
+      if (allocated(ctx%parameters)) model%parameters = ctx%parameters
       call read_title(ctx, model, pack([(i, i=1, ctx%source%nlines)], block == card_title))
       call read_analysis(ctx, model, lines_of(card_analysis))
       call read_sections(ctx, model, lines_of(card_sections))

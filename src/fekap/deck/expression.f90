@@ -8,7 +8,8 @@
 !>   power   = primary [("^" | "**") unary]          (right associative: 2^3^2 = 2^9)
 !>   primary = number | constant | function "(" expr {"," expr} ")" | "(" expr ")"
 !> Constants pi and deg (= pi/180); functions sqrt sin cos tan asin acos atan
-!> atan2(y,x) exp log abs. Names are case-insensitive.
+!> atan2(y,x) exp log abs; the deck's parameters (PARAmeters block), when the
+!> caller passes them. Names are case-insensitive.
 !>
 !> Every operation is checked before it is carried out, so that no NaN, no
 !> infinity and no overflow is ever computed (the tests run with floating-point
@@ -17,7 +18,8 @@ module fekap_deck_expression
    use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
-   use fekap_strings, only: lower
+   use fekap_strings, only: lower, same_name
+   use fekap_model, only: parameter_type
    implicit none
    private
 
@@ -53,6 +55,8 @@ module fekap_deck_expression
       character(:), allocatable :: detail
       !> Current nesting depth (see max_depth).
       integer :: depth = 0
+      !> The parameters the expression may name (none: not allocated).
+      type(parameter_type), allocatable :: parameters(:)
    end type parser_type
 
 contains
@@ -60,15 +64,20 @@ contains
    !> Evaluate the expression `text`. On failure `error` holds the headline
    !> (msg_not_a_number or msg_not_finite) and `detail` (when present) a short label
    !> saying what is wrong, for the caret line of a diagnostic.
-   pure subroutine evaluate_expression(text, value, error, detail)
+   pure subroutine evaluate_expression(text, value, error, detail, parameters)
       !> The field, without blanks.
       character(*), intent(in) :: text
       real(dp), intent(out) :: value
       type(error_type), allocatable, intent(out) :: error
       character(:), allocatable, intent(out), optional :: detail
+      !> Named values the expression may use besides pi and deg.
+      type(parameter_type), intent(in), optional :: parameters(:)
       type(parser_type) :: p
       p%text = text
       p%detail = ''
+      if (present(parameters)) then
+         if (size(parameters) > 0) p%parameters = parameters
+      end if
       value = 0
       if (len(text) == 0) then
          call fail(p, bad_syntax, 'empty field')
@@ -90,16 +99,17 @@ contains
 
    !> Evaluate `text` as an expression whose value is a whole number that fits
    !> a default integer.
-   pure subroutine evaluate_integer(text, value, error, detail)
+   pure subroutine evaluate_integer(text, value, error, detail, parameters)
       character(*), intent(in) :: text
       integer, intent(out) :: value
       type(error_type), allocatable, intent(out) :: error
       character(:), allocatable, intent(out), optional :: detail
+      type(parameter_type), intent(in), optional :: parameters(:)
       real(dp) :: x
       character(:), allocatable :: why
       ! A local label: passing the optional deferred-length `detail` straight on
       ! loses its length with gfortran 12.
-      call evaluate_expression(text, x, error, why)
+      call evaluate_expression(text, x, error, why, parameters)
       value = 0
       if (allocated(error)) then
          if (error%message == msg_not_a_number) error%message = 'expected an integer'
@@ -355,7 +365,7 @@ contains
             case ('nan', 'inf', 'infinity')
                call fail(p, bad_value, "'"//p%text(start:p%pos - 1)//"' is not a finite number")
             case default
-               call fail(p, bad_syntax, "unknown name '"//p%text(start:p%pos - 1)//"' (constants: pi deg)")
+               call parameter_value(p, p%text(start:p%pos - 1), v)
             end select
          end if
       else if (c == ' ') then
@@ -365,6 +375,30 @@ contains
       end if
       if (p%status /= ok) v = 0
    end subroutine parse_primary
+
+   !> The value of the parameter `name`, or an unknown-name failure that lists
+   !> the names there are.
+   pure subroutine parameter_value(p, name, v)
+      type(parser_type), intent(inout) :: p
+      character(*), intent(in) :: name
+      real(dp), intent(out) :: v
+      character(:), allocatable :: known
+      integer :: i
+      v = 0
+      known = 'pi deg'
+      if (allocated(p%parameters)) then
+         do i = 1, size(p%parameters)
+            if (same_name(p%parameters(i)%name, name)) then
+               v = p%parameters(i)%value
+               return
+            end if
+            known = known//' '//p%parameters(i)%name
+         end do
+         call fail(p, bad_syntax, "unknown name '"//name//"' (constants and parameters defined so far: "//known//')')
+      else
+         call fail(p, bad_syntax, "unknown name '"//name//"' (constants: pi deg)")
+      end if
+   end subroutine parameter_value
 
    pure recursive subroutine parse_call(p, name, v)
       type(parser_type), intent(inout) :: p

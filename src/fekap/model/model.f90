@@ -11,7 +11,7 @@ module fekap_model
 
    public :: model_type, node_type, section_type, link_type, weld_type
    public :: support_type, drive_type, load_type, slideline_type, mass_type
-   public :: analysis_type, output_type, source_loc_type
+   public :: analysis_type, output_type, source_loc_type, parameter_type
    public :: find_node, find_link, model_size
 
    !> Degree-of-freedom kinds at a node.
@@ -192,6 +192,17 @@ module fekap_model
       logical :: vtk = .false.
    end type output_type
 
+   !> A deck parameter (PARAmeters block): a named number that later numeric
+   !> fields of the deck may use.
+   type :: parameter_type
+      !> Its name as spelt in the deck (matched case-insensitively).
+      character(:), allocatable :: name
+      real(dp) :: value = 0
+      !> Whether `fekap --set` gave the value instead of the deck.
+      logical :: set_on_command_line = .false.
+      type(source_loc_type) :: loc
+   end type parameter_type
+
    !> The whole model of one deck.
    type :: model_type
       !> The deck's file name, for diagnostics.
@@ -211,6 +222,8 @@ module fekap_model
       type(source_loc_type) :: gravity_loc
       type(analysis_type) :: analysis
       type(output_type) :: output
+      !> The deck's parameters in the order defined, with the values used.
+      type(parameter_type), allocatable :: parameters(:)
    end type model_type
 
 contains

@@ -30,6 +30,7 @@ contains
       write (unit, '(a)') 'FEKAP '//version//' - Finite Element Kinematic Analysis Program'
       write (unit, '(a)') 'deck:  '//model%file
       if (allocated(model%title)) write (unit, '(a)') 'title: '//model%title
+      if (allocated(model%parameters)) call write_parameters(unit, model)
       write (unit, '(/,a)') 'NODES'
       write (unit, '(2x,a12,2a24)') 'name', 'x', 'y'
       do i = 1, size(model%nodes)
@@ -138,6 +139,23 @@ contains
       end if
       if (any(model%gravity /= 0)) write (unit, '(/,a,2es16.7)') 'GRAVITY', model%gravity
    end subroutine write_listing_inertia
+
+   !> The deck parameters and the values this run used.
+   subroutine write_parameters(unit, model)
+      integer, intent(in) :: unit
+      type(model_type), intent(in) :: model
+      integer :: i, width
+      character(len=32) :: form
+      if (size(model%parameters) == 0) return
+      width = max(12, maxval([(len(model%parameters(i)%name), i=1, size(model%parameters))]))
+      write (form, '(a,i0,a)') '(2x,a', width, ',es24.15,a)'
+      write (unit, '(/,a)') 'PARAMETERS'
+      do i = 1, size(model%parameters)
+         associate (p => model%parameters(i))
+            write (unit, form) p%name, p%value, trim(merge('  (--set)', '         ', p%set_on_command_line))
+         end associate
+      end do
+   end subroutine write_parameters
 
    !> One line saying what the run computes, e.g. "computing positions and
    !> velocities; 40 steps; output every 10th step".

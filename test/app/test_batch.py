@@ -1,0 +1,394 @@
+"""fekap-batch (scripts/batch) on Dask, everything on 127.0.0.1: a 20-case sweep
+gives the right table and a rerun does no work; a bad deck is recorded with its
+error; bad sweep files are refused before anything runs; a worker killed in
+mid-case has its case retried and completed; SIGINT keeps the finished cases;
+a sweep through --scheduler on a `dask scheduler` with two `dask worker`s.
+
+Each sweep runs `python3 -m batch` as a process, with bounded waits; every
+process a test starts is stopped by the test."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from apptest import ROOT, fekap_binary
+
+#: Example 1's four-bar with its lengths, run length and output rate as parameters.
+DECK = """\
+PARAmeters
+  crank = 2
+  turns = 1
+  dt = 0.05
+  every = 1
+  ground = 4
+  cx = (crank+ground)/2
+  cy = sqrt(16-(cx-ground)^2)
+SECTions
+  bar E=1 G=1 A=100 I=1
+NODEs
+  A 0 0
+  B crank 0
+  C cx cy
+  D ground 0
+LINKs
+  AB A B bar
+  BC B C bar
+  DC D C bar
+SUPPorts
+  A pin
+  D pin
+DRIVes
+  rotation AB rate 2*pi
+ANALysis
+  time 0 turns dt
+OUTPut
+  every every
+END
+"""
+
+#: A case of this many crank turns at dt = 1e-4 (100,000 steps) runs for about half a second.
+LONG = 10
+
+
+@pytest.fixture(scope="module")
+def fekap() -> str:
+    return str(Path(fekap_binary()).resolve())
+
+
+def batch(cwd: Path, fekap: str, *args: str, timeout: float = 120, workers: int = 2
+          ) -> subprocess.CompletedProcess:
+    """Run fekap-batch to its end."""
+    return subprocess.run(batch_command(fekap, *args, workers=workers), cwd=cwd, env=batch_env(),
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def batch_command(fekap: str, *args: str, workers: int = 2) -> list[str]:
+    return [sys.executable, "-m", "batch", "--fekap", fekap, "--workers", str(workers), *args]
+
+
+def batch_env() -> dict[str, str]:
+    return dict(os.environ, PYTHONPATH=str(ROOT / "scripts"))
+
+
+def summary(output: Path) -> list[dict[str, str]]:
+    with open(output / "summary.csv", newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def write_sweep(directory: Path, text: str, deck: str = DECK) -> Path:
+    (directory / "p.deck").write_text(deck)
+    path = directory / "sweep.toml"
+    path.write_text(text)
+    return path
+
+
+def fekap_processes(marker: str) -> list[int]:
+    """Pids of live processes whose command line contains ``marker``."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            command = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            state = (entry / "stat").read_text().split(")")[-1].split()[0]
+        except OSError:
+            continue
+        if marker in command and "-o" in command and state != "Z" and int(entry.name) != os.getpid():
+            if "fekap" in command.split()[0]:
+                pids.append(int(entry.name))
+    return pids
+
+
+def parent_of(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("PPid:"):
+            return int(line.split()[1])
+    raise LookupError(pid)
+
+
+def wait_until(condition, timeout: float, what: str):
+    """Poll ``condition`` every 50 ms until it returns something true."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+
+
+def stop(process: subprocess.Popen) -> None:
+    """Stop a process this test started, surely."""
+    if process.poll() is None:
+        process.terminate()
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def sweep20(tmp_path_factory, fekap):
+    """A 20-case grid (10 crank lengths x 2 steps) run once; its directory and result."""
+    directory = tmp_path_factory.mktemp("sweep20")
+    sweep = write_sweep(directory, """\
+decks = ["p.deck"]
+output = "out"
+measures = ["max(points.B.x)", "range(links.AB.angle)", "max(steps.iterations)"]
+[plot]
+point = "C"
+[parameters]
+crank = { linspace = [1.5, 2.4, 10] }
+[options]
+dt = [0.05, 0.1]
+""")
+    result = batch(directory, fekap, str(sweep))
+    return directory, result
+
+
+def test_sweep_of_20_cases_gives_the_right_table(sweep20):
+    directory, result = sweep20
+    assert result.returncode == 0, result.stderr
+    rows = summary(directory / "out")
+    assert len(rows) == 20
+    assert sorted({row["crank"] for row in rows}) == [f"{1.5 + 0.1 * i:.1f}" for i in range(10)]
+    assert {(row["crank"], row["dt"]) for row in rows} == {
+        (f"{1.5 + 0.1 * i:.1f}", dt) for i in range(10) for dt in ("0.05", "0.1")}
+    for row in rows:
+        assert row["exit"] == "0" and row["message"] == ""
+        # One turn: 1/dt steps; B starts at (crank, 0) and turns once about A.
+        assert int(row["steps"]) == round(1 / float(row["dt"]))
+        assert float(row["max(points.B.x)"]) == pytest.approx(float(row["crank"]), rel=1e-12)
+        assert float(row["range(links.AB.angle)"]) == pytest.approx(2 * math.pi, rel=1e-12)
+        assert 1 <= float(row["iterations_per_step"]) <= float(row["max(steps.iterations)"])
+        assert float(row["analysis_us_per_configuration"]) > 0
+        assert int(row["cuts"]) >= 0
+        case = directory / "out" / "cases" / row["case"]
+        record = json.loads((case / "case.json").read_text())
+        assert record["exit"] == 0 and record["attempt"] == 1
+        # The listing echoes the values the case ran with.
+        listing = (case / "p.lis").read_text()
+        assert f"{float(row['crank']):.15E}"[:8] in listing.split("PARAMETERS")[1].split("NODES")[0]
+    # The overlay of C (the cases at dt = 0.05: compare.py needs equal times) and a plot per measure.
+    for plot in ("paths-C-y.png", "measure-1.png", "measure-2.png", "measure-3.png"):
+        assert (directory / "out" / "plots" / plot).stat().st_size > 10000
+    table = (directory / "out" / "summary.md").read_text().splitlines()
+    assert len(table) == 22 and table[0].startswith("| case | crank | dt | exit |")
+    assert result.stdout.strip().splitlines()[-20:] == table[2:]
+
+
+def test_rerun_does_no_work(sweep20, fekap):
+    directory, first = sweep20
+    assert first.returncode == 0, first.stderr
+    cases = directory / "out" / "cases"
+    before = {path.parent.name: path.stat().st_mtime_ns for path in cases.glob("*/case.json")}
+    assert len(before) == 20
+    again = batch(directory, fekap, "sweep.toml", "--no-plots", "--measure", "min(points.C.y)")
+    assert again.returncode == 0, again.stderr
+    assert "20 done before, 0 to run" in again.stderr
+    assert "ran 0 cases" in again.stderr
+    after = {path.parent.name: path.stat().st_mtime_ns for path in cases.glob("*/case.json")}
+    assert after == before
+    # A new measure is computed from the kept results, without running anything.
+    rows = summary(directory / "out")
+    assert len(rows) == 20 and all(float(row["min(points.C.y)"]) < 4 for row in rows)
+
+
+def test_bad_deck_is_recorded_with_its_error_and_not_retried(tmp_path, fekap):
+    # crank = 13 leaves C unreachable: cy is the square root of a negative number.
+    sweep = write_sweep(tmp_path, """\
+decks = ["p.deck", "broken.deck"]
+[parameters]
+crank = [2, 13]
+""")
+    (tmp_path / "broken.deck").write_text(DECK.replace("LINKs", "LINKs\n  XY A Q bar"))
+    result = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots", workers=1)
+    assert result.returncode == 0, result.stderr
+    rows = {(Path(row["deck"]).name, row["crank"]): row for row in summary(tmp_path / "out")}
+    assert rows["p.deck", "2.0"]["exit"] == "0"
+    bad = rows["p.deck", "13.0"]
+    assert bad["exit"] == "2"
+    assert "p.deck:8:" in bad["message"] and "error: not a finite number" in bad["message"]
+    assert rows["broken.deck", "2.0"]["exit"] == "2"
+    assert "broken.deck:17:" in rows["broken.deck", "2.0"]["message"]
+    record = json.loads((tmp_path / "out" / "cases" / bad["case"] / "case.json").read_text())
+    assert record["attempt"] == 1 and "retrying" not in result.stderr
+
+
+def test_case_over_the_timeout_is_retried_then_lost(tmp_path, fekap):
+    sweep = write_sweep(tmp_path, f"""\
+decks = ["p.deck"]
+timeout = 1
+retries = 1
+[parameters]
+turns = [1, {50 * LONG}]
+every = 10000
+[options]
+dt = 1e-4
+""")
+    result = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots", workers=1)
+    assert result.returncode == 1, result.stderr
+    assert "CaseTimeout: exceeded the timeout of 1 s; retrying (1 of 1 retries)" in result.stderr
+    rows = {row["turns"]: row for row in summary(tmp_path / "out")}
+    assert rows["1.0"]["exit"] == "0"
+    assert rows[f"{50.0 * LONG}"]["exit"] == "lost"
+    assert "lost after 2 attempts: CaseTimeout" in rows[f"{50.0 * LONG}"]["message"]
+    assert not (tmp_path / "out" / "cases" / rows[f"{50.0 * LONG}"]["case"]).exists()
+    wait_until(lambda: not fekap_processes(str(tmp_path)), 10, "no fekap left running")
+
+
+@pytest.mark.parametrize("text, where, phrase", [
+    ('decks = ["p.deck"]\nsweeps = 3\n', "sweep.toml:2: sweeps:", "unknown key"),
+    ('decks = ["p.deck"]\n[parameters]\ncrank = 1\nlength = [1, 2]\n', "sweep.toml:4: parameters.length:",
+     "parameter 'length' is not in the deck"),
+    ('decks = ["p.deck"]\n[parameters]\ncrank = { range = [2, 1, 0.1] }\n', "sweep.toml:3: parameters.crank:",
+     "empty range"),
+    ('decks = ["p.deck"]\n[parameters]\ncrank = { linspace = [1, 2, 0] }\n', "sweep.toml:3: parameters.crank:",
+     "empty range"),
+    ('decks = ["p.deck"]\n[parameters]\ncrank = []\n', "sweep.toml:3: parameters.crank:", "empty list"),
+    ('\n\ndecks = ["p.deck", "missing.deck"]\n', "sweep.toml:3: decks:", "cannot read the deck 'missing.deck'"),
+    ('decks = ["p.deck"]\n[options]\nmethod = ["fem", "finite"]\n', "sweep.toml:3: options.method:",
+     "'finite' is not one of"),
+    ('decks = ["p.deck"]\n[options]\nsteps = 3\n', "sweep.toml:3: options.steps:", "unknown option"),
+    ('decks = ["p.deck"]\ncombine = "zip"\n[parameters]\ncrank = [1, 2]\n[options]\ndt = [0.1, 0.2, 0.3]\n',
+     "sweep.toml:4: parameters.crank:", "needs lists of one length"),
+    ('decks = ["p.deck"]\nmeasures = ["top(points.C.y)"]\n', "sweep.toml:2: measures:", "unknown function"),
+    ('decks = ["p.deck"\n', "sweep.toml:", "not valid TOML"),
+])
+def test_bad_sweep_file_is_refused_before_any_case_runs(tmp_path, fekap, text, where, phrase, monkeypatch,
+                                                        capsys):
+    sweep = write_sweep(tmp_path, text)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    from batch import cli  # in this process: the checks need no cluster, and no second Python
+    assert cli.main([str(sweep), "-o", "out", "--fekap", fekap]) == 2
+    stderr = capsys.readouterr().err
+    assert where in stderr and phrase in stderr, stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_killed_worker_has_its_case_retried_and_completed(tmp_path, fekap):
+    sweep = write_sweep(tmp_path, f"""\
+decks = ["p.deck"]
+retries = 2
+[parameters]
+crank = [1.9, 2.1]
+turns = {LONG}
+every = 10000
+[options]
+dt = 1e-4
+""")
+    process = subprocess.Popen(batch_command(fekap, str(sweep), "-o", "out", "--no-plots"), cwd=tmp_path,
+                               env=batch_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        runs = wait_until(lambda: fekap_processes(str(tmp_path)), 60, "a running case")
+        worker = parent_of(runs[0])
+        os.kill(worker, signal.SIGKILL)
+        out, err = process.communicate(timeout=120)
+    finally:
+        stop(process)
+    assert process.returncode == 0, err
+    assert "its worker died; retrying (1 of 2 retries)" in err
+    rows = summary(tmp_path / "out")
+    assert [row["exit"] for row in rows] == ["0", "0"]
+    attempts = sorted(json.loads((tmp_path / "out" / "cases" / row["case"] / "case.json").read_text())["attempt"]
+                      for row in rows)
+    assert attempts == [1, 2]
+    for row in rows:
+        assert int(row["steps"]) == LONG * 10000
+    # The killed worker's run died with it; nothing of the sweep runs on.
+    wait_until(lambda: not fekap_processes(str(tmp_path)), 10, "no fekap left running")
+
+
+def test_sigint_keeps_the_finished_cases(tmp_path, fekap):
+    sweep = write_sweep(tmp_path, f"""\
+decks = ["p.deck"]
+[parameters]
+crank = {{ linspace = [1.8, 2.1, 4] }}
+turns = {LONG}
+every = 10000
+[options]
+dt = 1e-4
+""")
+    process = subprocess.Popen(batch_command(fekap, str(sweep), "-o", "out"), cwd=tmp_path, env=batch_env(),
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    cases = tmp_path / "out" / "cases"
+    try:
+        wait_until(lambda: list(cases.glob("*/case.json")) if cases.is_dir() else [], 60, "a finished case")
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=60)
+    finally:
+        stop(process)
+    assert process.returncode == 130, err
+    assert "interrupted; finished cases are kept" in err
+    done = {path.parent.name for path in cases.glob("*/case.json")}
+    assert 1 <= len(done) < 4
+    rows = summary(tmp_path / "out")
+    assert len(rows) == 4
+    assert {row["case"] for row in rows if row["exit"] == "0"} == done
+    assert all(row["exit"] == "not run" for row in rows if row["case"] not in done)
+    wait_until(lambda: not fekap_processes(str(tmp_path)), 10, "no fekap left running")
+    # Resuming runs only the rest.
+    again = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots")
+    assert again.returncode == 0, again.stderr
+    assert f"{len(done)} done before, {4 - len(done)} to run" in again.stderr
+    assert all(row["exit"] == "0" for row in summary(tmp_path / "out"))
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def test_sweep_through_a_dask_scheduler_and_two_workers(tmp_path, fekap):
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    # The workers know nothing of FEKAP's scripts: the case code travels with the tasks.
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    dask = str(Path(sys.executable).parent / "dask")
+    processes = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                                   "--no-dashboard"], cwd=tmp_path, env=env,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        for name in ("w1", "w2"):
+            (tmp_path / name).mkdir()
+            processes.append(subprocess.Popen(
+                [dask, "worker", address, "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard",
+                 "--no-nanny", "--name", name], cwd=tmp_path / name, env=env,
+                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        sweep = write_sweep(tmp_path, """\
+decks = ["p.deck"]
+combine = "zip"
+measures = ["max(points.B.x)"]
+[parameters]
+crank = [1.7, 1.9, 2.1, 2.3]
+[options]
+method = ["fem", "cartesian", "angles", "fem"]
+""")
+        result = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots", "--scheduler", address)
+        assert result.returncode == 0, result.stderr
+        rows = summary(tmp_path / "out")
+        assert [(row["crank"], row["method"]) for row in rows] == [
+            ("1.7", "fem"), ("1.9", "cartesian"), ("2.1", "angles"), ("2.3", "fem")]
+        workers = set()
+        for row in rows:
+            assert row["exit"] == "0"
+            assert float(row["max(points.B.x)"]) == pytest.approx(float(row["crank"]), rel=1e-12)
+            workers.add(json.loads((tmp_path / "out" / "cases" / row["case"] / "case.json").read_text())["worker"])
+        assert workers and workers <= {"w1", "w2"}
+    finally:
+        for process in reversed(processes):
+            stop(process)
