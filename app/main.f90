@@ -149,8 +149,9 @@ contains
          if (.not. allocated(error)) call open_replace(outdir//'/links.csv', units%links, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
-         if (.not. allocated(error) .and. planned_effects(model) == effects_kinetostatics) &
-            & call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
+         if (.not. allocated(error) .and. planned_effects(model) == effects_kinetostatics) then
+            call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
+         end if
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)
          call close_checked(mesh_unit, -1_int64, error)
