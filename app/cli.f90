@@ -141,30 +141,52 @@ contains
       if (dot > 1) name = name(:dot - 1)
    end function stem
 
+   !> The code of `value` of an option among the blank-separated `names`
+   !> (model's method_names or predictor_names): a name, or 4 letters of it,
+   !> as in the deck; code is left as it was when value is none of them.
+   subroutine named_code(option, value, names, code, error)
+      character(*), intent(in) :: option, value, names
+      integer, intent(inout) :: code
+      type(error_type), allocatable, intent(out) :: error
+      integer :: found, last
+      found = word_index(value, names)
+      if (found == 0) then
+         last = index(names, ' ', back=.true.)
+         call input_error(error, 'fekap: '//option//' '//value//': expected '// &
+            & replace_blanks(names(:last - 1))//' or '//names(last + 1:))
+         return
+      end if
+      code = found
+   contains
+      !> "a b c" as "a, b, c".
+      pure recursive function replace_blanks(text) result(listed)
+         character(*), intent(in) :: text
+         character(:), allocatable :: listed
+         integer :: blank
+         blank = index(text, ' ')
+         if (blank == 0) then
+            listed = text
+         else
+            listed = text(:blank - 1)//', '//replace_blanks(text(blank + 1:))
+         end if
+      end function replace_blanks
+   end subroutine named_code
+
    !> Apply the command-line overrides to the model's analysis settings.
    subroutine apply_overrides(cli, model, error)
       type(cli_type), intent(in) :: cli
       type(model_type), intent(inout) :: model
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: value
-      integer :: start, comma, code
+      integer :: start, comma
       character(:), allocatable :: item
       if (allocated(cli%method)) then
-         ! A name of method_names (or 4 letters of it), as in the deck.
-         code = word_index(cli%method, method_names)
-         if (code == 0) then
-            call input_error(error, 'fekap: --method '//cli%method//': expected fem, cartesian or angles')
-            return
-         end if
-         model%analysis%method = code
+         call named_code('--method', cli%method, method_names, model%analysis%method, error)
+         if (allocated(error)) return
       end if
       if (allocated(cli%predictor)) then
-         code = word_index(cli%predictor, predictor_names)
-         if (code == 0) then
-            call input_error(error, 'fekap: --predictor '//cli%predictor//': expected previous, extrapolate or taylor')
-            return
-         end if
-         model%analysis%predictor = code
+         call named_code('--predictor', cli%predictor, predictor_names, model%analysis%predictor, error)
+         if (allocated(error)) return
       end if
       if (allocated(cli%dt)) then
          call option_number('--dt', cli%dt, value, error)

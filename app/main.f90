@@ -94,8 +94,11 @@ contains
    subroutine say(text)
       character(*), intent(in) :: text
       integer :: ios
+      ! Nothing more to say to a closed output: the run goes on.
       write (output_unit, '(a)', iostat=ios) text
+      if (ios /= 0) return
       flush (output_unit, iostat=ios)
+      if (ios /= 0) return
    end subroutine say
 
    !> The stepper of the deck's method.
@@ -175,7 +178,9 @@ contains
    subroutine finish(error)
       type(error_type), intent(in) :: error
       integer :: ios
+      ! A closed standard error loses the message, not the exit code.
       write (error_unit, '(a)', iostat=ios) error%message
+      if (ios /= 0) continue
       select case (error%kind)
       case (error_input)
          call c_exit(2_c_int)

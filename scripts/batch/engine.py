@@ -76,14 +76,13 @@ class Progress:
         self.stream.flush()
 
 
-def start_client(scheduler: str | None, workers: int | None, retries: int):
+def start_client(scheduler: str | None, workers: int | None):
     """A Dask client on the given scheduler, or on a new LocalCluster; and the cluster."""
     import dask
     from dask.distributed import Client, LocalCluster
     # Worker deaths come back at once as KilledWorker, and the sweep retries them
     # itself (--retries), so that a timeout and a death count alike.
-    dask.config.set({"distributed.scheduler.allowed-failures": 0,
-                     "distributed.worker.daemon": False})
+    dask.config.set({"distributed.scheduler.allowed-failures": 0})
     if scheduler:
         return Client(scheduler, timeout="30s"), None
     if "DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD" not in os.environ and sys.platform == "linux":
@@ -109,7 +108,7 @@ def run_all(tasks: list[dict], labels: dict[str, str], scheduler: str | None, wo
     client = cluster = None
     pending: dict[str, tuple[list[dict], object]] = {}
     try:
-        client, cluster = start_client(scheduler, workers, retries)
+        client, cluster = start_client(scheduler, workers)
         nworkers = max(len(client.scheduler_info().get("workers", {})), 1)
         # The case code goes to each worker once, by value (cloudpickle: the
         # workers need not import scripts/), as data that every task calls

@@ -47,39 +47,46 @@ module fekap_posix
    interface
       function c_mkdir(path, mode) bind(C, name='mkdir') result(status)
          import :: c_int, c_char
+         implicit none
          character(kind=c_char), intent(in) :: path(*)
          integer(c_int), value :: mode
          integer(c_int) :: status
       end function c_mkdir
       function c_rename(from, to) bind(C, name='rename') result(status)
          import :: c_int, c_char
+         implicit none
          character(kind=c_char), intent(in) :: from(*), to(*)
          integer(c_int) :: status
       end function c_rename
       function c_unlink(path) bind(C, name='unlink') result(status)
          import :: c_int, c_char
+         implicit none
          character(kind=c_char), intent(in) :: path(*)
          integer(c_int) :: status
       end function c_unlink
       function c_rmdir(path) bind(C, name='rmdir') result(status)
          import :: c_int, c_char
+         implicit none
          character(kind=c_char), intent(in) :: path(*)
          integer(c_int) :: status
       end function c_rmdir
       function c_truncate(path, length) bind(C, name='truncate') result(status)
          import :: c_int, c_char, c_long
+         implicit none
          character(kind=c_char), intent(in) :: path(*)
          integer(c_long), value :: length
          integer(c_int) :: status
       end function c_truncate
       function c_open(path, flags, mode) bind(C, name='open') result(fd)
          import :: c_int, c_char
+         implicit none
          character(kind=c_char), intent(in) :: path(*)
          integer(c_int), value :: flags, mode
          integer(c_int) :: fd
       end function c_open
       function c_read(fd, buffer, count) bind(C, name='read') result(got)
          import :: c_int, c_char, c_size_t, c_long
+         implicit none
          integer(c_int), value :: fd
          character(kind=c_char), intent(out) :: buffer(*)
          integer(c_size_t), value :: count
@@ -87,17 +94,20 @@ module fekap_posix
       end function c_read
       function c_lseek(fd, offset, whence) bind(C, name='lseek') result(position)
          import :: c_int, c_long
+         implicit none
          integer(c_int), value :: fd, whence
          integer(c_long), value :: offset
          integer(c_long) :: position
       end function c_lseek
       function c_close(fd) bind(C, name='close') result(status)
          import :: c_int
+         implicit none
          integer(c_int), value :: fd
          integer(c_int) :: status
       end function c_close
       function c_write(fd, buffer, count) bind(C, name='write') result(written)
          import :: c_int, c_char, c_size_t, c_long
+         implicit none
          integer(c_int), value :: fd
          character(kind=c_char), intent(in) :: buffer(*)
          integer(c_size_t), value :: count
@@ -105,40 +115,48 @@ module fekap_posix
       end function c_write
       function c_flock(fd, operation) bind(C, name='flock') result(status)
          import :: c_int
+         implicit none
          integer(c_int), value :: fd, operation
          integer(c_int) :: status
       end function c_flock
       function c_errno_location() bind(C, name='__errno_location') result(where)
          import :: c_ptr
+         implicit none
          type(c_ptr) :: where
       end function c_errno_location
       function c_strerror(errnum) bind(C, name='strerror') result(text)
          import :: c_int, c_ptr
+         implicit none
          integer(c_int), value :: errnum
          type(c_ptr) :: text
       end function c_strerror
       function c_strlen(text) bind(C, name='strlen') result(length)
          import :: c_ptr, c_size_t
+         implicit none
          type(c_ptr), value :: text
          integer(c_size_t) :: length
       end function c_strlen
       function c_opendir(path) bind(C, name='opendir') result(dir)
          import :: c_char, c_ptr
+         implicit none
          character(kind=c_char), intent(in) :: path(*)
          type(c_ptr) :: dir
       end function c_opendir
       function c_readdir(dir) bind(C, name='readdir') result(entry)
          import :: c_ptr
+         implicit none
          type(c_ptr), value :: dir
          type(c_ptr) :: entry
       end function c_readdir
       function c_closedir(dir) bind(C, name='closedir') result(status)
          import :: c_ptr, c_int
+         implicit none
          type(c_ptr), value :: dir
          integer(c_int) :: status
       end function c_closedir
       function c_signal(signum, handler) bind(C, name='signal') result(previous)
          import :: c_int, c_funptr
+         implicit none
          integer(c_int), value :: signum
          type(c_funptr), value :: handler
          type(c_funptr) :: previous

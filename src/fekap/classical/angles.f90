@@ -14,8 +14,9 @@ module fekap_classical_angles
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_strings, only: int_text, short_real_text
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
-   use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, branch_state_type, branch_jump_text, magnitude_ratio
+   use fekap_classical_stepping, only: classical_stepper_type, new_classical_history, begin_result, drive_value, &
+      & new_step_convergence, &
+      & newton_positions, branch_state_type, branch_jump_text, magnitude_ratio
    implicit none
    private
 
@@ -24,7 +25,6 @@ module fekap_classical_angles
    !> Orientation-angle stepper of a four-bar linkage.
    type, extends(classical_stepper_type) :: angles_stepper_type
       private
-      type(convergence_type) :: conv
       integer :: nnode = 0, nlink = 0
       !> Nodes A, B, C, D of the loop (indices into model%nodes).
       integer :: node(4) = 0
@@ -43,8 +43,8 @@ module fekap_classical_angles
       real(dp) :: d(2) = 0, dd(2) = 0, ddd(2) = 0
       !> Names of the crank, coupler and rocker, for messages.
       character(len=64) :: link_name(3) = ''
-      !> Model size, the unit of divergence.
-      real(dp) :: model_length = 1
+      !> The loop-closure residual at d, for the Newton correction.
+      real(dp) :: p(2) = 0
       !> Jump check: the state of the accepted configuration and the largest
       !> conditioning measure met so far.
       type(branch_state_type) :: branch
@@ -54,6 +54,8 @@ module fekap_classical_angles
       procedure :: try_step
       procedure :: rates_at
       procedure :: finish_step
+      procedure :: position_residual
+      procedure :: position_correction
    end type angles_stepper_type
 
 contains
@@ -181,7 +183,7 @@ contains
       self%law = model%drives(idrive)%law
       self%theta1_initial = atan2(internal(2, 1), internal(1, 1))
       self%d = [atan2(internal(2, 2), internal(1, 2)), atan2(internal(2, 3), internal(1, 3))]
-      call new_history(self%history, 2)
+      call new_classical_history(self, 2)
    contains
       subroutine refuse(error, what)
          type(error_type), allocatable, intent(out) :: error
@@ -217,7 +219,7 @@ contains
       self%step = 0
       call drive_value(self%law, self%theta1_initial, self%analysis%t_start, self%analysis%t_start, &
          & self%theta1(1), self%theta1(2), self%theta1(3))
-      call self%history%push(self%d, self%analysis%t_start)
+      call self%accept(self%d, self%analysis%t_start)
       call branch_state(self, self%d, self%branch)
       self%reference = self%branch%measure
       call finish_step(self, self%analysis%t_start, 0, result, error)
@@ -232,70 +234,69 @@ contains
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
       type(branch_state_type) :: new
-      real(dp) :: p(2), k(2, 2), delta(2), r, r0, increment_residual, correction, f0, df, ddf, increment, worst
+      real(dp) :: p(2), increment_residual, f0, df, ddf, increment, worst
       integer :: where_
       character(:), allocatable :: jump
 
       call drive_value(self%law, self%theta1_initial, self%analysis%t_start, t, &
          & self%theta1(1), self%theta1(2), self%theta1(3))
       ! The scale of the default test: the residual of the drive increment alone.
-      call closure(self, self%history%q(:, 1), p)
+      call closure(self, self%history%q(:, self%history%newest), p)
       increment_residual = norm2(p)
-      call self%history%predict(self%analysis%predictor, t, self%d)
-      iterations = 0
-      r0 = 0
-      do
-         call closure(self, self%d, p)
-         self%counts%residual_assemblies = self%counts%residual_assemblies + 1
-         r = norm2(p)
-         if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
-            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
-         end if
-         if (iterations >= self%analysis%max_iter) then
-            call analysis_error(error, no_convergence_text(t, iterations, r))
-            return
-         end if
-         call tangent(self, self%d, k)
-         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         call solve2(k, -p, delta, error)
-         self%counts%lu_factorisations = self%counts%lu_factorisations + 1
-         if (allocated(error)) then
-            error%message = 't = '//short_real_text(t)//': '//error%message
-            return
-         end if
-         iterations = iterations + 1
-         self%counts%iterations = self%counts%iterations + 1
-         self%d = self%d + delta
-         correction = maxval(abs(delta)*self%length(2:3))
-         if (correction > divergence_length*self%model_length) then
-            call analysis_error(error, 't = '//short_real_text(t)// &
-               & ': Newton diverged at iteration '//int_text(iterations))
-            return
-         end if
-         if (self%conv%mode /= convergence_paper) then
-            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
-         end if
-      end do
+      call self%predict(t, self%d)
+      call newton_positions(self, t, increment_residual, iterations, error)
+      if (allocated(error)) return
 
       ! Branch-jump check: the coupler and rocker angles against their linear
       ! response to the crank increment, and the sign of det K.
-      call drive_value(self%law, self%theta1_initial, self%analysis%t_start, self%history%t(1), f0, df, ddf)
+      call drive_value(self%law, self%theta1_initial, self%analysis%t_start, self%history%t(self%history%newest), f0, df, ddf)
       increment = self%theta1(1) - f0
       call branch_state(self, self%d, new)
-      call magnitude_ratio(self%d - self%history%q(:, 1), increment*self%branch%response(:, 1), &
+      call magnitude_ratio(self%d - self%history%q(:, self%history%newest), increment*self%branch%response(:, 1), &
          & increment*new%response(:, 1), abs(increment), worst, where_)
       self%reference = max(self%reference, new%measure)
       where_ = max(1, where_)
-      jump = branch_jump_text(t, self%branch, new, self%reference, worst, self%d(where_) - self%history%q(where_, 1), &
-         & 'the angle of link '//trim(self%link_name(where_ + 1)))
+      jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
+         & self%d(where_) - self%history%q(where_, self%history%newest), 'the angle of link '//trim(self%link_name(where_ + 1)))
       if (len(jump) > 0) then
          call analysis_error(error, jump)
          return
       end if
       self%branch = new
-      call self%history%push(self%d, t)
+      call self%accept(self%d, t)
    end subroutine try_step
+
+   !> The loop-closure residual at the current d (kept in self%p) and its norm
+   !> (theta1 at time t is already set: the closure needs no t).
+   subroutine position_residual(self, t, norm)
+      class(angles_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: norm
+      call closure(self, self%d, self%p)
+      self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+      norm = norm2(self%p)
+   end subroutine position_residual
+
+   !> The Newton correction of d from the kept residual, and its length
+   !> (each angle times the length of its link).
+   subroutine position_correction(self, t, correction, error)
+      class(angles_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: correction
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: k(2, 2), delta(2)
+      call tangent(self, self%d, k)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      call solve2(k, -self%p, delta, error)
+      self%counts%lu_factorisations = self%counts%lu_factorisations + 1
+      correction = 0
+      if (allocated(error)) then
+         error%message = 't = '//short_real_text(t)//': '//error%message
+         return
+      end if
+      self%d = self%d + delta
+      correction = maxval(abs(delta)*self%length(2:3))
+   end subroutine position_correction
 
    !> The jump check's view of the configuration d at the current crank angle:
    !> the sign of det K, |det K| / (|k1| |k2|) = |sin(theta3 - theta2)|, and the
@@ -338,14 +339,7 @@ contains
       real(dp) :: p(2), e(2, 3), n(2, 3), w(3), a(3)
       integer :: j
 
-      if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
-      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) then
-         call new_step_result(result, self%nnode, self%nlink)
-      end if
-      result%step = self%step
-      result%t = t
-      result%iterations = iterations
-      result%note = ''
+      call begin_result(self, t, iterations, self%nnode, self%nlink, result)
       call closure(self, self%d, p)
       result%residual = norm2(p)
       result%has_velocity = self%analysis%velocities
@@ -404,7 +398,7 @@ contains
       call solve2(k, rhs, self%ddd, error)
       self%counts%acceleration_solves = self%counts%acceleration_solves + 1
       if (allocated(error)) return
-      call self%history%set_rates(self%dd, self%ddd)
+      call self%set_rates(self%dd, self%ddd)
    end subroutine solve_rates
 
    !> Unit directions e = (cos, sin) and normals n = (-sin, cos) of theta1, theta2, theta3.

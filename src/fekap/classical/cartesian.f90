@@ -22,8 +22,9 @@ module fekap_classical_cartesian
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_classical_constraints, only: constraint_system_type, new_constraint_system, eq_angle
    use fekap_assembly_lapack, only: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
-   use fekap_classical_stepping, only: classical_stepper_type, new_history, drive_value, new_step_convergence, &
-      & no_convergence_text, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
+   use fekap_classical_stepping, only: classical_stepper_type, new_classical_history, begin_result, drive_value, &
+      & new_step_convergence, &
+      & newton_positions, branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
    implicit none
    private
 
@@ -41,7 +42,6 @@ module fekap_classical_cartesian
    type, extends(classical_stepper_type) :: cartesian_stepper_type
       private
       type(constraint_system_type) :: system
-      type(convergence_type) :: conv
       integer :: nnode = 0, nlink = 0
       !> The equations solved (all of them unless redundant ones were removed).
       integer, allocatable :: active(:)
@@ -57,7 +57,7 @@ module fekap_classical_cartesian
       !> 1 for the translation coordinates, the model size for the angles.
       real(dp), allocatable :: column_scale(:)
       !> Model size and the shortest link (the unit of translation drives in the jump check).
-      real(dp) :: model_length = 1, shortest_link = 1
+      real(dp) :: shortest_link = 1
       !> Whether the equations solved can change from step to step (redundant
       !> ones removed, slidelines on master chains): then the determinant of the
       !> last configuration is recomputed with the equations of the step.
@@ -76,6 +76,8 @@ module fekap_classical_cartesian
       procedure :: try_step
       procedure :: rates_at => solve_rates
       procedure :: finish_step
+      procedure :: position_residual
+      procedure :: position_correction
    end type cartesian_stepper_type
 
 contains
@@ -101,7 +103,7 @@ contains
       allocate (self%phi(m), self%jac_all(m, n), self%jac(n, n), source=0.0_dp)
       allocate (self%ipiv(n))
       self%q = self%system%bodies%q0
-      call new_history(self%history, n)
+      call new_classical_history(self, n)
       self%model_length = model_size(model)
       self%shortest_link = huge(1.0_dp)
       allocate (self%body_name(n/3))
@@ -231,12 +233,12 @@ contains
       self%equations_time = huge(1.0_dp)
       call self%system%residual(self%q, t, self%phi)
       increment_residual = active_norm(self)
-      call solve_positions(self, t, increment_residual, iterations, error)
+      call newton_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) then
          error%message = 'the initial configuration cannot be assembled: '//error%message
          return
       end if
-      call self%history%push(self%q, t)
+      call self%accept(self%q, t)
       call branch_state(self, self%q, .true., self%branch)
       self%reference = self%branch%measure
       call finish_step(self, t, iterations, result, error)
@@ -261,25 +263,25 @@ contains
       ! The equations (and master segments) to solve are chosen at the last
       ! accepted configuration, once: a retry after a step cut starts from
       ! the same configuration and would choose the same.
-      if (self%equations_time /= self%history%t(1)) then
+      if (self%equations_time /= self%history%t(self%history%newest)) then
          if (self%redundant) then
-            call select_equations(self, self%history%q(:, 1), .false., error)
+            call select_equations(self, self%history%q(:, self%history%newest), .false., error)
             if (allocated(error)) return
          end if
-         call self%system%select_segments(self%history%q(:, 1))
+         call self%system%select_segments(self%history%q(:, self%history%newest))
          ! With other equations the determinant of the last configuration is another one.
-         if (self%changing_equations) call branch_state(self, self%history%q(:, 1), .true., self%branch)
-         self%equations_time = self%history%t(1)
+         if (self%changing_equations) call branch_state(self, self%history%q(:, self%history%newest), .true., self%branch)
+         self%equations_time = self%history%t(self%history%newest)
       end if
       ! The scale of the default test: the residual of the drive increment alone.
-      self%q = self%history%q(:, 1)
+      self%q = self%history%q(:, self%history%newest)
       call set_driven_angles(self, t)
       call self%system%residual(self%q, t, self%phi)
       increment_residual = active_norm(self)
       ! Predictor, with the driven angles set to their values at t (the paper's (8)).
-      call self%history%predict(self%analysis%predictor, t, self%q)
+      call self%predict(t, self%q)
       call set_driven_angles(self, t)
-      call solve_positions(self, t, increment_residual, iterations, error)
+      call newton_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) return
       ! Without its redundant equations the system may converge to a
       ! configuration of a mechanism with a joint missing: every equation must hold.
@@ -298,7 +300,7 @@ contains
       ! Newton factor, at the converged configuration within tolerance).
       call branch_state(self, self%q, iterations == 0, new)
       self%reference = max(self%reference, new%measure)
-      call self%system%drive_increments(self%history%t(1), t, dd, rotation)
+      call self%system%drive_increments(self%history%t(self%history%newest), t, dd, rotation)
       ! The drive increment: radians, or lengths of the shortest link.
       step_floor = 0
       do b = 1, size(dd)
@@ -308,17 +310,17 @@ contains
          dq_old(b) = dot_product(self%branch%response(3*b, :), dd)
          dq_new(b) = dot_product(new%response(3*b, :), dd)
       end do
-      call magnitude_ratio(self%q(3:self%system%n:3) - self%history%q(3:self%system%n:3, 1), dq_old, dq_new, step_floor, &
-         & worst, where_)
+      call magnitude_ratio(self%q(3:self%system%n:3) - self%history%q(3:self%system%n:3, self%history%newest), dq_old, dq_new, &
+         & step_floor, worst, where_)
       where_ = max(1, where_)
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
-         & self%q(3*where_) - self%history%q(3*where_, 1), 'the angle of link '//trim(self%body_name(where_)))
+         & self%q(3*where_) - self%history%q(3*where_, self%history%newest), 'the angle of link '//trim(self%body_name(where_)))
       if (len(jump) > 0) then
          call analysis_error(error, jump)
          return
       end if
       self%branch = new
-      call self%history%push(self%q, t)
+      call self%accept(self%q, t)
    end subroutine try_step
 
    !> The jump check's view of configuration q with the equations of the
@@ -375,54 +377,38 @@ contains
       end do
    end subroutine set_driven_angles
 
-   !> Newton iterations on the active equations from self%q; iterations are
-   !> counted as linear solves until the shared convergence test passes.
-   subroutine solve_positions(self, t, increment_residual, iterations, error)
-      type(cartesian_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t, increment_residual
-      integer, intent(out) :: iterations
-      type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r, r0, correction
-      integer :: k
+   !> The residuals of the constraint equations at self%q and time t (in
+   !> self%phi) and the norm of the active ones.
+   subroutine position_residual(self, t, norm)
+      class(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: norm
+      call self%system%residual(self%q, t, self%phi)
+      self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+      norm = active_norm(self)
+   end subroutine position_residual
 
-      iterations = 0
-      r0 = 0
-      do
-         call self%system%residual(self%q, t, self%phi)
-         self%counts%residual_assemblies = self%counts%residual_assemblies + 1
-         r = active_norm(self)
-         if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
-            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
-         end if
-         if (iterations >= self%analysis%max_iter) then
-            call analysis_error(error, no_convergence_text(t, iterations, r))
-            return
-         end if
-         call self%system%jacobian(self%q, self%jac_all)
-         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         do k = 1, size(self%active)
-            self%rhs(k) = -self%phi(self%active(k))
-         end do
-         call factor_and_solve(self, t, error)
-         if (allocated(error)) return
-         iterations = iterations + 1
-         self%counts%iterations = self%counts%iterations + 1
-         self%q = self%q + self%rhs
-         correction = 0
-         do k = 1, self%system%n/3
-            correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
-         end do
-         if (correction > divergence_length*self%model_length) then
-            call analysis_error(error, 't = '//short_real_text(t)// &
-               & ': Newton diverged at iteration '//int_text(iterations))
-            return
-         end if
-         if (self%conv%mode /= convergence_paper) then
-            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
-         end if
+   !> The Newton correction of self%q from the active residuals, and its
+   !> length (the largest change of a body's position).
+   subroutine position_correction(self, t, correction, error)
+      class(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: correction
+      type(error_type), allocatable, intent(out) :: error
+      integer :: k
+      correction = 0
+      call self%system%jacobian(self%q, self%jac_all)
+      self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+      do k = 1, size(self%active)
+         self%rhs(k) = -self%phi(self%active(k))
       end do
-   end subroutine solve_positions
+      call factor_and_solve(self, t, error)
+      if (allocated(error)) return
+      self%q = self%q + self%rhs
+      do k = 1, self%system%n/3
+         correction = max(correction, abs(self%rhs(3*k - 2)), abs(self%rhs(3*k - 1)))
+      end do
+   end subroutine position_correction
 
    !> Euclidean norm of the active residuals in self%phi.
    pure real(dp) function active_norm(self) result(r)
@@ -474,14 +460,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       integer :: k, b, l
 
-      if (.not. allocated(result%pos)) call new_step_result(result, self%nnode, self%nlink)
-      if (size(result%pos, 2) /= self%nnode .or. size(result%angle) /= self%nlink) then
-         call new_step_result(result, self%nnode, self%nlink)
-      end if
-      result%step = self%step
-      result%t = t
-      result%iterations = iterations
-      result%note = ''
+      call begin_result(self, t, iterations, self%nnode, self%nlink, result)
       call self%system%residual(self%q, t, self%phi)
       self%counts%residual_assemblies = self%counts%residual_assemblies + 1
       result%residual = norm2(self%phi)
@@ -538,7 +517,7 @@ contains
       self%qdd = gamma_rhs(self%active)
       call dense_lu_solve(self%jac, self%ipiv, self%qdd, info)
       self%counts%acceleration_solves = self%counts%acceleration_solves + 1
-      call self%history%set_rates(self%qd, self%qdd)
+      call self%set_rates(self%qd, self%qdd)
    end subroutine solve_rates
 
 end module fekap_classical_cartesian

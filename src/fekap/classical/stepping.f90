@@ -6,21 +6,22 @@
 module fekap_classical_stepping
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error, error_analysis
-   use fekap_model, only: analysis_type, predictor_previous, predictor_extrapolate, predictor_taylor
+   use fekap_model, only: analysis_type, predictor_previous, predictor_taylor, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_strings, only: int_text, short_real_text
-   use fekap_model_results, only: step_result_type
+   use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_convergence, only: convergence_type
-   use fekap_solver_predictor, only: extrapolate
+   use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
+   use fekap_solver_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, extrapolate, &
+      & taylor_predict, prediction_none
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_branch, only: jump_ratio, jump_bound_ratio
    implicit none
    private
 
-   public :: history_type, new_history, drive_value, new_step_convergence, no_convergence_text
+   public :: new_classical_history, drive_value, new_step_convergence, no_convergence_text
    public :: branch_state_type, branch_jump_text, magnitude_ratio, lu_determinant
-   public :: classical_stepper_type
+   public :: classical_stepper_type, newton_positions, begin_result
 
    !> A change of sign of the Jacobian's determinant over a step is a
    !> legitimate passage through a singular configuration only if one end of
@@ -41,39 +42,31 @@ module fekap_classical_stepping
       real(dp), allocatable :: response(:, :)
    end type branch_state_type
 
-   !> The last (up to three) converged configurations, newest first, and the
-   !> rates of the newest one when they were computed.
-   type :: history_type
-      !> Number of stored configurations (0 to 3).
-      integer :: filled = 0
-      !> (ncoord, 3): configurations; column 1 is the newest.
-      real(dp), allocatable :: q(:, :)
-      !> Their times.
-      real(dp) :: t(3) = 0
-      !> Whether qd and qdd hold the rates of configuration 1.
-      logical :: has_rates = .false.
-      real(dp), allocatable :: qd(:), qdd(:)
-   contains
-      !> Store a newly converged configuration (its rates are unknown until set_rates).
-      procedure :: push => history_push
-      !> Record the velocities and accelerations of the newest configuration.
-      procedure :: set_rates => history_set_rates
-      !> The predictor's guess at a new time.
-      procedure :: predict => history_predict
-   end type history_type
-
    !> A constraint-equation method as a stepper. Its advance, the step-cut
    !> loop around the method's Newton solve, is shared; a method supplies the
    !> solve of one (sub-)step, the rates at an intermediate point of a cut
    !> step and the step's result.
    type, abstract, extends(stepper_type) :: classical_stepper_type
       type(analysis_type) :: analysis
-      !> The accepted configurations (newest first) and their times.
-      type(history_type) :: history
+      !> The convergence test of the Newton solves, and the model size (the unit of divergence).
+      type(convergence_type) :: conv
+      real(dp) :: model_length = 1
+      !> The accepted configurations and their times, for the predictor.
+      type(predictor_history_type) :: history
+      !> Whether rate_v and rate_a hold the velocities and accelerations of
+      !> the newest configuration (for the Taylor predictor).
+      logical :: has_rates = .false.
+      real(dp), allocatable :: rate_v(:), rate_a(:)
       !> Steps advanced so far.
       integer :: step = 0
    contains
       procedure :: advance => classical_advance
+      !> Make a converged configuration the accepted one (its rates unknown until set_rates).
+      procedure :: accept => classical_accept
+      !> Record the velocities and accelerations of the accepted configuration.
+      procedure :: set_rates => classical_set_rates
+      !> The predictor's guess at a new time.
+      procedure :: predict => classical_predict
       !> Newton at time t from the predictor and the branch-jump check; the
       !> configuration is pushed on the history only if both succeed.
       procedure(try_step_interface), deferred :: try_step
@@ -81,6 +74,12 @@ module fekap_classical_stepping
       procedure(rates_at_interface), deferred :: rates_at
       !> Rates at the accepted configuration (when asked for) and the step's result.
       procedure(finish_step_interface), deferred :: finish_step
+      !> The residual of the position equations at time t and the current
+      !> unknowns (kept for position_correction), counted, and its norm.
+      procedure(position_residual_interface), deferred :: position_residual
+      !> The Newton correction from the kept residual, applied to the
+      !> unknowns, counted, and its length (translations in lengths).
+      procedure(position_correction_interface), deferred :: position_correction
    end type classical_stepper_type
 
    abstract interface
@@ -110,9 +109,61 @@ module fekap_classical_stepping
          type(step_result_type), intent(inout) :: result
          type(error_type), allocatable, intent(out) :: error
       end subroutine finish_step_interface
+
+      subroutine position_residual_interface(self, t, norm)
+         import :: classical_stepper_type, dp
+         implicit none
+         class(classical_stepper_type), intent(inout) :: self
+         real(dp), intent(in) :: t
+         real(dp), intent(out) :: norm
+      end subroutine position_residual_interface
+
+      subroutine position_correction_interface(self, t, correction, error)
+         import :: classical_stepper_type, dp, error_type
+         implicit none
+         class(classical_stepper_type), intent(inout) :: self
+         real(dp), intent(in) :: t
+         real(dp), intent(out) :: correction
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine position_correction_interface
    end interface
 
 contains
+
+   !> Newton on the method's position equations at time t from its current
+   !> unknowns, until the shared convergence test passes (increment_residual:
+   !> the scale of the default test); iterations are counted as corrections.
+   subroutine newton_positions(self, t, increment_residual, iterations, error)
+      class(classical_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, increment_residual
+      integer, intent(out) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: r, r0, correction
+      iterations = 0
+      r0 = 0
+      do
+         call self%position_residual(t, r)
+         if (iterations == 0) r0 = r
+         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
+            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
+         end if
+         if (iterations >= self%analysis%max_iter) then
+            call analysis_error(error, no_convergence_text(t, iterations, r))
+            return
+         end if
+         call self%position_correction(t, correction, error)
+         if (allocated(error)) return
+         iterations = iterations + 1
+         self%counts%iterations = self%counts%iterations + 1
+         if (correction > divergence_length*self%model_length) then
+            call analysis_error(error, 't = '//short_real_text(t)//': Newton diverged at iteration '//int_text(iterations))
+            return
+         end if
+         if (self%conv%mode /= convergence_paper) then
+            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
+         end if
+      end do
+   end subroutine newton_positions
 
    !> Advance to time t: the method's Newton solve at t, the step cut in
    !> halves (at most max_cuts times) when Newton fails or the converged
@@ -130,10 +181,10 @@ contains
 
       self%step = self%step + 1
       self%counts%steps = self%counts%steps + 1
-      call cuts%begin(self%history%t(1), t)
+      call cuts%begin(self%history%t(self%history%newest), t)
       total = 0
-      do while (self%history%t(1) < t)
-         t_try = cuts%next(self%history%t(1))
+      do while (self%history%t(self%history%newest) < t)
+         t_try = cuts%next(self%history%t(self%history%newest))
          call self%try_step(t_try, iterations, step_error)
          total = total + iterations
          if (allocated(step_error)) then
@@ -157,65 +208,67 @@ contains
       result%note = cuts%note()
    end subroutine classical_advance
 
-   !> An empty history for ncoord coordinates.
-   pure subroutine new_history(self, ncoord)
-      type(history_type), intent(out) :: self
+   !> The head of a step's result at time t: its storage for nnode nodes and
+   !> nlink links, the step, the time and the iterations, no note.
+   subroutine begin_result(self, t, iterations, nnode, nlink, result)
+      class(classical_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      integer, intent(in) :: iterations, nnode, nlink
+      type(step_result_type), intent(inout) :: result
+      if (.not. allocated(result%pos)) call new_step_result(result, nnode, nlink)
+      if (size(result%pos, 2) /= nnode .or. size(result%angle) /= nlink) call new_step_result(result, nnode, nlink)
+      result%step = self%step
+      result%t = t
+      result%iterations = iterations
+      result%note = ''
+   end subroutine begin_result
+
+   !> An empty history and rates for ncoord coordinates.
+   pure subroutine new_classical_history(self, ncoord)
+      class(classical_stepper_type), intent(inout) :: self
       integer, intent(in) :: ncoord
-      allocate (self%q(ncoord, 3), source=0.0_dp)
-      allocate (self%qd(ncoord), self%qdd(ncoord), source=0.0_dp)
-   end subroutine new_history
-
-   pure subroutine history_push(self, q, t)
-      class(history_type), intent(inout) :: self
-      real(dp), intent(in) :: q(:), t
-      self%q(:, 3) = self%q(:, 2)
-      self%q(:, 2) = self%q(:, 1)
-      self%q(:, 1) = q
-      self%t(3) = self%t(2)
-      self%t(2) = self%t(1)
-      self%t(1) = t
-      self%filled = min(3, self%filled + 1)
+      call new_predictor_history(self%history, ncoord)
+      allocate (self%rate_v(ncoord), self%rate_a(ncoord), source=0.0_dp)
       self%has_rates = .false.
-   end subroutine history_push
+   end subroutine new_classical_history
 
-   pure subroutine history_set_rates(self, qd, qdd)
-      class(history_type), intent(inout) :: self
+   pure subroutine classical_accept(self, q, t)
+      class(classical_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: q(:), t
+      call self%history%push(q, t)
+      self%has_rates = .false.
+   end subroutine classical_accept
+
+   pure subroutine classical_set_rates(self, qd, qdd)
+      class(classical_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: qd(:), qdd(:)
-      self%qd = qd
-      self%qdd = qdd
+      self%rate_v = qd
+      self%rate_a = qdd
       self%has_rates = .true.
-   end subroutine history_set_rates
+   end subroutine classical_set_rates
 
-   !> Predictor at time t: predictor_previous takes the last converged
-   !> configuration (the paper's (10)); predictor_extrapolate the Lagrange
-   !> extrapolation through the last (up to) three; predictor_taylor
+   !> Predictor at time t (the analysis's): predictor_previous takes the last
+   !> converged configuration (the paper's (10)); predictor_extrapolate the
+   !> Lagrange extrapolation through the last (up to) three; predictor_taylor
    !> q + dt q' + dt**2/2 q'' from the last rates, or extrapolation when
    !> velocities and accelerations were not both computed.
-   pure subroutine history_predict(self, predictor, t, q)
-      class(history_type), intent(in) :: self
-      !> predictor_previous, predictor_extrapolate or predictor_taylor.
-      integer, intent(in) :: predictor
+   subroutine classical_predict(self, t, q)
+      class(classical_stepper_type), intent(in) :: self
       real(dp), intent(in) :: t
       real(dp), intent(out) :: q(:)
-      ! The history's columns, newest first.
-      integer, parameter :: columns(3) = [1, 2, 3]
-      real(dp) :: h
-      integer :: k
-      k = max(1, self%filled)
-      select case (predictor)
-      case (predictor_previous)
-         q = self%q(:, 1)
-      case (predictor_taylor)
-         if (self%has_rates) then
-            h = t - self%t(1)
-            q = self%q(:, 1) + h*self%qd + h**2/2*self%qdd
+      integer :: made
+      associate (history => self%history)
+         if (self%analysis%predictor == predictor_previous) then
+            q = history%q(:, history%newest)
+         else if (self%analysis%predictor == predictor_taylor .and. self%has_rates) then
+            call taylor_predict(history%q(:, history%newest), self%rate_v, self%rate_a, t - history%t(history%newest), q)
          else
-            call extrapolate(self%q, self%t, columns(1:k), t, q)
+            call extrapolate_history(history, t, .false., 0.0_dp, [0.0_dp], q, made)
+            ! One configuration: the constant extrapolation through it.
+            if (made == prediction_none) call extrapolate(history%q, history%t, [history%newest], t, q)
          end if
-      case default
-         call extrapolate(self%q, self%t, columns(1:k), t, q)
-      end select
-   end subroutine history_predict
+      end associate
+   end subroutine classical_predict
 
    !> Value and rates at time t of a driven quantity that starts at `initial`
    !> at t_start: initial + law(t) - law(t_start). For an absolute law that

@@ -287,7 +287,7 @@ contains
       end if
    end subroutine slide_locate
 
-   !> Default penalty constant k_p = scale * max(EA/L) over the elements the spring couples
+   !> Default penalty constant k_p = factor * max(EA/L) over the elements the spring couples
    !> (the master element and the slave node's element). Pass ea = 0 for an absent
    !> element (a ground guide). Why this scale: at a converged kinematic configuration all
    !> forces vanish, so the gap is zero whatever k_p is, and k_p only affects the
@@ -309,7 +309,7 @@ contains
       if (present(factor)) kp = factor*kp
    end function default_penalty
 
-   !> Default rotational penalty k_r = scale * max(EI/L) of the master element and the
+   !> Default rotational penalty k_r = factor * max(EI/L) of the master element and the
    !> slave link's element (moment per radian), by the same reasoning as default_penalty:
    !> EI/L is the scale of the beams' own rotational stiffness.
    pure function default_tie_penalty(ei_master, ei_slave, l_master, l_slave, factor) result(kr)

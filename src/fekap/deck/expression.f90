@@ -11,6 +11,10 @@
 !> atan2(y,x) exp log abs; the deck's parameters (PARAmeters block), when the
 !> caller passes them. Names are case-insensitive.
 !>
+!> Why one module of over 600 lines (just over): the recursive-descent
+!> parser, its tokens and the overflow-safe arithmetic it evaluates with
+!> share private state of one expression and are tested together.
+!>
 !> Every operation is checked before it is carried out, so that no NaN, no
 !> infinity and no overflow is ever computed (the tests run with floating-point
 !> traps): a result that would not be a finite number is reported instead.

@@ -107,7 +107,10 @@ contains
       end if
       self%failed = .true.
       self%closed = .true.
+      ! The failed write is the error; a failing close (its library buffer
+      ! cannot be written either) adds nothing to it.
       close (self%unit, iostat=ios)
+      if (ios /= 0) self%failed = .true.
       call write_failure(self%path, self%verified, error)
    end subroutine flush_text_buffer
 

@@ -1,8 +1,8 @@
-!> Writes that are checked. gfortran's I/O library loses a failed write(2)
-!> without a word (on a full file system a write statement, a flush and a
-!> close all report success, and the file simply ends short: measured with
-!> gfortran 12 on a full tmpfs), so a file is taken as written only when its
-!> size on disk equals the position its unit has reached. A file that came
+!> Writes that are checked: a file counts as written when its length on disk
+!> equals the position its unit reached. gfortran's I/O library loses a
+!> failed write(2) without a word (on a full file system a write statement, a
+!> flush and a close all report success, and the file simply ends short:
+!> measured with gfortran 12 on a full tmpfs). A file that came
 !> out short is cut back to the length last verified (whole lines: the
 !> writers hand over whole lines only), and the error names the file and
 !> the operating system's reason, found by appending one byte with write(2).

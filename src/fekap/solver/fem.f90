@@ -37,7 +37,7 @@ module fekap_solver_fem
       & assemble_system_residual, factor_system, system_pivot, residual_norm, newton_correction, &
       & apply_correction, drive_response, drive_load_rhs, solve_system, apply_response
    use fekap_solver_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, &
-      & taylor_predict, prediction_none, prediction_smooth
+      & taylor_predict, prediction_none, prediction_smooth, predictor_margin
    use fekap_solver_branch, only: branch_check_type, new_branch_check, drive_increment, branch_verdict, &
       & branch_reject, branch_verify, branch_unverifiable, max_verify_depth
    use fekap_solver_rates, only: pivot_note, solve_velocities, solve_accelerations, near_singular_drop, &
@@ -62,9 +62,6 @@ module fekap_solver_fem
    !> Iterations in a row with the residual below its floor after which
    !> Newton has stalled at round-off.
    integer, parameter :: stall_iterations = 3
-   !> A step whose first Newton correction is at most this share of the
-   !> length tolerance is accepted at its predictor (see solve_step).
-   real(dp), parameter :: accept_margin = 1.0e-3_dp
    !> A verifying pair of half steps contradicts its step when their results
    !> differ by more than verify_agreement model sizes (or the admissible
    !> strain, if larger); see verify_step.
@@ -463,7 +460,7 @@ contains
                   end if
                   ! Converged where this pass starts (the predictor, or an
                   ! iterate that a check below corrected): a first correction
-                  ! below accept_margin times the length tolerance (at
+                  ! below predictor_margin times the length tolerance (at
                   ! round-off with the default tolerance) leaves it as it is,
                   ! and the tangent just factored, material only (every Gauss
                   ! point strained less than kg_above), is the tangent at the
@@ -473,7 +470,7 @@ contains
                   ! error along the near-singular direction (a predictor kept
                   ! past collinear is then rejected by the branch-jump check).
                   if (i == 0 .and. .not. self%loaded .and. self%conv%mode /= convergence_paper) then
-                     at_predictor = correction <= accept_margin*self%conv%length .and. &
+                     at_predictor = correction <= predictor_margin*self%conv%length .and. &
                         & system%assembled_strain < kg_above .and. &
                         & is_converged(self%conv, residual, r0, increment_residual, correction)
                      if (at_predictor) then

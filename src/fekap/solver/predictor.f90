@@ -25,7 +25,9 @@ module fekap_solver_predictor
    !> The Adams-Bashforth predictor is taken when its error, estimated by
    !> the difference between its predictions through the newest
    !> history_depth - 1 and history_depth velocities, is at most
-   !> predictor_margin times the length tolerance.
+   !> predictor_margin times the length tolerance; and a step whose first
+   !> Newton correction is that small is accepted at its predictor (see the
+   !> FEM's solve_step).
    real(dp), parameter, public :: predictor_margin = 1.0e-3_dp
 
    !> What extrapolate_history made: nothing (fewer than two configurations),
