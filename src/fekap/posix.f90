@@ -15,6 +15,8 @@ module fekap_posix
    public :: os_mkdir, os_make_path, os_is_directory, os_rename, os_unlink, os_rmdir, os_truncate
    public :: os_open_lock, os_append_probe, os_error_text, os_ignore_sigpipe
    public :: os_list_directory, name_list_type, os_read_all, os_file_size
+   ! The C library's signal(2), for the interrupt module.
+   public :: c_signal
 
    integer(c_int), parameter :: o_rdonly = 0, o_wronly = 1, o_append = 1024, o_cloexec = 524288
    integer(c_int), parameter :: lock_ex = 2, lock_nb = 4

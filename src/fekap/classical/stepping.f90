@@ -255,7 +255,7 @@ contains
    subroutine classical_predict(self, t, q)
       class(classical_stepper_type), intent(in) :: self
       real(dp), intent(in) :: t
-      real(dp), intent(out) :: q(:)
+      real(dp), contiguous, intent(out) :: q(:)
       integer :: made
       associate (history => self%history)
          if (self%analysis%predictor == predictor_previous) then

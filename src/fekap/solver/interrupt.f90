@@ -7,6 +7,7 @@
 !> no other place to leave it.
 module fekap_solver_interrupt
    use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
+   use fekap_posix, only: c_signal
    implicit none
    private
 
@@ -16,16 +17,6 @@ module fekap_solver_interrupt
 
    !> The signal received, 0 if none.
    integer(c_int), volatile :: received = 0
-
-   interface
-      function c_signal(signum, handler) bind(C, name='signal') result(previous)
-         import :: c_int, c_funptr
-         implicit none
-         integer(c_int), value :: signum
-         type(c_funptr), value :: handler
-         type(c_funptr) :: previous
-      end function c_signal
-   end interface
 
 contains
 
