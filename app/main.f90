@@ -4,8 +4,10 @@ program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
    use fekap_error, only: error_type, error_input, error_analysis, error_output
-   use fekap_model, only: model_type, method_fem, method_cartesian
+   use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics
    use fekap_deck, only: read_deck
+   use fekap_model_effects, only: check_effects_request, planned_effects
+   use fekap_effects_kinetostatic_stepper, only: kinetostatic_stepper_type, new_kinetostatic_stepper
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
@@ -59,6 +61,8 @@ program fekap_main
    if (allocated(error)) call finish(error)
    call apply_overrides(cli, model, error)
    if (allocated(error)) call finish(error)
+   call check_effects_request(model, error)
+   if (allocated(error)) call finish(error)
 
    call make_stepper(model, stepper, error)
    if (allocated(error)) call finish(error)
@@ -103,13 +107,20 @@ contains
       class(stepper_type), allocatable, intent(out) :: stepper
       type(error_type), allocatable, intent(out) :: error
       type(fem_stepper_type), allocatable :: fem
+      type(kinetostatic_stepper_type), allocatable :: kinetostatic
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
       select case (model%analysis%method)
       case (method_fem)
          allocate (fem)
          call new_fem_stepper(fem, model)
-         call move_alloc(fem, stepper)
+         if (planned_effects(model) == effects_kinetostatics) then
+            allocate (kinetostatic)
+            call new_kinetostatic_stepper(kinetostatic, fem)
+            call move_alloc(kinetostatic, stepper)
+         else
+            call move_alloc(fem, stepper)
+         end if
       case (method_cartesian)
          allocate (cartesian)
          call new_cartesian_stepper(cartesian, model, error)
@@ -142,6 +153,9 @@ contains
          if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/nodes.csv', units%nodes, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
+         if (.not. allocated(error) .and. planned_effects(model) == effects_kinetostatics) then
+            call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
+         end if
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)
          call close_checked(mesh_unit, -1_int64, error)

@@ -15,7 +15,8 @@ module fekap_run
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes, has_note
    use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
-      & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix, write_nodes_header, write_nodes_row
+      & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix, write_nodes_header, write_nodes_row, &
+      & write_reactions_header, write_reactions_rows
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop, write_listing_note
    use fekap_output_vtk, only: write_vtu
@@ -55,6 +56,8 @@ module fekap_run
       !> nodes.csv: every node's position at the written steps.
       integer :: nodes = no_unit
       integer :: listing = no_unit
+      !> reactions.csv, written by kinetostatics runs only.
+      integer :: reactions = no_unit
       logical :: vtk = .false.
       !> The output directory and the deck's stem, for the VTK file names.
       character(:), allocatable :: outdir, stem
@@ -74,7 +77,7 @@ module fekap_run
 
    !> The text of the files written step by step, held between flushes.
    type :: run_buffers_type
-      type(text_buffer_type) :: points, links, steps, nodes, listing
+      type(text_buffer_type) :: points, links, steps, nodes, listing, reactions
    end type run_buffers_type
 
 contains
@@ -135,6 +138,7 @@ contains
       if (units%links /= no_unit) call write_links_header(out%links, vel, acc)
       if (units%steps /= no_unit) call write_steps_header(out%steps)
       if (units%nodes /= no_unit) call write_nodes_header(out%nodes, model)
+      if (units%reactions /= no_unit) call write_reactions_header(out%reactions)
       if (units%listing /= no_unit) call write_listing_step_header(units%listing)
       if (units%vtk) then
          allocate (vtk%links_nodes(2, size(model%links)))
@@ -177,7 +181,7 @@ contains
          end if
          if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
             if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit .or. &
-               & units%nodes /= no_unit) then
+               & units%nodes /= no_unit .or. units%reactions /= no_unit) then
                call new_row_prefix(prefix, result)
             end if
             if (units%points /= no_unit) then
@@ -193,6 +197,10 @@ contains
                rows = rows + 1
             end if
             if (units%nodes /= no_unit) call write_nodes_row(out%nodes, result, prefix)
+            if (units%reactions /= no_unit) then
+               call write_reactions_rows(out%reactions, model, result, prefix)
+               rows = rows + size(result%reactions, 2)
+            end if
             if (units%listing /= no_unit) call write_listing_step(out%listing, result)
             if (units%vtk) then
                call write_vtk_step(units, model, result, vtk, error)
@@ -368,6 +376,7 @@ contains
       if (units%links /= no_unit) call new_text_buffer(out%links, units%links, formatted=.false.)
       if (units%steps /= no_unit) call new_text_buffer(out%steps, units%steps, formatted=.false.)
       if (units%nodes /= no_unit) call new_text_buffer(out%nodes, units%nodes, formatted=.false.)
+      if (units%reactions /= no_unit) call new_text_buffer(out%reactions, units%reactions, formatted=.false.)
       if (units%listing /= no_unit) call new_text_buffer(out%listing, units%listing, formatted=.true.)
    end subroutine new_run_buffers
 
@@ -384,6 +393,7 @@ contains
       if (units%links /= no_unit) call flush_one(out%links)
       if (units%steps /= no_unit) call flush_one(out%steps)
       if (units%nodes /= no_unit) call flush_one(out%nodes)
+      if (units%reactions /= no_unit) call flush_one(out%reactions)
       if (units%listing /= no_unit) call flush_one(out%listing)
    contains
       subroutine flush_one(buffer)

@@ -191,7 +191,7 @@ def bad_numbers(outdir: Path) -> list[str]:
                 problems.append(f"{path.name}: ragged row {row}")
                 continue
             for name, field in zip(header, row):
-                if name in ("point", "link", "node1", "node2") or field == "":
+                if name in ("point", "link", "node1", "node2", "kind", "node") or field == "":
                     continue
                 try:
                     value = float(field)

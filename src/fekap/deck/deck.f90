@@ -6,13 +6,14 @@ module fekap_deck
    use fekap_model, only: model_type
    use fekap_deck_card, only: card_none, card_title, card_sections, card_nodes, card_links, card_welds, &
       & card_supports, card_drives, card_loads, card_slidelines, card_analysis, card_output, card_include, &
-      & card_end, card_parameters, ncards, card_name, card_list, card_of
+      & card_end, card_parameters, ncards, card_name, card_list, card_of, card_masses, card_gravity
    use fekap_deck_context, only: context_type
    use fekap_deck_diagnostic, only: mark_type
    use fekap_deck_source, only: load_file, load_string
    use fekap_deck_geometry, only: read_sections, read_nodes, read_links, read_welds, read_supports
    use fekap_deck_motion, only: read_drives, read_loads, read_slidelines
    use fekap_deck_settings, only: read_title, read_analysis, read_output
+   use fekap_deck_inertia, only: read_masses, read_gravity, check_effects
    use fekap_deck_parameters, only: override_type, read_parameters
    implicit none
    private
@@ -90,7 +91,7 @@ contains
             card = line%card
             nfields = size(line%tokens)
             if (card == card_include) cycle   ! the included lines follow, in the open block
-            if (card /= card_none .and. card /= card_title .and. nfields > 1) then
+            if (card /= card_none .and. card /= card_title .and. card /= card_gravity .and. nfields > 1) then
                call ctx%error(i, 1, "'"//line%tokens(1)%text//"' reads as the card "//card_name(card)// &
                   & ', but more fields follow', label='a card keyword stands alone on its line, '// &
                   & 'and a name cannot be a card keyword (4 or more letters that begin one)')
@@ -100,6 +101,13 @@ contains
             if (card == card_title) then
                block(i) = card_title
                current = card_skip
+               cycle
+            end if
+            if (card == card_gravity) then
+               ! Its values are on its line; data lines after it are errors (read_gravity).
+               block(i) = card_gravity
+               current = card_gravity
+               seen(card) = .true.
                cycle
             end if
             if (card /= card_none) then
@@ -135,7 +143,10 @@ contains
       call read_slidelines(ctx, model, lines_of(card_slidelines))
       call read_drives(ctx, model, lines_of(card_drives))
       call read_loads(ctx, model, lines_of(card_loads))
+      call read_masses(ctx, model, lines_of(card_masses))
+      call read_gravity(ctx, model, lines_of(card_gravity))
       call read_output(ctx, model, lines_of(card_output))
+      call check_effects(ctx, model, lines_of(card_analysis))
 
       ! The deck as a whole.
       last = ctx%source%nlines

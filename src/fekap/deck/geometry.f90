@@ -28,18 +28,21 @@ module fekap_deck_geometry
 
 contains
 
-   !> SECTions: `name E= G= A= I= [k=]` (k defaults to 5/6) or `name EA= kGA= EI=`.
+   !> SECTions: `name E= G= A= I= [k=]` (k defaults to 5/6) or `name EA= kGA= EI=`,
+   !> and optionally a density: `rho=` (mass per length rho*A, rotary inertia
+   !> per length rho*I), or `rhoA=` and optionally `rhoI=` directly.
    subroutine read_sections(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       !> The card's data lines (indices into ctx%source%lines).
       integer, intent(in) :: lines(:)
-      character(*), parameter :: keys(8) = [character(len=3) :: 'e', 'g', 'a', 'i', 'k', 'ea', 'kga', 'ei']
+      character(*), parameter :: keys(11) = [character(len=4) :: 'e', 'g', 'a', 'i', 'k', 'ea', 'kga', 'ei', &
+         & 'rho', 'rhoa', 'rhoi']
       character(*), parameter :: form = 'name E=... G=... A=... I=... [k=...]  or  name EA=... kGA=... EI=...'
       type(section_type), allocatable :: list(:)
-      real(dp) :: value(8), v
-      logical :: given(8), ok, good
-      integer :: n, i, k, iline, eq, key, ikey(8), prev
+      real(dp) :: value(11), v
+      logical :: given(11), ok, good
+      integer :: n, i, k, iline, eq, key, ikey(11), prev
       character(:), allocatable :: field
       allocate (list(size(lines)))
       n = 0
@@ -56,14 +59,14 @@ contains
             eq = index(field, '=')
             if (eq <= 1) then
                call ctx%error(iline, k, "expected PROPERTY=VALUE, not '"//field//"'", &
-                  & label='properties: E= G= A= I= k= EA= kGA= EI= (no blanks around =)')
+                  & label='properties: E= G= A= I= k= EA= kGA= EI= rho= rhoA= rhoI= (no blanks around =)')
                good = .false.
                cycle
             end if
             key = findloc(keys, lower(field(:eq - 1)), 1)
             if (key == 0) then
                call ctx%error(iline, k, "unknown section property '"//field(:eq - 1)//"'", &
-                  & label='properties: E= G= A= I= k= EA= kGA= EI=')
+                  & label='properties: E= G= A= I= k= EA= kGA= EI= rho= rhoA= rhoI=')
                good = .false.
                cycle
             end if
@@ -103,6 +106,7 @@ contains
             call derive(list(n)%ea, 6, [1, 3], 'EA', 'E= and A=')
             call derive(list(n)%kga, 7, [5, 2, 3], 'kGA', 'k=, G= and A= (k defaults to 5/6)')
             call derive(list(n)%ei, 8, [1, 4], 'EI', 'E= and I=')
+            call derive_density()
             if (any([list(n)%ea, list(n)%kga, list(n)%ei] > max_property) .or. &
                & any([list(n)%ea, list(n)%kga, list(n)%ei] < min_property .and. &
                & [list(n)%ea, list(n)%kga, list(n)%ei] > 0)) then
@@ -120,6 +124,37 @@ contains
       model%sections = list(:n)
 
    contains
+
+      !> rho*A and rho*I from rho= (which needs A= and I=), or rhoA= [rhoI=].
+      subroutine derive_density()
+         logical :: fine
+         if (given(9) .and. (given(10) .or. given(11))) then
+            call ctx%error(iline, ikey(9), 'the density is given both as rho= and as rhoA=/rhoI=', &
+               & label='give rho= (with A= and I=) or rhoA= [rhoI=]')
+            good = .false.
+         else if (given(9)) then
+            if (.not. (given(3) .and. given(4))) then
+               call ctx%error(iline, ikey(9), 'rho= needs A= and I= on the line (rhoA = rho*A, rhoI = rho*I)', &
+                  & label='give A= and I=, or rhoA= [rhoI=] directly')
+               good = .false.
+               return
+            end if
+            call safe_multiply(value(9), value(3), list(n)%rho_a, fine)
+            if (fine) call safe_multiply(value(9), value(4), list(n)%rho_i, fine)
+            if (.not. fine .or. list(n)%rho_a > max_property .or. list(n)%rho_i > max_property .or. &
+               & list(n)%rho_a < min_property .or. list(n)%rho_i < min_property) then
+               call ctx%error(iline, ikey(9), 'section '//ctx%field(iline, 1)//': rho*A or rho*I out of range', &
+                  & label='rhoA and rhoI must lie between 1e-100 and 1e100')
+               good = .false.
+            end if
+         else if (given(11) .and. .not. given(10)) then
+            call ctx%error(iline, ikey(11), 'rhoI= without rhoA=', label='give the mass per length rhoA= too')
+            good = .false.
+         else
+            list(n)%rho_a = value(10)
+            list(n)%rho_i = value(11)
+         end if
+      end subroutine derive_density
 
       !> A stiffness given directly (value(direct)) or as the product of others.
       subroutine derive(stiffness, direct, factors, what, how)

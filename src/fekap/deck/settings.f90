@@ -6,7 +6,8 @@ module fekap_deck_settings
    use fekap_model, only: model_type, method_names, predictor_names, method_fem, method_cartesian, method_angles, &
       & predictor_previous, &
       & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, &
-      & solver_band, solver_dense
+      & solver_band, solver_dense, effects_auto, effects_kinematics, effects_kinetostatics, effects_statics, &
+      & effects_dynamics
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, word_index
    use fekap_deck_context, only: context_type
@@ -48,13 +49,13 @@ contains
    end subroutine read_title
 
    !> ANALysis: `method`, `time`, `compute`, `tolerance`, `length`, `iterations`,
-   !> `predictor`, `convergence`, `gauss`, `redundant`, `solver` lines; then the time span is checked.
+   !> `predictor`, `convergence`, `gauss`, `redundant`, `solver`, `type` lines; then the time span is checked.
    subroutine read_analysis(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
       character(*), parameter :: keys = 'method time compute tolerance length iterations predictor convergence '// &
-         & 'gauss redundant solver'
+         & 'gauss redundant solver type'
       integer :: i, iline, k, time_line, ivalue
       real(dp) :: t(3), span, v
       logical :: ok, fine
@@ -170,6 +171,21 @@ contains
                model%analysis%solver = solver_band
             case (2)
                model%analysis%solver = solver_dense
+            end select
+         else if (is_word_of(key, 'type', 4)) then
+            ! Whether the type can run is checked against the whole deck (check_effects).
+            if (.not. one_value('type auto|kinematics|kinetostatics|statics|dynamics')) cycle
+            select case (choice(2, 'auto kinematics kinetostatics statics dynamics'))
+            case (1)
+               model%analysis%effects = effects_auto
+            case (2)
+               model%analysis%effects = effects_kinematics
+            case (3)
+               model%analysis%effects = effects_kinetostatics
+            case (4)
+               model%analysis%effects = effects_statics
+            case (5)
+               model%analysis%effects = effects_dynamics
             end select
          else
             call ctx%error(iline, 1, "unknown ANALysis parameter '"//ctx%field(iline, 1)//"'", label='allowed: '//keys)

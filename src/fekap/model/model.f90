@@ -10,7 +10,7 @@ module fekap_model
    private
 
    public :: model_type, node_type, section_type, link_type, weld_type
-   public :: support_type, drive_type, load_type, slideline_type
+   public :: support_type, drive_type, load_type, slideline_type, mass_type
    public :: analysis_type, output_type, source_loc_type, parameter_type
    public :: find_node, find_link, model_size
 
@@ -38,6 +38,12 @@ module fekap_model
    !> Slideline kinds: the paper's pin-in-slot (slave rotation free) or a
    !> prismatic joint (slave link keeps its angle relative to the master).
    integer, parameter, public :: joint_pin_in_slot = 1, joint_prismatic = 2
+   !> Effects a run simulates (ANALysis type): chosen from the deck (auto), pure
+   !> kinematics, or kinetostatics (drive and joint reactions of the computed
+   !> motion); statics and dynamics are named so that the deck can say they
+   !> are not available yet.
+   integer, parameter, public :: effects_auto = 0, effects_kinematics = 1, effects_kinetostatics = 2, &
+      & effects_statics = 3, effects_dynamics = 4
 
    !> Where an entity was declared: for diagnostics that point into the deck.
    type :: source_loc_type
@@ -59,6 +65,8 @@ module fekap_model
       character(:), allocatable :: name
       !> Axial EA, shear kGA and bending EI stiffness, all positive.
       real(dp) :: ea = 0, kga = 0, ei = 0
+      !> Mass per length rho*A and rotary inertia per length rho*I (0: massless).
+      real(dp) :: rho_a = 0, rho_i = 0
       type(source_loc_type) :: loc
    end type section_type
 
@@ -117,6 +125,17 @@ module fekap_model
       type(source_loc_type) :: loc
    end type load_type
 
+   !> A point mass at a node (the pin's: it moves with the node's translations)
+   !> and a rotary inertia on one link end there (it turns with that end).
+   type :: mass_type
+      integer :: node = 0
+      real(dp) :: mass = 0
+      real(dp) :: inertia = 0
+      !> The link end (at node) that carries the rotary inertia (0 without one).
+      integer :: link = 0
+      type(source_loc_type) :: loc
+   end type mass_type
+
    !> A sliding joint: a slave node kept on a master line by a penalty spring.
    type :: slideline_type
       character(:), allocatable :: name
@@ -156,6 +175,8 @@ module fekap_model
       logical :: remove_redundant = .false.
       !> Linear solver of the finite element method: solver_band or solver_dense.
       integer :: solver = solver_band
+      !> Effects asked for (ANALysis type): effects_auto, effects_kinematics, ...
+      integer :: effects = effects_auto
    end type analysis_type
 
    !> What to write.
@@ -199,6 +220,10 @@ module fekap_model
       type(drive_type), allocatable :: drives(:)
       type(load_type), allocatable :: loads(:)
       type(slideline_type), allocatable :: slidelines(:)
+      type(mass_type), allocatable :: masses(:)
+      !> Gravity acceleration (GRAVity card), and where it was given.
+      real(dp) :: gravity(2) = 0
+      type(source_loc_type) :: gravity_loc
       type(analysis_type) :: analysis
       type(output_type) :: output
       !> The deck's parameters in the order defined, with the values used.

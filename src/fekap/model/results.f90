@@ -39,6 +39,12 @@ module fekap_model_results
       real(dp), allocatable :: mesh_pos(:, :), mesh_vel(:, :), mesh_acc(:, :)
       integer, allocatable :: cells(:, :), cell_link(:)
       real(dp), allocatable :: cell_force(:, :)
+      !> Kinetostatics (filled only when the run simulates it): the
+      !> reactions (fx, fy, m) of each row (see fekap_effects_kinetostatics:
+      !> drives, supports, then both ends of every link), and whether they are
+      !> known at this step (not at a singular configuration).
+      logical :: has_reactions = .false.
+      real(dp), allocatable :: reactions(:, :)
    end type step_result_type
 
 contains

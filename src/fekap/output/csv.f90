@@ -17,7 +17,7 @@ module fekap_output_csv
 
    public :: write_points_header, write_points_rows, write_links_header, write_links_rows
    public :: write_steps_header, write_steps_row, write_mesh_csv, new_row_prefix
-   public :: write_nodes_header, write_nodes_row, write_mechanism_csv
+   public :: write_nodes_header, write_nodes_row, write_mechanism_csv, write_reactions_header, write_reactions_rows
 
    !> Longest text of a real (es25.16e3 without its leading blank) and of an
    !> integer, and of the prefix `step,t,` of a row.
@@ -313,6 +313,71 @@ contains
          out = out//text(i:i)
       end do
    end function squeeze
+
+   subroutine write_reactions_header(out)
+      type(text_buffer_type), intent(inout) :: out
+      character(*), parameter :: header = 'step,t,kind,link,node,fx,fy,m'
+      call reserve_text(out, len(header) + 1)
+      call append_text(out%text, out%n, header//new_line('a'))
+   end subroutine write_reactions_header
+
+   !> `step,t,kind,link,node,fx,fy,m` for every reaction row of a kinetostatics
+   !> step (fekap_effects_kinetostatics): `drive` rows (the force or torque of
+   !> each drive, in its component), `support` rows (each support's reactions,
+   !> zero in a direction it leaves free), and `joint` rows, two per link (the
+   !> force and moment the joint at each end exerts on the link). The force
+   !> columns are empty at a step without accelerations (a singular configuration).
+   subroutine write_reactions_rows(out, model, result, prefix)
+      type(text_buffer_type), intent(inout) :: out
+      type(model_type), intent(in) :: model
+      type(step_result_type), intent(in) :: result
+      type(row_prefix_type), intent(in) :: prefix
+      integer :: row, i, l, end_
+      row = 0
+      do i = 1, size(model%drives)
+         row = row + 1
+         associate (d => model%drives(i))
+            if (d%dof == dof_rot) then
+               call append_reaction(out, 'drive', model%links(d%link)%name, model%nodes(d%node)%name, row)
+            else
+               call append_reaction(out, 'drive', '', model%nodes(d%node)%name, row)
+            end if
+         end associate
+      end do
+      do i = 1, size(model%supports)
+         row = row + 1
+         associate (s => model%supports(i))
+            if (s%fix(dof_rot)) then
+               call append_reaction(out, 'support', model%links(s%link)%name, model%nodes(s%node)%name, row)
+            else
+               call append_reaction(out, 'support', '', model%nodes(s%node)%name, row)
+            end if
+         end associate
+      end do
+      do l = 1, size(model%links)
+         do end_ = 1, 2
+            row = row + 1
+            call append_reaction(out, 'joint', model%links(l)%name, model%nodes(model%links(l)%node(end_))%name, row)
+         end do
+      end do
+
+   contains
+
+      subroutine append_reaction(buffer, kind, link, node, irow)
+         type(text_buffer_type), intent(inout) :: buffer
+         character(*), intent(in) :: kind, link, node
+         integer, intent(in) :: irow
+         call reserve_text(buffer, row_length(len(kind) + len(link) + len(node) + 2, 3))
+         call append_text(buffer%text, buffer%n, prefix%text(1:prefix%n)//kind//','//link//','//node)
+         if (result%has_reactions) then
+            call append_values(buffer%text, buffer%n, result%reactions(:, irow))
+         else
+            call append_text(buffer%text, buffer%n, ',,,')
+         end if
+         call append_char(buffer%text, buffer%n, new_line('a'))
+      end subroutine append_reaction
+
+   end subroutine write_reactions_rows
 
    !> `link,node1,node2`: the end points of every link, for drawing the
    !> mechanism; to a unit open for unformatted stream access.

@@ -6,6 +6,7 @@ module fekap_output_listing
       & predictor_previous, predictor_extrapolate, convergence_paper, joint_prismatic
    use fekap_model_results, only: step_result_type
    use fekap_model_drive_law, only: law_type, law_rate, law_harmonic, law_polynomial, law_table
+   use fekap_model_effects, only: effects_plan_type, plan_effects, effects_name
    use fekap_model_work, only: work_counts_type, phase_seconds
    use fekap_output_format, only: append_es, append_i, append_integer, append_text, es_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
@@ -113,6 +114,7 @@ contains
             end associate
          end do
       end if
+      call write_listing_inertia(unit, model)
    end subroutine write_listing_model
 
    !> The time law of a drive as a formula in t, e.g. `angle = angle0 + 6.28...*t`.
@@ -183,6 +185,38 @@ contains
       write (text, '(i0)') n
    end function int_text
 
+   !> The sections' densities, the point masses and gravity, when given.
+   subroutine write_listing_inertia(unit, model)
+      integer, intent(in) :: unit
+      type(model_type), intent(in) :: model
+      integer :: i
+      if (any(model%sections%rho_a > 0)) then
+         write (unit, '(/,a)') 'SECTION MASSES'
+         write (unit, '(2x,a12,2a16)') 'name', 'rhoA', 'rhoI'
+         do i = 1, size(model%sections)
+            if (model%sections(i)%rho_a > 0) write (unit, '(2x,a12,2es16.7)') model%sections(i)%name, &
+               & model%sections(i)%rho_a, model%sections(i)%rho_i
+         end do
+      end if
+      if (allocated(model%masses)) then
+         if (size(model%masses) > 0) then
+            write (unit, '(/,a)') 'MASSES (m moves with the node, J turns with the link end)'
+            write (unit, '(2x,a12,2a16,2x,a)') 'node', 'm', 'J', 'link'
+         end if
+         do i = 1, size(model%masses)
+            associate (m => model%masses(i))
+               if (m%link > 0) then
+                  write (unit, '(2x,a12,2es16.7,2x,a)') model%nodes(m%node)%name, m%mass, m%inertia, &
+                     & model%links(m%link)%name
+               else
+                  write (unit, '(2x,a12,2es16.7)') model%nodes(m%node)%name, m%mass, m%inertia
+               end if
+            end associate
+         end do
+      end if
+      if (any(model%gravity /= 0)) write (unit, '(/,a,2es16.7)') 'GRAVITY', model%gravity
+   end subroutine write_listing_inertia
+
    !> The deck parameters and the values this run used.
    subroutine write_parameters(unit, model)
       integer, intent(in) :: unit
@@ -251,8 +285,12 @@ contains
       integer, intent(in) :: nsteps
       character(*), intent(in) :: mesh_text
       character(len=16) :: pred
+      type(effects_plan_type) :: effects
       write (unit, '(/,a)') 'PLAN'
       write (unit, '(2x,a)') plan_text(model, nsteps)
+      effects = plan_effects(model)
+      write (unit, '(2x,a)') 'effects: '//effects_name(effects%effects)//' ('//effects%why//')'
+      if (len(effects%left_out) > 0) write (unit, '(2x,a)') effects%left_out
       if (len(mesh_text) > 0) write (unit, '(2x,a)') mesh_text
       select case (model%analysis%predictor)
       case (predictor_previous)
