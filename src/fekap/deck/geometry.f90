@@ -6,7 +6,7 @@ module fekap_deck_geometry
    use fekap_model, only: model_type, section_type, node_type, link_type, weld_type, support_type, &
       & model_size, dof_x, dof_y, dof_rot
    use fekap_deck_card, only: is_word_of
-   use fekap_strings, only: lower, same_name
+   use fekap_strings, only: lower, same_name, int_text
    use fekap_deck_name_index, only: new_name_index
    use fekap_deck_context, only: context_type
    use fekap_deck_expression, only: safe_multiply
@@ -287,10 +287,10 @@ contains
             call ctx%integer_field(iline, 5, list(n)%nelem, fine)
             if (fine .and. list(n)%nelem < 1) then
                call ctx%error(iline, 5, 'number of elements must be at least 1', &
-                  & label='give a whole number from 1 to '//limit_text(max_elements))
+                  & label='give a whole number from 1 to '//int_text(max_elements))
             else if (fine .and. list(n)%nelem > max_elements) then
-               call ctx%error(iline, 5, 'too many elements: a link has at most '//limit_text(max_elements), &
-                  & label='give a whole number from 1 to '//limit_text(max_elements))
+               call ctx%error(iline, 5, 'too many elements: a link has at most '//int_text(max_elements), &
+                  & label='give a whole number from 1 to '//int_text(max_elements))
             end if
          end if
          if (ok .and. list(n)%node(1) == list(n)%node(2)) then
@@ -494,14 +494,6 @@ contains
          & label='define it in LINKs')
    end function lookup_link
 
-   !> A limit as text.
-   pure function limit_text(limit) result(text)
-      integer, intent(in) :: limit
-      character(:), allocatable :: text
-      character(len=12) :: digits
-      write (digits, '(i0)') limit
-      text = trim(digits)
-   end function limit_text
 
    !> Whether link has an end at node.
    pure logical function has_end(model, link, node)

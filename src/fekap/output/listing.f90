@@ -10,6 +10,7 @@ module fekap_output_listing
    use fekap_model_work, only: work_counts_type, phase_seconds
    use fekap_output_format, only: append_es, append_i, append_integer, append_text, es_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
+   use fekap_strings, only: int_text
    implicit none
    private
 
@@ -139,11 +140,11 @@ contains
             if (k == 2) then
                text = text//' + '//short_text(law%c(k))//'*t'
             else
-               text = text//' + '//short_text(law%c(k))//'*t^'//trim(int_text(k - 1))
+               text = text//' + '//short_text(law%c(k))//'*t^'//int_text(k - 1)
             end if
          end do
       case (law_table)
-         text = what//' from a table of '//trim(int_text(size(law%tt)))//' points, t = '//short_text(law%tt(1))// &
+         text = what//' from a table of '//int_text(size(law%tt))//' points, t = '//short_text(law%tt(1))// &
             & ' to '//short_text(law%tt(size(law%tt)))//' (natural cubic spline)'
       case default
          text = what
@@ -178,12 +179,6 @@ contains
       if (text(k:k) == '.') k = k - 1
       text = text(:k)
    end function short_text
-
-   pure function int_text(n) result(text)
-      integer, intent(in) :: n
-      character(len=12) :: text
-      write (text, '(i0)') n
-   end function int_text
 
    !> The sections' densities, the point masses and gravity, when given.
    subroutine write_listing_inertia(unit, model)
