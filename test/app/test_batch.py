@@ -313,11 +313,16 @@ dt = 1e-4
 
 
 def test_sigint_keeps_the_finished_cases(tmp_path, fekap):
+    # One short case and three five times as long: whichever finishes first,
+    # a long one still has at least four short cases' time to run when the
+    # SIGINT is sent, however slow the machine (with equal cases both workers'
+    # second cases could finish before a loaded machine handled the signal).
     sweep = write_sweep(tmp_path, f"""\
 decks = ["p.deck"]
+combine = "zip"
 [parameters]
 crank = {{ linspace = [1.8, 2.1, 4] }}
-turns = {LONG}
+turns = [{LONG}, {5 * LONG}, {5 * LONG}, {5 * LONG}]
 every = 10000
 [options]
 dt = 1e-4
