@@ -14,6 +14,15 @@
 !> Newton iteration of a step, with its choices of tangent, and the
 !> step-doubling verification that the branch check asks for.
 !>
+!> An exactly constrained kinematic model (assembly/strain_rate: as many
+!> strain and gap rows as free dofs, no loads) solves its Newton
+!> corrections, drive responses and rates in the square-root form, with the
+!> band LU of the strain-rate operator B_f instead of the factor of K_ff =
+!> B_f^T W B_f, whose condition number is the square of B_f's
+!> (docs/theory.md, "Rates at scale"). The tangent K is still assembled and
+!> factored at each accepted configuration: its pivot ratio makes the
+!> listing's notes on singular and near-singular configurations.
+!>
 !> Why one module of over 600 lines: the Newton iteration (solve_step), the
 !> step loop (advance_to) and the verification by half steps (verify_step)
 !> call one another recursively and act on the whole of the stepper's state
@@ -41,7 +50,9 @@ module fekap_solver_fem
    use fekap_solver_branch, only: branch_check_type, new_branch_check, drive_increment, branch_verdict, &
       & branch_reject, branch_verify, branch_unverifiable, max_verify_depth
    use fekap_solver_rates, only: pivot_note, solve_velocities, solve_accelerations, near_singular_drop, &
-      & singular_floor
+      & singular_floor, root_velocities, root_accelerations, root_drive_response
+   use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate, assemble_strain_rate, &
+      & factor_strain_rate, solve_strain_rate
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_output_format, only: es_text
@@ -157,6 +168,13 @@ module fekap_solver_fem
       logical :: guard_pending = .false.
       !> Steps advanced so far.
       integer :: advances = 0
+      !> The strain-rate operator B_f and its factor (see the module header);
+      !> whether the square-root form is used (root_form), and whether `root`
+      !> holds the factor of the stress-free B at the accepted configuration.
+      type(strain_rate_type) :: root
+      logical :: root_form = .false., root_current = .false.
+      !> Scratch over the equations for the square-root form's solves.
+      real(dp), allocatable :: root_work(:)
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
@@ -191,6 +209,9 @@ contains
       self%model_length = model_size(model)
       self%dof_length = merge(self%model_length, 1.0_dp, self%mesh%dof_kind == dof_rot)
       self%loaded = any(abs(self%mesh%f_ext) > 0)
+      call new_strain_rate(self%root, self%mesh)
+      self%root_form = self%root%applies .and. .not. self%loaded .and. model%analysis%solver /= solver_dense
+      allocate (self%root_work(self%mesh%nfree), source=0.0_dp)
       self%conv%mode = model%analysis%convergence
       self%conv%tol = model%analysis%tol
       self%conv%length = model%analysis%length_tol*self%model_length
@@ -265,7 +286,7 @@ contains
          if (info == 0) then
             call system_pivot(self%system, pivot)
             call note_response_pivot(self, pivot)
-            call drive_response(self%system, self%mesh, self%state%jump_response, self%counts)
+            call accepted_response(self, self%state%jump_response)
          end if
          call record_velocity(self)
       end if
@@ -377,7 +398,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: r0, increment_residual, correction, previous, strain, kg_above, stalled_correction, pivot
       integer :: i, info, element, pass, at_floor
-      logical :: moved, by_estimate, at_predictor
+      logical :: moved, by_estimate, at_predictor, root_solved
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof, system => self%system)
          self%seg = self%state%seg
@@ -392,6 +413,7 @@ contains
          end if
          self%factor_current = .false.
          self%accepted_singular = .false.
+         self%root_current = .false.
          iterations = 0
          r0 = 0
          previous = 0
@@ -437,8 +459,12 @@ contains
                      call analysis_error(error, trim(msg)//')')
                      return
                   end if
-                  call factor_system(system, info, self%counts)
-                  if (info > 0 .and. kg_above > 0) then
+                  root_solved = .false.
+                  if (self%root_form) call root_correction(self, qt, correction, root_solved)
+                  if (.not. root_solved) call factor_system(system, info, self%counts)
+                  if (root_solved) then
+                     info = 0
+                  else if (info > 0 .and. kg_above > 0) then
                      ! The material tangent is singular at a stationary configuration;
                      ! the geometric stiffness of the iterate's stresses may still
                      ! carry Newton there (full Newton from here on in this step).
@@ -452,7 +478,7 @@ contains
                      call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
                      return
                   end if
-                  call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+                  if (.not. root_solved) call newton_correction(system, mesh, self%dof_length, correction, self%counts)
                   if (correction > divergence_length*self%model_length) then
                      write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
                      call analysis_error(error, trim(msg))
@@ -469,7 +495,8 @@ contains
                   ! stationary configuration: the residual there hardly sees an
                   ! error along the near-singular direction (a predictor kept
                   ! past collinear is then rejected by the branch-jump check).
-                  if (i == 0 .and. .not. self%loaded .and. self%conv%mode /= convergence_paper) then
+                  if (i == 0 .and. .not. self%loaded .and. self%conv%mode /= convergence_paper .and. &
+                     & .not. root_solved) then
                      at_predictor = correction <= predictor_margin*self%conv%length .and. &
                         & system%assembled_strain < kg_above .and. &
                         & is_converged(self%conv, residual, r0, increment_residual, correction)
@@ -523,7 +550,9 @@ contains
             ! substitution): the correction it gives must pass the estimate's own
             ! margin, or it is applied as one more Newton iteration and Newton
             ! goes on (with a stiff slideline penalty the estimate can miss).
-            call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+            root_solved = .false.
+            if (self%root_form) call root_correction(self, qt, correction, root_solved)
+            if (.not. root_solved) call newton_correction(system, mesh, self%dof_length, correction, self%counts)
             if (correction <= estimate_margin*self%conv%length) exit verification
             call take_correction(self, qt, iterations)
             if (iterations >= self%model%analysis%max_iter) then
@@ -555,6 +584,8 @@ contains
             self%accepted_singular = info /= 0
          end if
          call accept(self, t, qt)
+         ! branch_jump left the factor of the stress-free B at qt in root.
+         self%root_current = self%root_form .and. self%root%factored .and. self%root%stress_free
          if (stalled_correction > 0) then
             write (msg, '(a,es12.5,a,es9.2,a,es9.2,a)') 't = ', t, ': Newton stopped at the round-off floor of the '// &
                & 'residual (', residual, '); the last correction, ', stalled_correction, &
@@ -664,6 +695,14 @@ contains
       integer :: info
       qt = self%state%q
       call set_driven(self, t, qt)
+      if (self%root_form .and. self%state%has_jump_response) then
+         ! The drive response from B_f (the one from K_ff loses accuracy with the square of its condition).
+         associate (dd => self%mesh%driven_dof)
+            call apply_response(self%state%jump_response, qt(dd) - self%state%q(dd), self%work)
+         end associate
+         qt = self%state%q + self%work
+         return
+      end if
       ! At a singular configuration there is no tangent response: start from the last configuration.
       call refactor_at_accepted(self, info)
       if (info > 0) return
@@ -694,6 +733,54 @@ contains
       self%accepted_singular = info /= 0
    end subroutine refactor_at_accepted
 
+   !> The Newton correction of the square-root form at qt: B_f dq = -eps with
+   !> B the exact gradient of the strains and gaps eps at qt, into the
+   !> system's right-hand side (as newton_correction), and its length;
+   !> solved = .false. if B_f is singular there (the caller uses K).
+   subroutine root_correction(self, qt, correction, solved)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: qt(:)
+      real(dp), intent(out) :: correction
+      logical, intent(out) :: solved
+      integer :: info, k
+      correction = 0
+      call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
+      call factor_strain_rate(self%root, info)
+      self%root_current = .false.
+      solved = info == 0
+      if (.not. solved) return
+      self%root_work = -self%root_work
+      call solve_strain_rate(self%root, self%root_work)
+      self%system%rhs(:, 1) = self%root_work
+      do k = 1, self%mesh%nfree
+         correction = max(correction, abs(self%root_work(k))*self%dof_length(self%mesh%eq_dof(k)))
+      end do
+   end subroutine root_correction
+
+   !> Make `root` hold the factor of the stress-free B at the accepted
+   !> configuration, unless it does already (root_current tells whether it could).
+   subroutine root_at_accepted(self)
+      type(fem_stepper_type), intent(inout) :: self
+      integer :: info
+      if (self%root_current) return
+      call assemble_strain_rate(self%root, self%mesh, self%state%q, self%state%seg, .true.)
+      call factor_strain_rate(self%root, info)
+      self%root_current = info == 0
+   end subroutine root_at_accepted
+
+   !> The drive response at the accepted configuration, whose tangent the
+   !> system holds factored: from B_f in the square-root form, else from K_ff.
+   subroutine accepted_response(self, resp)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(inout) :: resp(:, :)
+      if (self%root_form) call root_at_accepted(self)
+      if (self%root_current) then
+         call root_drive_response(self%root, self%mesh, resp, self%root_work)
+      else
+         call drive_response(self%system, self%mesh, resp, self%counts)
+      end if
+   end subroutine accepted_response
+
    !> Driven dofs at time t: the initial value plus the law's change since t_start.
    subroutine set_driven(self, t, q)
       type(fem_stepper_type), intent(in) :: self
@@ -723,7 +810,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: swap(:, :)
       real(dp) :: step_floor, turn, pivot
-      integer :: verdict, crossing(3)
+      integer :: verdict, crossing(3), info
       logical :: has_response
       associate (state => self%state, resp => self%jump_response_new)
          call drive_increment(self%branch, self%mesh, state%q, qt, self%drive_step, step_floor)
@@ -732,7 +819,15 @@ contains
          if (factored) call system_pivot(self%system, pivot)
          has_response = pivot >= singular_floor
          if (has_response) then
-            call drive_response(self%system, self%mesh, resp, self%counts)
+            if (self%root_form) then
+               call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .true.)
+               call factor_strain_rate(self%root, info)
+            end if
+            if (self%root_form .and. self%root%factored) then
+               call root_drive_response(self%root, self%mesh, resp, self%root_work)
+            else
+               call drive_response(self%system, self%mesh, resp, self%counts)
+            end if
          else
             resp = 0
          end if
@@ -856,6 +951,7 @@ contains
       self%state = before
       self%seg = before%seg
       self%factor_current = .false.
+      self%root_current = .false.
       call refactor_at_accepted(self, info)
    end subroutine restore_state
 
@@ -909,6 +1005,18 @@ contains
          call pivot_note(state%t, ratio, state%reference_pivot, self%model%analysis%velocities, state%note, regular)
          if (.not. regular .or. .not. self%model%analysis%velocities) return
          call self%model%drives%law%eval(state%t, self%law_value, self%law_rate, self%law_rate2)
+         if (self%root_form) call root_at_accepted(self)
+         if (self%root_current) then
+            ! The square-root form, refined (see fekap_solver_rates).
+            call root_velocities(self%root, self%mesh, self%law_rate, state%v, self%root_work)
+            self%counts%velocity_solves = self%counts%velocity_solves + 1
+            state%has_velocity = .true.
+            if (.not. self%model%analysis%accelerations) return
+            call root_accelerations(self%root, self%mesh, state%v, self%law_rate2, state%a, self%root_work)
+            self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+            state%has_acceleration = .true.
+            return
+         end if
          if (history%has_velocity(history%newest)) then
             ! (47) is R vd with the drive response R of this factor: record_velocity
             ! made it already, for the predictor.
