@@ -55,8 +55,16 @@ module fekap_assembly_strain_rate
       real(dp), allocatable :: section(:, :), slide_ns(:, :), slide_ts(:, :), slide_nm(:, :)
       !> (6, nslide): the dofs of each gap at the last assembly (0: a ground point).
       integer, allocatable :: slide_dofs(:, :)
+      !> (n): the largest magnitude in each column of the assembled B_f.
+      real(dp), allocatable :: column_max(:)
       !> Whether ab holds a factor, and of a stress-free assembly.
       logical :: factored = .false., stress_free = .false.
+      !> Pivot ratio of the factor on the scale of the tangent's
+      !> (band_pivot_ratio): min over j of (|U(j, j)| / max_i |B(i, j)|)**2.
+      !> K = B^T W B has the squares of B's pivots (exactly so for the R of
+      !> a QR of B), so a configuration d away from a singular one has a
+      !> ratio of order d**2 in both forms; 0 if B_f is singular.
+      real(dp) :: pivot_ratio = 0
    end type strain_rate_type
 
 contains
@@ -134,6 +142,7 @@ contains
       self%slide_row = order(3*nelem + 1:)
       allocate (self%ab(2*self%kl + self%ku + 1, nrow), self%bd(nrow, mesh%ndriven), source=0.0_dp)
       allocate (self%ipiv(nrow), source=0)
+      allocate (self%column_max(nrow), source=0.0_dp)
       allocate (self%section(2, nelem), self%slide_ns(6, nslide), self%slide_ts(6, nslide), &
          & self%slide_nm(3, nslide), source=0.0_dp)
       allocate (self%slide_dofs(6, nslide), source=0)
@@ -166,7 +175,7 @@ contains
       integer, intent(in) :: seg(:)
       logical, intent(in) :: stress_free
       real(dp), contiguous, intent(out), optional :: strain(:)
-      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, row(6, 3), xs(2), x1(2), x2(2), s1, t(2), nrm(2), alpha
+      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, row(6, 2), xs(2), x1(2), x2(2), s1, t(2), nrm(2), alpha
       integer :: e, i, k, r
       self%ab = 0
       self%bd = 0
@@ -198,10 +207,11 @@ contains
             ! Gradients of Gamma1, Gamma2 and kappa L in (x1, y1, theta1, x2, y2, theta2).
             row(:, 1) = [-c*rl, -s*rl, g2/2, c*rl, s*rl, g2/2]
             row(:, 2) = [s*rl, -c*rl, -(1 + g1)/2, -s*rl, c*rl, -(1 + g1)/2]
-            row(:, 3) = [0.0_dp, 0.0_dp, -1.0_dp, 0.0_dp, 0.0_dp, 1.0_dp]
-            do r = 1, 3
+            do r = 1, 2
                call scatter_row(self, mesh, rows(r), dofs, row(:, r))
             end do
+            ! kappa L on the rotations only (its band bounds were found so).
+            call scatter_row(self, mesh, rows(3), dofs([3, 6]), [-1.0_dp, 1.0_dp])
          end associate
       end do
       do i = 1, size(mesh%slides)
@@ -244,8 +254,23 @@ contains
    subroutine factor_strain_rate(self, info)
       type(strain_rate_type), intent(inout) :: self
       integer, intent(out) :: info
+      integer :: j, diagonal
+      diagonal = self%kl + self%ku + 1
+      do j = 1, self%n
+         self%column_max(j) = maxval(abs(self%ab(:, j)))
+      end do
       call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
       self%factored = info == 0
+      self%pivot_ratio = 0
+      if (.not. self%factored) return
+      self%pivot_ratio = huge(1.0_dp)
+      do j = 1, self%n
+         if (.not. self%column_max(j) > 0) then
+            self%pivot_ratio = 0
+            return
+         end if
+         self%pivot_ratio = min(self%pivot_ratio, (abs(self%ab(diagonal, j))/self%column_max(j))**2)
+      end do
    end subroutine factor_strain_rate
 
    !> Solve B_f x = b with the factor (b by band rows in, x by equations out).

@@ -19,9 +19,10 @@
 !> corrections, drive responses and rates in the square-root form, with the
 !> band LU of the strain-rate operator B_f instead of the factor of K_ff =
 !> B_f^T W B_f, whose condition number is the square of B_f's
-!> (docs/theory.md, "Rates at scale"). The tangent K is still assembled and
-!> factored at each accepted configuration: its pivot ratio makes the
-!> listing's notes on singular and near-singular configurations.
+!> (docs/theory.md, "Rates at scale"). The factor at the accepted
+!> configuration (factor_current) is then B_f's, and the pivot ratio of the
+!> listing's notes its square (strain_rate_type%pivot_ratio, on K's scale).
+!> Kinetostatics and loaded models keep the tangent K throughout.
 !>
 !> Why one module of over 600 lines: the Newton iteration (solve_step), the
 !> step loop (advance_to) and the verification by half steps (verify_step)
@@ -34,7 +35,8 @@ module fekap_solver_fem
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type, model_size, dof_rot, predictor_previous, predictor_taylor, &
-      & convergence_paper, solver_dense
+      & convergence_paper, solver_dense, effects_kinematics
+   use fekap_model_effects, only: planned_effects
    use fekap_model_results, only: step_result_type, note_length, has_note
    use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
    use fekap_assembly_assemble, only: max_strain
@@ -168,11 +170,11 @@ module fekap_solver_fem
       logical :: guard_pending = .false.
       !> Steps advanced so far.
       integer :: advances = 0
-      !> The strain-rate operator B_f and its factor (see the module header);
-      !> whether the square-root form is used (root_form), and whether `root`
-      !> holds the factor of the stress-free B at the accepted configuration.
+      !> The strain-rate operator B_f and its factor (see the module header),
+      !> and whether the square-root form is used (then factor_current refers
+      !> to the factor of the stress-free B_f in root).
       type(strain_rate_type) :: root
-      logical :: root_form = .false., root_current = .false.
+      logical :: root_form = .false.
       !> Scratch over the equations for the square-root form's solves.
       real(dp), allocatable :: root_work(:)
    contains
@@ -210,7 +212,9 @@ contains
       self%dof_length = merge(self%model_length, 1.0_dp, self%mesh%dof_kind == dof_rot)
       self%loaded = any(abs(self%mesh%f_ext) > 0)
       call new_strain_rate(self%root, self%mesh)
-      self%root_form = self%root%applies .and. .not. self%loaded .and. model%analysis%solver /= solver_dense
+      ! Kinetostatics solves its deflection with the factor of K at the accepted configuration.
+      self%root_form = self%root%applies .and. .not. self%loaded .and. model%analysis%solver /= solver_dense .and. &
+         & planned_effects(model) == effects_kinematics
       allocate (self%root_work(self%mesh%nfree), source=0.0_dp)
       self%conv%mode = model%analysis%convergence
       self%conv%tol = model%analysis%tol
@@ -284,7 +288,7 @@ contains
          call refactor_at_accepted(self, info)
          self%state%has_jump_response = info == 0
          if (info == 0) then
-            call system_pivot(self%system, pivot)
+            pivot = accepted_pivot(self)
             call note_response_pivot(self, pivot)
             call accepted_response(self, self%state%jump_response)
          end if
@@ -413,7 +417,6 @@ contains
          end if
          self%factor_current = .false.
          self%accepted_singular = .false.
-         self%root_current = .false.
          iterations = 0
          r0 = 0
          previous = 0
@@ -544,16 +547,25 @@ contains
             call assemble_system(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
             ! The residual reported for the step is the one at the accepted configuration.
             residual = residual_norm(system, mesh)
-            call factor_system(system, info, self%counts)
-            if (.not. by_estimate .or. info /= 0) exit verification
-            ! A stop on the estimate is checked with this factor (one back
-            ! substitution): the correction it gives must pass the estimate's own
-            ! margin, or it is applied as one more Newton iteration and Newton
-            ! goes on (with a stiff slideline penalty the estimate can miss).
-            root_solved = .false.
-            if (self%root_form) call root_correction(self, qt, correction, root_solved)
-            if (.not. root_solved) call newton_correction(system, mesh, self%dof_length, correction, self%counts)
-            if (correction <= estimate_margin*self%conv%length) exit verification
+            if (self%root_form) then
+               ! The estimate is checked by one more correction of B_f; then the
+               ! factor of the stress-free B_f at qt serves as K's does below.
+               root_solved = .false.
+               if (by_estimate) call root_correction(self, qt, correction, root_solved)
+               if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
+                  call factor_root(self, qt, self%seg, info)
+                  exit verification
+               end if
+            else
+               call factor_system(system, info, self%counts)
+               if (.not. by_estimate .or. info /= 0) exit verification
+               ! A stop on the estimate is checked with this factor (one back
+               ! substitution): the correction it gives must pass the estimate's own
+               ! margin, or it is applied as one more Newton iteration and Newton
+               ! goes on (with a stiff slideline penalty the estimate can miss).
+               call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+               if (correction <= estimate_margin*self%conv%length) exit verification
+            end if
             call take_correction(self, qt, iterations)
             if (iterations >= self%model%analysis%max_iter) then
                write (msg, '(a,es12.5,a,i0,a,es9.2)') 't = ', t, ': Newton did not converge in ', iterations, &
@@ -584,8 +596,6 @@ contains
             self%accepted_singular = info /= 0
          end if
          call accept(self, t, qt)
-         ! branch_jump left the factor of the stress-free B at qt in root.
-         self%root_current = self%root_form .and. self%root%factored .and. self%root%stress_free
          if (stalled_correction > 0) then
             write (msg, '(a,es12.5,a,es9.2,a,es9.2,a)') 't = ', t, ': Newton stopped at the round-off floor of the '// &
                & 'residual (', residual, '); the last correction, ', stalled_correction, &
@@ -695,8 +705,9 @@ contains
       integer :: info
       qt = self%state%q
       call set_driven(self, t, qt)
-      if (self%root_form .and. self%state%has_jump_response) then
-         ! The drive response from B_f (the one from K_ff loses accuracy with the square of its condition).
+      if (self%root_form) then
+         ! The drive response from B_f (if the configuration is not singular).
+         if (.not. self%state%has_jump_response) return
          associate (dd => self%mesh%driven_dof)
             call apply_response(self%state%jump_response, qt(dd) - self%state%q(dd), self%work)
          end associate
@@ -728,7 +739,11 @@ contains
       if (self%factor_current) return
       call assemble_system(self%system, self%mesh, self%state%q, self%state%t, self%seg, &
          & merge(0.0_dp, huge(1.0_dp), self%loaded), self%counts)
-      call factor_system(self%system, info, self%counts)
+      if (self%root_form) then
+         call factor_root(self, self%state%q, self%state%seg, info)
+      else
+         call factor_system(self%system, info, self%counts)
+      end if
       self%factor_current = info == 0
       self%accepted_singular = info /= 0
    end subroutine refactor_at_accepted
@@ -746,7 +761,6 @@ contains
       correction = 0
       call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
       call factor_strain_rate(self%root, info)
-      self%root_current = .false.
       solved = info == 0
       if (.not. solved) return
       self%root_work = -self%root_work
@@ -757,24 +771,34 @@ contains
       end do
    end subroutine root_correction
 
-   !> Make `root` hold the factor of the stress-free B at the accepted
-   !> configuration, unless it does already (root_current tells whether it could).
-   subroutine root_at_accepted(self)
+   !> Assemble and factor the stress-free B at q (slidelines on seg): the
+   !> square-root form's factor at a configuration; info > 0 if B_f is singular there.
+   subroutine factor_root(self, q, seg, info)
       type(fem_stepper_type), intent(inout) :: self
-      integer :: info
-      if (self%root_current) return
-      call assemble_strain_rate(self%root, self%mesh, self%state%q, self%state%seg, .true.)
+      real(dp), contiguous, intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      integer, intent(out) :: info
+      call assemble_strain_rate(self%root, self%mesh, q, seg, .true.)
       call factor_strain_rate(self%root, info)
-      self%root_current = info == 0
-   end subroutine root_at_accepted
+   end subroutine factor_root
 
-   !> The drive response at the accepted configuration, whose tangent the
-   !> system holds factored: from B_f in the square-root form, else from K_ff.
+   !> The pivot ratio of the factor at the accepted configuration (B_f's on
+   !> K's scale in the square-root form, else K's).
+   real(dp) function accepted_pivot(self) result(ratio)
+      type(fem_stepper_type), intent(inout) :: self
+      if (self%root_form) then
+         ratio = self%root%pivot_ratio
+      else
+         call system_pivot(self%system, ratio)
+      end if
+   end function accepted_pivot
+
+   !> The drive response at the accepted configuration, whose factor the
+   !> system (or root) holds: from B_f in the square-root form, else from K_ff.
    subroutine accepted_response(self, resp)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), contiguous, intent(inout) :: resp(:, :)
-      if (self%root_form) call root_at_accepted(self)
-      if (self%root_current) then
+      if (self%root_form) then
          call root_drive_response(self%root, self%mesh, resp, self%root_work)
       else
          call drive_response(self%system, self%mesh, resp, self%counts)
@@ -810,20 +834,16 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: swap(:, :)
       real(dp) :: step_floor, turn, pivot
-      integer :: verdict, crossing(3), info
+      integer :: verdict, crossing(3)
       logical :: has_response
       associate (state => self%state, resp => self%jump_response_new)
          call drive_increment(self%branch, self%mesh, state%q, qt, self%drive_step, step_floor)
          ! Response at the new configuration (unless its tangent is singular).
          pivot = 0
-         if (factored) call system_pivot(self%system, pivot)
+         if (factored) pivot = accepted_pivot(self)
          has_response = pivot >= singular_floor
          if (has_response) then
             if (self%root_form) then
-               call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .true.)
-               call factor_strain_rate(self%root, info)
-            end if
-            if (self%root_form .and. self%root%factored) then
                call root_drive_response(self%root, self%mesh, resp, self%root_work)
             else
                call drive_response(self%system, self%mesh, resp, self%counts)
@@ -951,7 +971,6 @@ contains
       self%state = before
       self%seg = before%seg
       self%factor_current = .false.
-      self%root_current = .false.
       call refactor_at_accepted(self, info)
    end subroutine restore_state
 
@@ -995,7 +1014,7 @@ contains
       if (self%accepted_singular) then
          ratio = 0
       else if (self%factor_current) then
-         call system_pivot(self%system, ratio)
+         ratio = accepted_pivot(self)
       else
          return
       end if
@@ -1005,8 +1024,7 @@ contains
          call pivot_note(state%t, ratio, state%reference_pivot, self%model%analysis%velocities, state%note, regular)
          if (.not. regular .or. .not. self%model%analysis%velocities) return
          call self%model%drives%law%eval(state%t, self%law_value, self%law_rate, self%law_rate2)
-         if (self%root_form) call root_at_accepted(self)
-         if (self%root_current) then
+         if (self%root_form) then
             ! The square-root form, refined (see fekap_solver_rates).
             call root_velocities(self%root, self%mesh, self%law_rate, state%v, self%root_work)
             self%counts%velocity_solves = self%counts%velocity_solves + 1
