@@ -26,7 +26,7 @@ module fekap_assembly_strain_rate
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
-   use fekap_assembly_lapack, only: band_lu_factor, band_lu_solve
+   use fekap_assembly_lapack, only: band_lu_factor
    implicit none
    private
 
@@ -167,20 +167,26 @@ contains
    !> B at q (slidelines on their segments seg) into the band storage and
    !> B_d; stress_free: with the strains set to zero (the rates' form), else
    !> the exact gradients of the strains (Newton's). With `strain`, the
-   !> strains and gaps themselves by band rows (Newton's residual).
-   subroutine assemble_strain_rate(self, mesh, q, seg, stress_free, strain)
+   !> strains and gaps themselves by band rows (Newton's residual); with
+   !> `largest`, the largest element strain (as beam_max_strain) and its element.
+   subroutine assemble_strain_rate(self, mesh, q, seg, stress_free, strain, largest, element)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: q(:)
       integer, intent(in) :: seg(:)
       logical, intent(in) :: stress_free
       real(dp), contiguous, intent(out), optional :: strain(:)
+      real(dp), intent(out), optional :: largest
+      integer, intent(out), optional :: element
       real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, row(6, 2), xs(2), x1(2), x2(2), s1, t(2), nrm(2), alpha
+      real(dp) :: worst
       integer :: e, i, k, r
       self%ab = 0
       self%bd = 0
       self%factored = .false.
       self%stress_free = stress_free
+      if (present(largest)) largest = 0
+      if (present(element)) element = 0
       do e = 1, size(mesh%elements)
          associate (el => mesh%elements(e), dofs => mesh%edof(:, e), rows => self%element_row(:, e))
             do k = 1, 6
@@ -199,6 +205,13 @@ contains
                strain(rows(1)) = g1
                strain(rows(2)) = g2
                strain(rows(3)) = xe(6) - xe(3)
+            end if
+            if (present(largest) .and. present(element)) then
+               worst = max(abs(g1), abs(g2), abs(xe(6) - xe(3)))
+               if (worst > largest .or. element == 0) then
+                  largest = worst
+                  element = e
+               end if
             end if
             if (stress_free) then
                g1 = 0
@@ -274,12 +287,44 @@ contains
    end subroutine factor_strain_rate
 
    !> Solve B_f x = b with the factor (b by band rows in, x by equations out).
-   subroutine solve_strain_rate(self, x)
+   pure subroutine solve_strain_rate(self, x)
       type(strain_rate_type), intent(in) :: self
       real(dp), contiguous, intent(inout) :: x(:)
-      integer :: info
-      call band_lu_solve(self%ab, self%kl, self%ku, self%ipiv, x, info)
+      call band_lu_solve_loops(self%ab, self%kl, self%ku, self%ipiv, x)
    end subroutine solve_strain_rate
+
+   !> Solve with the factor of dgbtrf as dgbtrs ('N') does, the same
+   !> operations in the same order (row interchanges and L's multipliers,
+   !> then back substitution with U as dtbsv), in loops: dgbtrs makes a BLAS
+   !> call per column, whose overhead exceeds the arithmetic of a band this
+   !> narrow (kl + ku = 12 for the scissor lift).
+   pure subroutine band_lu_solve_loops(ab, kl, ku, ipiv, b)
+      real(dp), intent(in) :: ab(:, :)
+      integer, intent(in) :: kl, ku, ipiv(:)
+      real(dp), intent(inout) :: b(:)
+      real(dp) :: temp
+      integer :: n, kv, j, l, i
+      n = size(b)
+      kv = kl + ku
+      do j = 1, n - 1
+         l = ipiv(j)
+         temp = b(l)
+         if (l /= j) then
+            b(l) = b(j)
+            b(j) = temp
+         end if
+         do i = 1, min(kl, n - j)
+            b(j + i) = b(j + i) - temp*ab(kv + 1 + i, j)
+         end do
+      end do
+      do j = n, 1, -1
+         b(j) = b(j)/ab(kv + 1, j)
+         temp = b(j)
+         do i = j - 1, max(1, j - kv), -1
+            b(i) = b(i) - temp*ab(kv + 1 + i - j, j)
+         end do
+      end do
+   end subroutine band_lu_solve_loops
 
    !> r = B v by band rows, the strain and gap rates of the velocities v over
    !> all dofs (zero on fixed dofs), with the stress-free B at the section

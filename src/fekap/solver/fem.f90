@@ -440,13 +440,11 @@ contains
             relocations: do pass = 0, size(mesh%slides)*8
                at_predictor = .false.
                do i = 0, self%model%analysis%max_iter
-                  call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
+                  call newton_assembly(self, qt, t, kg_above)
                   ! The predictor's guard, once per step: it needs the strains of this first assembly.
                   if (self%guard_pending) then
                      self%guard_pending = .false.
-                     if (guard_extrapolation(self, t, qt)) then
-                        call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
-                     end if
+                     if (guard_extrapolation(self, t, qt)) call newton_assembly(self, qt, t, kg_above)
                   end if
                   residual = residual_norm(system, mesh)
                   if (i == 0) then
@@ -463,7 +461,11 @@ contains
                      return
                   end if
                   root_solved = .false.
-                  if (self%root_form) call root_correction(self, qt, correction, root_solved)
+                  if (self%root_form) then
+                     call root_correction(self, qt, .false., correction, root_solved)
+                     ! B_f singular at the iterate: K's Newton step (its tangent was not assembled).
+                     if (.not. root_solved) call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
+                  end if
                   if (.not. root_solved) call factor_system(system, info, self%counts)
                   if (root_solved) then
                      info = 0
@@ -551,7 +553,7 @@ contains
                ! The estimate is checked by one more correction of B_f; then the
                ! factor of the stress-free B_f at qt serves as K's does below.
                root_solved = .false.
-               if (by_estimate) call root_correction(self, qt, correction, root_solved)
+               if (by_estimate) call root_correction(self, qt, .true., correction, root_solved)
                if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
                   call factor_root(self, qt, self%seg, info)
                   exit verification
@@ -748,18 +750,36 @@ contains
       self%accepted_singular = info /= 0
    end subroutine refactor_at_accepted
 
-   !> The Newton correction of the square-root form at qt: B_f dq = -eps with
-   !> B the exact gradient of the strains and gaps eps at qt, into the
-   !> system's right-hand side (as newton_correction), and its length;
-   !> solved = .false. if B_f is singular there (the caller uses K).
-   subroutine root_correction(self, qt, correction, solved)
+   !> The assembly of a Newton iteration at qt: the residual and the tangent
+   !> (K form), or the residual, B and the strains (square-root form: K is
+   !> not needed), with the largest element strain in the system either way.
+   subroutine newton_assembly(self, qt, t, kg_above)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), contiguous, intent(in) :: qt(:)
+      real(dp), intent(in) :: t, kg_above
+      if (.not. self%root_form) then
+         call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
+         return
+      end if
+      call assemble_system_residual(self%system, self%mesh, qt, t, self%seg, self%counts)
+      call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work, &
+         & self%system%assembled_strain, self%system%assembled_element)
+   end subroutine newton_assembly
+
+   !> The Newton correction of the square-root form at qt: B_f dq = -eps with
+   !> B the exact gradient of the strains and gaps eps at qt (assembled here,
+   !> or by newton_assembly with eps in root_work), into the system's
+   !> right-hand side (as newton_correction), and its length; solved =
+   !> .false. if B_f is singular there (the caller uses K).
+   subroutine root_correction(self, qt, assemble, correction, solved)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: qt(:)
+      logical, intent(in) :: assemble
       real(dp), intent(out) :: correction
       logical, intent(out) :: solved
       integer :: info, k
       correction = 0
-      call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
+      if (assemble) call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
       call factor_strain_rate(self%root, info)
       solved = info == 0
       if (.not. solved) return
