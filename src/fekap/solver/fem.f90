@@ -461,7 +461,7 @@ contains
                      return
                   end if
                   root_solved = .false.
-                  if (self%root_form) then
+                  if (self%root_form .and. system%assembled_strain < kg_above) then
                      call root_correction(self, qt, .false., correction, root_solved)
                      ! B_f singular at the iterate: K's Newton step (its tangent was not assembled).
                      if (.not. root_solved) call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
@@ -751,8 +751,13 @@ contains
    end subroutine refactor_at_accepted
 
    !> The assembly of a Newton iteration at qt: the residual and the tangent
-   !> (K form), or the residual, B and the strains (square-root form: K is
-   !> not needed), with the largest element strain in the system either way.
+   !> (K form), or the residual, B and the strains (square-root form), with
+   !> the largest element strain in the system either way. The square-root
+   !> form's correction is Newton's with the material tangent (K = B^T W B,
+   !> B_f square), which is the K form's below kg_above; an iterate strained
+   !> more takes the K form's full Newton step, as before (its path, e.g.
+   !> from a poor predictor, stays the one the branch check was built on),
+   !> and K is assembled too.
    subroutine newton_assembly(self, qt, t, kg_above)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), contiguous, intent(in) :: qt(:)
@@ -764,6 +769,8 @@ contains
       call assemble_system_residual(self%system, self%mesh, qt, t, self%seg, self%counts)
       call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work, &
          & self%system%assembled_strain, self%system%assembled_element)
+      if (self%system%assembled_strain >= kg_above) &
+         & call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
    end subroutine newton_assembly
 
    !> The Newton correction of the square-root form at qt: B_f dq = -eps with
