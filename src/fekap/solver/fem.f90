@@ -769,8 +769,9 @@ contains
       call assemble_system_residual(self%system, self%mesh, qt, t, self%seg, self%counts)
       call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work, &
          & self%system%assembled_strain, self%system%assembled_element)
-      if (self%system%assembled_strain >= kg_above) &
-         & call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
+      if (self%system%assembled_strain >= kg_above) then
+         call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
+      end if
    end subroutine newton_assembly
 
    !> The Newton correction of the square-root form at qt: B_f dq = -eps with
