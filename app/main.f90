@@ -3,12 +3,14 @@
 program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
-   use fekap_error, only: error_type, error_input, error_analysis, error_output
-   use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_statics
+   use fekap_error, only: error_type, error_input, error_analysis, error_output, input_error
+   use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_statics, &
+      & effects_dynamics
    use fekap_deck, only: read_deck
    use fekap_model_effects, only: check_effects_request, planned_effects
    use fekap_effects_kinetostatic_stepper, only: kinetostatic_stepper_type, new_kinetostatic_stepper
    use fekap_effects_statics, only: statics_stepper_type, new_statics_stepper
+   use fekap_effects_free_motion, only: check_free_motion
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
@@ -124,6 +126,13 @@ contains
             allocate (statics)
             call new_statics_stepper(statics, fem)
             call move_alloc(statics, stepper)
+         else if (planned_effects(model) == effects_dynamics) then
+            ! Bad input first: a free motion with neither mass nor stiffness.
+            call check_free_motion(fem%mesh, model, fem%mesh%q0, model%analysis%t_start, fem%seg, error)
+            if (allocated(error)) return
+            ! The plan refuses dynamics until its stepper lands (dynamics_available).
+            call input_error(error, model%file//': ANALysis type dynamics is not available yet')
+            return
          else
             call move_alloc(fem, stepper)
          end if
