@@ -19,7 +19,7 @@ module fekap_effects_kinetostatics
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, joint_prismatic
    use fekap_model_reactions, only: reaction_row_type, reaction_rows, reaction_count, reaction_drive, &
-      & reaction_support, reaction_slider, reaction_joint
+      & reaction_support, reaction_slider
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
    use fekap_contact_slideline, only: slide_force, slide_tie_force
@@ -106,7 +106,8 @@ contains
             end associate
          case (reaction_slider)
             self%row_slide(row) = i
-         case (reaction_joint)
+         case default
+            ! reaction_joint: one end of link i.
             l = i
             end_ = rows(row)%end
             self%row_element(row) = merge(first(l), last(l), end_ == 1)
