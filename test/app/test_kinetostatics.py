@@ -1,5 +1,5 @@
 """Kinetostatics through the fekap executable: the deck chooses the effects,
-reactions.csv is written only by kinetostatics runs (rows per step: the
+reactions.csv is written only by kinetostatics and statics runs (rows per step: the
 drives, the supports, both ends of every link), the listing's plan says which
 effects run and why, and a type that cannot run is an input error (exit 2)."""
 
@@ -93,6 +93,7 @@ def test_gravity_without_masses_is_noted(tmp_path):
 
 def test_statics_needs_loads(tmp_path):
     deck = variant(tmp_path, "  type kinetostatics", "  type statics")
+    deck.write_text(deck.read_text().replace("GRAVity  0  -9.81", ""))
     run = run_fekap("-q", "-o", str(tmp_path / "s"), str(deck))
     assert run.returncode == 2
-    assert "variant.deck:26:8: error: statics cannot run: " in run.stderr
+    assert "variant.deck:26:8: error: statics cannot run: statics needs loads" in run.stderr

@@ -20,7 +20,7 @@ module fekap_model_effects
    use fekap_model, only: model_type, method_fem, effects_auto, effects_kinematics, effects_kinetostatics, &
       & effects_statics, effects_dynamics, joint_prismatic
    use fekap_strings, only: int_text
-   use fekap_model_loads, only: load_count, has_timed_loads
+   use fekap_model_loads, only: load_count
    implicit none
    private
 
@@ -191,10 +191,6 @@ contains
          text = 'kinetostatics needs the accelerations (compute ... accelerations)'
       else if (count_of_drives(model) == 0) then
          text = 'kinetostatics needs drives (DRIVes) that move the mechanism'
-      else if (load_count(model) > 0) then
-         text = 'masses with LOADs ask for statics or dynamics, which are not available yet'
-      else if (count_of_slidelines(model) > 0) then
-         text = 'sliding joints (SLIDelines) are not in kinetostatics yet'
       end if
    end function kinetostatics_obstacle
 
@@ -207,11 +203,6 @@ contains
          text = 'statics runs with method fem only'
       else if (load_count(model) == 0 .and. .not. (has_masses(model) .and. has_gravity(model))) then
          text = 'statics needs loads: LOADs, or masses under GRAVity'
-      else if (has_timed_loads(model)) then
-         text = 'loads with a time law of their own are not in statics yet (give them without a law: the '// &
-            & 'load factor t)'
-      else if (has_masses(model) .and. has_gravity(model)) then
-         text = 'weights (masses under GRAVity) are not in statics yet'
       end if
    end function statics_obstacle
 
@@ -274,12 +265,6 @@ contains
       n = 0
       if (allocated(model%drives)) n = size(model%drives)
    end function count_of_drives
-
-   pure integer function count_of_slidelines(model) result(n)
-      type(model_type), intent(in) :: model
-      n = 0
-      if (allocated(model%slidelines)) n = size(model%slidelines)
-   end function count_of_slidelines
 
    !> Whether some link has a section with mass or some node a point mass or rotary inertia.
    pure logical function has_masses(model)
