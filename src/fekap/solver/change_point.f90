@@ -95,16 +95,18 @@ contains
 
    !> Correct the filled positions q at time t (driven and fixed dofs already
    !> set) onto the mechanism's configurations by Newton with the shifted
-   !> material tangent K + mu I, mu = fill_shift max diag K (at most
+   !> material tangent K + mu I, mu = shift max diag K (shift = fill_shift on
+   !> a singular tangent; 0, plain Newton, where it is regular enough) (at most
    !> fill_iterations corrections, until one is below `length`, each dof
    !> weighted by dof_length). Returns the corrections taken, the last
    !> correction's length and the residual at the corrected q. The system is
    !> left holding the shifted factor (not the tangent at q).
-   subroutine correct_fill(system, mesh, q, t, seg, dof_length, length, iterations, correction, residual, counts)
+   subroutine correct_fill(system, mesh, q, t, seg, dof_length, length, shift, iterations, correction, residual, &
+      & counts)
       type(linear_system_type), intent(inout) :: system
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(inout) :: q(:)
-      real(dp), intent(in) :: t, length
+      real(dp), intent(in) :: t, length, shift
       integer, intent(in) :: seg(:)
       real(dp), contiguous, intent(in) :: dof_length(:)
       integer, intent(out) :: iterations
@@ -119,7 +121,7 @@ contains
          residual = residual_norm(system, mesh)
          associate (diag => system%kff%a(system%kff%kd + 1, :))
             if (size(diag) == 0) exit
-            mu = fill_shift*maxval(diag)
+            mu = shift*maxval(diag)
             diag = diag + mu
          end associate
          call factor_system(system, info, counts)

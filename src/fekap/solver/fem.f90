@@ -45,7 +45,7 @@ module fekap_solver_fem
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_solver_change_point, only: change_verdict, change_regular, hermite_fill, correct_fill, fill_order, &
-      & rates_drop
+      & rates_drop, fill_shift
    use fekap_output_format, only: es_text
    implicit none
    private
@@ -327,7 +327,9 @@ contains
          ! Another time: from the regular state before the change point.
          call restore_state(self, self%before_change)
       end if
-      self%detect_change = .not. self%loaded
+      ! The paper's `previous` predictor is the last configuration: its tangent
+      ! says nothing about the new time's.
+      self%detect_change = .not. self%loaded .and. self%model%analysis%predictor /= predictor_previous
       self%change_found = .false.
       call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
       self%detect_change = .false.
@@ -377,7 +379,7 @@ contains
       type(error_type), allocatable :: over_error
       type(step_cuts_type) :: over_cuts
       real(dp), allocatable :: v0(:), a0(:), v1(:), a1(:)
-      real(dp) :: t_next, rcond, residual, correction
+      real(dp) :: t_next, rcond, rcond_fill, residual, correction
       integer :: its, order, info, i
       logical :: has_v0, has_a0, has_v1, has_a1
       character(len=300) :: text
@@ -421,8 +423,19 @@ contains
          end do
          call set_driven(self, t, q)
          self%seg = b%seg
-         call correct_fill(self%system, self%mesh, q, t, self%seg, self%dof_length, self%conv%length, its, &
-            & correction, residual, self%counts)
+         call correct_fill(self%system, self%mesh, q, t, self%seg, self%dof_length, self%conv%length, fill_shift, &
+            & its, correction, residual, self%counts)
+         ! The material tangent at the filled configuration: where it is regular
+         ! enough (near, not on, a change point) Newton finishes the correction
+         ! (the shift leaves the near-kernel part of the error), and the rates are
+         ! solved there; at a singular one they are left out.
+         call fill_tangent(self, q, t, rcond_fill)
+         if (rcond_fill >= rates_drop*b%reference_rcond) then
+            call correct_fill(self%system, self%mesh, q, t, self%seg, self%dof_length, &
+               & predictor_margin*self%conv%length, 0.0_dp, i, correction, residual, self%counts)
+            its = its + i
+            call fill_tangent(self, q, t, rcond_fill)
+         end if
          self%state = b
          self%state%t = t
          self%state%q = q
@@ -433,21 +446,16 @@ contains
             & rcond/max(b%reference_rcond, tiny(1.0_dp)), ' of the run''s best); stepped over from t = ', b%t, &
             & ' to ', n%t, ', positions interpolated from both sides (order ', order, ') and corrected (residual ', &
             & residual, ')'
-         ! The material tangent at the filled configuration: rates there unless it is singular.
-         call assemble_system(self%system, self%mesh, q, t, self%seg, huge(1.0_dp), self%counts)
-         call factor_system(self%system, info, self%counts)
-         self%factor_current = .false.
-         rcond = 0
-         if (info == 0) call system_rcond(self%system, rcond, self%counts)
          self%state%note = trim(text)
-         if (rcond < rates_drop*b%reference_rcond) then
-            write (text, '(a,es9.2,a)') '; singular there (condition ', rcond/max(b%reference_rcond, tiny(1.0_dp)), ')'
+         if (rcond_fill < rates_drop*b%reference_rcond) then
+            write (text, '(a,es9.2,a)') '; singular there (condition ', &
+               & rcond_fill/max(b%reference_rcond, tiny(1.0_dp)), ')'
             self%state%note = trim(self%state%note)//trim(text)
             if (self%model%analysis%velocities) self%state%note = trim(self%state%note)// &
                & ': velocities and accelerations are left out of this step'
          else if (self%model%analysis%velocities) then
             write (text, '(a,es9.2,a)') '; near singular there (condition ', &
-               & rcond/max(b%reference_rcond, tiny(1.0_dp)), '): velocities and accelerations are ill-conditioned'
+               & rcond_fill/max(b%reference_rcond, tiny(1.0_dp)), '): velocities and accelerations are ill-conditioned'
             self%state%note = trim(self%state%note)//trim(text)
             call self%model%drives%law%eval(t, self%law_value, self%law_rate, self%law_rate2)
             call solve_velocities(self%system, self%mesh, self%law_rate, self%loaded, self%state%v, self%counts)
@@ -466,6 +474,21 @@ contains
       call fill_result(self, result)
       filled = .true.
    end subroutine step_over
+
+   !> Assemble and factor the material tangent at the filled configuration q
+   !> at time t; its condition estimate (0 if singular).
+   subroutine fill_tangent(self, q, t, rcond)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: q(:)
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: rcond
+      integer :: info
+      call assemble_system(self%system, self%mesh, q, t, self%seg, huge(1.0_dp), self%counts)
+      call factor_system(self%system, info, self%counts)
+      self%factor_current = .false.
+      rcond = 0
+      if (info == 0) call system_rcond(self%system, rcond, self%counts)
+   end subroutine fill_tangent
 
    !> Velocities and accelerations of an accepted state for the fill of a
    !> change point, as far as known: the solved rates, else the velocity of
