@@ -381,8 +381,9 @@ contains
       real(dp), allocatable :: v0(:), a0(:), v1(:), a1(:)
       real(dp) :: t_next, rcond, rcond_fill, residual, correction
       integer :: its, order, info, i
-      logical :: has_v0, has_a0, has_v1, has_a1
-      character(len=300) :: text
+      logical :: has_v0, has_a0, has_v1, has_a1, singular
+      character(:), allocatable :: what
+      character(len=360) :: text
       filled = .false.
       rcond = self%predictor_rcond
       self%change_found = .false.
@@ -441,22 +442,20 @@ contains
          self%state%q = q
          self%state%has_velocity = .false.
          self%state%has_acceleration = .false.
-         write (text, '(a,es12.5,a,es9.2,a,es12.5,a,es12.5,a,i0,a,es9.2,a)') 't = ', t, &
-            & ': change point (tangent near singular at the predictor: condition ', &
-            & rcond/max(b%reference_rcond, tiny(1.0_dp)), ' of the run''s best); stepped over from t = ', b%t, &
-            & ' to ', n%t, ', positions interpolated from both sides (order ', order, ') and corrected (residual ', &
-            & residual, ')'
+         singular = rcond_fill < rates_drop*b%reference_rcond
+         what = ': near a change point ('
+         if (singular) what = ': singular configuration (a change point: '
+         write (text, '(a,es12.5,a,es9.2,a,es9.2,a,es12.5,a,es12.5,a,i0,a,es9.2,a)') 't = ', t, &
+            & what//'the tangent''s condition ', rcond/max(b%reference_rcond, tiny(1.0_dp)), ' at the predictor, ', &
+            & rcond_fill/max(b%reference_rcond, tiny(1.0_dp)), ' at the configuration, of the run''s best): '// &
+            & 'stepped over from t = ', b%t, ' to ', n%t, '; positions interpolated from both sides (order ', order, &
+            & ') and corrected (residual ', residual, ')'
          self%state%note = trim(text)
-         if (rcond_fill < rates_drop*b%reference_rcond) then
-            write (text, '(a,es9.2,a)') '; singular there (condition ', &
-               & rcond_fill/max(b%reference_rcond, tiny(1.0_dp)), ')'
-            self%state%note = trim(self%state%note)//trim(text)
+         if (singular) then
             if (self%model%analysis%velocities) self%state%note = trim(self%state%note)// &
                & ': velocities and accelerations are left out of this step'
          else if (self%model%analysis%velocities) then
-            write (text, '(a,es9.2,a)') '; near singular there (condition ', &
-               & rcond_fill/max(b%reference_rcond, tiny(1.0_dp)), '): velocities and accelerations are ill-conditioned'
-            self%state%note = trim(self%state%note)//trim(text)
+            self%state%note = trim(self%state%note)//': velocities and accelerations are ill-conditioned'
             call self%model%drives%law%eval(t, self%law_value, self%law_rate, self%law_rate2)
             call solve_velocities(self%system, self%mesh, self%law_rate, self%loaded, self%state%v, self%counts)
             self%state%has_velocity = .true.
