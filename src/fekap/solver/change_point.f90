@@ -16,7 +16,7 @@ module fekap_solver_change_point
    implicit none
    private
 
-   public :: change_verdict, hermite_fill, correct_fill, fill_order
+   public :: change_verdict, response_trusted, hermite_fill, correct_fill, fill_order
 
    !> A tangent whose reciprocal condition number is below change_drop times
    !> the largest of the run's accepted configurations is near singular.
@@ -30,6 +30,14 @@ module fekap_solver_change_point
    !> rates_drop times the run's best is singular: its rates are left out.
    !> Above it (a row near, not on, a change point) they are solved there.
    real(dp), parameter, public :: rates_drop = 1.0e-10_dp
+   !> The branch-jump check trusts the drive response of a factor whose
+   !> reciprocal condition number is at least response_drop times the run's
+   !> best: the square of the 1e-3 that the study found on B, since lambda_min
+   !> of K goes like sigma_min(B)**2. Below it (at and next to a change point)
+   !> the response's size and signs are arbitrary. Smaller than change_drop:
+   !> the double crank at dt = 2e-4 has 2e-5 one step from its collinear
+   !> configuration, where the response is still right.
+   real(dp), parameter, public :: response_drop = 1.0e-6_dp
    !> Verdicts of change_verdict.
    integer, parameter, public :: change_regular = 0, change_near_singular = 1
    !> Shift of the filled row's position correction, relative to the largest
@@ -55,6 +63,13 @@ contains
          verdict = change_near_singular
       end if
    end function change_verdict
+
+   !> Whether the drive response of a factor with reciprocal condition number
+   !> rcond is trusted against the run's best so far, reference.
+   pure logical function response_trusted(rcond, reference) result(trusted)
+      real(dp), intent(in) :: rcond, reference
+      trusted = rcond > 0 .and. rcond >= response_drop*reference
+   end function response_trusted
 
    !> The order of the two-sided interpolation that the neighbours' data
    !> allow: 5 (quintic Hermite) with velocities and accelerations at both,

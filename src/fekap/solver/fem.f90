@@ -45,7 +45,7 @@ module fekap_solver_fem
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_solver_change_point, only: change_verdict, change_regular, hermite_fill, correct_fill, fill_order, &
-      & rates_drop, fill_shift
+      & rates_drop, fill_shift, response_trusted
    use fekap_output_format, only: es_text
    implicit none
    private
@@ -367,8 +367,11 @@ contains
    !> velocities), corrected onto the mechanism (correct_fill). The filled
    !> row never enters the predictor's history. Its rates are left out: at a
    !> bifurcation they are fixed only by the second-order (bifurcation)
-   !> equations, which this does not solve (docs/hard-cases.md). If the
-   !> double step fails, t is solved as before (filled false).
+   !> equations, which this does not solve (docs/hard-cases.md). Where the
+   !> tangent at the filled configuration is regular enough (near, not on, a
+   !> change point), the row is solved as without the detection instead
+   !> (filled false), its interpolation being no closer than a nearby branch;
+   !> and so it is if the double step fails.
    subroutine step_over(self, t, result, cuts, filled, error)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
@@ -376,9 +379,9 @@ contains
       type(step_cuts_type), intent(out) :: cuts
       logical, intent(out) :: filled
       type(error_type), allocatable, intent(out) :: error
-      type(error_type), allocatable :: over_error
+      type(error_type), allocatable :: over_error, near_error
       type(step_cuts_type) :: over_cuts
-      real(dp), allocatable :: v0(:), a0(:), v1(:), a1(:)
+      real(dp), allocatable :: v0(:), a0(:), v1(:), a1(:), q_fill(:)
       real(dp) :: t_next, rcond, rcond_fill, residual, correction
       integer :: its, order, info, i
       logical :: has_v0, has_a0, has_v1, has_a1, singular
@@ -414,41 +417,50 @@ contains
       self%ahead_cuts = over_cuts%cuts
       self%has_ahead = .true.
       ! The rates of the two sides: the solved ones, else the predictor's history velocities.
-      associate (b => self%before_change, n => self%ahead, q => self%qt)
-         call side_rates(b, v0, a0, has_v0, has_a0)
+      associate (bf => self%before_change, n => self%ahead, q => self%qt)
+         call side_rates(bf, v0, a0, has_v0, has_a0)
          call side_rates(n, v1, a1, has_v1, has_a1)
          order = fill_order(has_v0 .and. has_v1, has_a0 .and. has_a1)
-         call hermite_fill(order, b%t, b%q, v0, a0, n%t, n%q, v1, a1, t, q)
+         call hermite_fill(order, bf%t, bf%q, v0, a0, n%t, n%q, v1, a1, t, q)
          do i = 1, self%mesh%ndof
             if (self%mesh%status(i) == dof_fixed) q(i) = self%mesh%q0(i)
          end do
          call set_driven(self, t, q)
-         self%seg = b%seg
+         self%seg = bf%seg
          call correct_fill(self%system, self%mesh, q, t, self%seg, self%dof_length, self%conv%length, fill_shift, &
             & its, correction, residual, self%counts)
-         ! The material tangent at the filled configuration: where it is regular
-         ! enough (near, not on, a change point) Newton finishes the correction
-         ! (the shift leaves the near-kernel part of the error), and the rates are
-         ! solved there; at a singular one they are left out.
          call fill_tangent(self, q, t, rcond_fill)
-         if (rcond_fill >= rates_drop*b%reference_rcond) then
-            call correct_fill(self%system, self%mesh, q, t, self%seg, self%dof_length, &
-               & predictor_margin*self%conv%length, 0.0_dp, i, correction, residual, self%counts)
-            its = its + i
-            call fill_tangent(self, q, t, rcond_fill)
+         q_fill = q
+         singular = rcond_fill < rates_drop*bf%reference_rcond
+      end associate
+      if (.not. singular) then
+         ! Near, not on, a change point (the tangent at the filled configuration
+         ! is regular enough): solve the row itself as without the detection,
+         ! from the state before it; the state at the next time stays ahead.
+         call restore_state(self, self%before_change)
+         call advance_to(self, t, 0, result%iterations, result%residual, cuts, near_error)
+         if (.not. allocated(near_error)) then
+            self%change_found = .false.
+            return
          end if
-         self%state = b
+         ! It failed: the fill, finished by plain Newton, with rates there.
+         call correct_fill(self%system, self%mesh, q_fill, t, self%seg, self%dof_length, &
+            & predictor_margin*self%conv%length, 0.0_dp, i, correction, residual, self%counts)
+         its = its + i
+         call fill_tangent(self, q_fill, t, rcond_fill)
+      end if
+      associate (bf => self%before_change, n => self%ahead)
+         self%state = bf
          self%state%t = t
-         self%state%q = q
+         self%state%q = q_fill
          self%state%has_velocity = .false.
          self%state%has_acceleration = .false.
-         singular = rcond_fill < rates_drop*b%reference_rcond
          what = ': near a change point ('
          if (singular) what = ': singular configuration (a change point: '
          write (text, '(a,es12.5,a,es9.2,a,es9.2,a,es12.5,a,es12.5,a,i0,a,es9.2,a)') 't = ', t, &
-            & what//'the tangent''s condition ', rcond/max(b%reference_rcond, tiny(1.0_dp)), ' at the predictor, ', &
-            & rcond_fill/max(b%reference_rcond, tiny(1.0_dp)), ' at the configuration, of the run''s best): '// &
-            & 'stepped over from t = ', b%t, ' to ', n%t, '; positions interpolated from both sides (order ', order, &
+            & what//'the tangent''s condition ', rcond/max(bf%reference_rcond, tiny(1.0_dp)), ' at the predictor, ', &
+            & rcond_fill/max(bf%reference_rcond, tiny(1.0_dp)), ' at the configuration, of the run''s best): '// &
+            & 'stepped over from t = ', bf%t, ' to ', n%t, '; positions interpolated from both sides (order ', order, &
             & ') and corrected (residual ', residual, ')'
          self%state%note = trim(text)
          if (singular) then
@@ -460,12 +472,13 @@ contains
             call solve_velocities(self%system, self%mesh, self%law_rate, self%loaded, self%state%v, self%counts)
             self%state%has_velocity = .true.
             if (self%model%analysis%accelerations) then
-               call solve_accelerations(self%system, self%mesh, q, self%state%v, self%seg, self%law_rate2, &
+               call solve_accelerations(self%system, self%mesh, q_fill, self%state%v, self%seg, self%law_rate2, &
                   & self%state%a, self%work, self%counts)
                self%state%has_acceleration = .true.
             end if
          end if
       end associate
+      self%factor_current = .false.
       result%iterations = its
       result%residual = residual
       result%cuts = 0
@@ -983,8 +996,7 @@ contains
             call system_pivot(self%system, pivot)
             call system_rcond(self%system, rcond, self%counts)
          end if
-         has_response = factored .and. pivot >= singular_floor .and. &
-            & change_verdict(rcond, state%reference_rcond) == change_regular
+         has_response = factored .and. pivot >= singular_floor .and. response_trusted(rcond, state%reference_rcond)
          if (has_response) then
             call drive_response(self%system, self%mesh, resp, self%counts)
          else
