@@ -168,6 +168,10 @@ module fekap_solver_fem
       !> tangent's condition estimate.
       logical :: detect_change = .false., change_found = .false.
       real(dp) :: predictor_rcond = 0
+      !> Whether this step's predictor was checked and found regular: its
+      !> estimate then stands for the accepted configuration's in the
+      !> branch-jump check (one estimate a step, not two).
+      logical :: predictor_regular = .false.
       !> The regular states on either side of a change point stepped over: the
       !> state before it, and the one solved at the next output time, kept for
       !> the next advance with its iterations, residual and cuts.
@@ -629,6 +633,7 @@ contains
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof, system => self%system)
          self%seg = self%state%seg
+         self%predictor_regular = .false.
          call predict(self, t, qt)
          ! Scale of the residual: what the drive (and load) increment alone
          ! produces from the last configuration, to first order -K_fd dq_d +
@@ -693,7 +698,8 @@ contains
                      rcond = 0
                      if (info == 0) call system_rcond(system, rcond, self%counts)
                      self%predictor_rcond = rcond
-                     if (change_verdict(rcond, self%state%reference_rcond) /= change_regular) then
+                     self%predictor_regular = change_verdict(rcond, self%state%reference_rcond) == change_regular
+                     if (.not. self%predictor_regular) then
                         self%change_found = .true.
                         return
                      end if
@@ -994,7 +1000,11 @@ contains
          rcond = 0
          if (factored) then
             call system_pivot(self%system, pivot)
-            call system_rcond(self%system, rcond, self%counts)
+            if (self%predictor_regular) then
+               rcond = self%predictor_rcond
+            else
+               call system_rcond(self%system, rcond, self%counts)
+            end if
          end if
          has_response = factored .and. pivot >= singular_floor .and. response_trusted(rcond, state%reference_rcond)
          if (has_response) then
