@@ -476,7 +476,7 @@ contains
          else if (self%model%analysis%velocities) then
             self%state%note = trim(self%state%note)//': velocities and accelerations are ill-conditioned'
             call self%model%drives%law%eval(t, self%law_value, self%law_rate, self%law_rate2)
-            call solve_velocities(self%system, self%mesh, self%law_rate, self%loaded, self%state%v, self%counts)
+            call solve_velocities(self%system, self%mesh, self%law_rate, self%state%v, self%counts)
             self%state%has_velocity = .true.
             if (self%model%analysis%accelerations) then
                call solve_accelerations(self%system, self%mesh, q_fill, self%state%v, self%seg, self%law_rate2, &
