@@ -9,7 +9,7 @@ module test_mechanisms
    implicit none
    private
 
-   public :: fourbar_model, add_node, add_link, cantilever_model, slider_crank_model
+   public :: fourbar_model, add_node, add_link, cantilever_model, slider_crank_model, parallelogram_model
 
    real(dp), parameter :: pi = acos(-1.0_dp)
 
@@ -82,6 +82,43 @@ contains
       model%output%links = [1, 2, 3]
    end subroutine fourbar_model
 
+
+   !> The IFToMM A02 chain with N = 1 (a parallelogram four-bar): pivots
+   !> O0 = (0, 0), O1 = (1, 0), tips T0 = (0, 1), T1 = (1, 1), cranks O0-T0
+   !> (driven, pi/2 + 2 pi t) and O1-T1, coupler T0-T1, all of length 1. At
+   !> t = 0.25 and 0.75 every bar is horizontal and the tangent loses a rank (a
+   !> change point); on the parallelogram Tk = (k + cos q, sin q), q = pi/2 + 2 pi t.
+   subroutine parallelogram_model(model, dt)
+      type(model_type), intent(out) :: model
+      real(dp), intent(in) :: dt
+      model%file = 'parallelogram'
+      call add_node(model, 'O0', 0.0_dp, 0.0_dp)
+      call add_node(model, 'O1', 1.0_dp, 0.0_dp)
+      call add_node(model, 'T0', 0.0_dp, 1.0_dp)
+      call add_node(model, 'T1', 1.0_dp, 1.0_dp)
+      allocate (model%sections(1))
+      model%sections(1)%name = 'bar'
+      model%sections(1)%ea = 100
+      model%sections(1)%kga = 5.0_dp/6*100
+      model%sections(1)%ei = 1
+      call add_link(model, 'crank0', 1, 3, 1)
+      call add_link(model, 'crank1', 2, 4, 1)
+      call add_link(model, 'coupler0', 3, 4, 1)
+      allocate (model%supports(2))
+      model%supports(1)%node = 1
+      model%supports(1)%fix = [.true., .true., .false.]
+      model%supports(2)%node = 2
+      model%supports(2)%fix = [.true., .true., .false.]
+      allocate (model%drives(1))
+      model%drives(1)%dof = dof_rot
+      model%drives(1)%link = 1
+      model%drives(1)%node = 1
+      call new_rate_law(model%drives(1)%law, 2*pi)
+      model%analysis%dt = dt
+      allocate (model%welds(0), model%loads(0), model%slidelines(0))
+      model%output%points = [3, 4]
+      model%output%links = [1, 2, 3]
+   end subroutine parallelogram_model
 
    !> A cantilever R-T of length 1 along +x, clamped at R, meshed with nelem
    !> elements, under an end moment M = t * 2*pi*EI/L at T (EI = 1).

@@ -6,7 +6,7 @@ module fekap_assembly_lapack
    implicit none
    private
 
-   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dgeqp3
+   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgbcon, dgetrf, dgetrs, dgeqp3, dlacn2
    public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
    public :: band_lu_factor, band_lu_solve
 
@@ -54,6 +54,22 @@ module fekap_assembly_lapack
          integer, intent(out) :: info
       end subroutine dgbtrs
 
+      !> Reciprocal condition number (1-norm) of a band matrix from its
+      !> dgbtrf factor and its norm anorm.
+      subroutine dgbcon(norm, n, kl, ku, ab, ldab, ipiv, anorm, rcond, work, iwork, info)
+         import :: dp
+         implicit none
+         character, intent(in) :: norm
+         integer, intent(in) :: n, kl, ku, ldab
+         real(dp), intent(in) :: ab(ldab, *)
+         integer, intent(in) :: ipiv(*)
+         real(dp), intent(in) :: anorm
+         real(dp), intent(out) :: rcond
+         real(dp), intent(out) :: work(*)
+         integer, intent(out) :: iwork(*)
+         integer, intent(out) :: info
+      end subroutine dgbcon
+
       !> LU factorisation with partial pivoting of a general (dense) matrix.
       pure subroutine dgetrf(m, n, a, lda, ipiv, info)
          import :: dp
@@ -87,6 +103,21 @@ module fekap_assembly_lapack
          real(dp), intent(inout) :: work(*)
          integer, intent(out) :: info
       end subroutine dgeqp3
+
+      !> Estimate of the 1-norm of a matrix by reverse communication (Hager and
+      !> Higham; the estimator inside dpbcon, dgbcon and dgecon): call with kase
+      !> = 0, then, while kase /= 0, overwrite x by A x (kase = 1) or A^T x
+      !> (kase = 2) and call again; est is the estimate.
+      pure subroutine dlacn2(n, v, x, isgn, est, kase, isave)
+         import :: dp
+         implicit none
+         integer, intent(in) :: n
+         real(dp), intent(inout) :: v(*), x(*)
+         integer, intent(inout) :: isgn(*)
+         real(dp), intent(inout) :: est
+         integer, intent(inout) :: kase
+         integer, intent(inout) :: isave(3)
+      end subroutine dlacn2
    end interface
 
 contains

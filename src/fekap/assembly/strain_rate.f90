@@ -26,12 +26,12 @@ module fekap_assembly_strain_rate
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
-   use fekap_assembly_lapack, only: band_lu_factor
+   use fekap_assembly_lapack, only: band_lu_factor, dgbcon
    implicit none
    private
 
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
-   public :: strain_rates, strain_accelerations, strain_rows
+   public :: strain_rates, strain_accelerations, strain_rows, strain_rate_rcond
 
    !> B_f of a mesh, in band storage, and its factor.
    type :: strain_rate_type
@@ -65,6 +65,11 @@ module fekap_assembly_strain_rate
       !> a QR of B), so a configuration d away from a singular one has a
       !> ratio of order d**2 in both forms; 0 if B_f is singular.
       real(dp) :: pivot_ratio = 0
+      !> 1-norm of B_f at its last factorisation, and dgbcon's scratch
+      !> (allocated on first use), for strain_rate_rcond.
+      real(dp) :: norm1 = 0
+      real(dp), allocatable :: rcond_work(:)
+      integer, allocatable :: rcond_iwork(:)
    end type strain_rate_type
 
 contains
@@ -269,8 +274,10 @@ contains
       integer, intent(out) :: info
       integer :: j, diagonal
       diagonal = self%kl + self%ku + 1
+      self%norm1 = 0
       do j = 1, self%n
          self%column_max(j) = maxval(abs(self%ab(:, j)))
+         self%norm1 = max(self%norm1, sum(abs(self%ab(:, j))))
       end do
       call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
       self%factored = info == 0
@@ -285,6 +292,21 @@ contains
          self%pivot_ratio = min(self%pivot_ratio, (abs(self%ab(diagonal, j))/self%column_max(j))**2)
       end do
    end subroutine factor_strain_rate
+
+   !> The condition estimate of the factor of B_f (LAPACK dgbcon, 1-norm),
+   !> squared to be on the tangent's scale like pivot_ratio (K = B^T W B);
+   !> 0 without a factor. Change points compare it with the run's best.
+   subroutine strain_rate_rcond(self, rcond)
+      type(strain_rate_type), intent(inout) :: self
+      real(dp), intent(out) :: rcond
+      integer :: info
+      rcond = 0
+      if (.not. self%factored) return
+      if (.not. allocated(self%rcond_work)) allocate (self%rcond_work(3*self%n), self%rcond_iwork(self%n))
+      call dgbcon('1', self%n, self%kl, self%ku, self%ab, size(self%ab, 1), self%ipiv, self%norm1, rcond, &
+         & self%rcond_work, self%rcond_iwork, info)
+      rcond = rcond**2
+   end subroutine strain_rate_rcond
 
    !> Solve B_f x = b with the factor (b by band rows in, x by equations out).
    pure subroutine solve_strain_rate(self, x)

@@ -46,7 +46,7 @@ module fekap_solver_fem
       & divergence_length
    use fekap_solver_linear_system, only: linear_system_type, new_linear_system, assemble_system, &
       & assemble_system_residual, factor_system, system_pivot, residual_norm, newton_correction, &
-      & apply_correction, drive_response, drive_load_rhs, solve_system, apply_response
+      & apply_correction, drive_response, drive_load_rhs, solve_system, apply_response, system_rcond
    use fekap_solver_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, &
       & taylor_predict, prediction_none, prediction_smooth, predictor_margin
    use fekap_solver_branch, only: branch_check_type, new_branch_check, drive_increment, branch_verdict, &
@@ -54,9 +54,11 @@ module fekap_solver_fem
    use fekap_solver_rates, only: pivot_note, solve_velocities, solve_accelerations, near_singular_drop, &
       & singular_floor, root_velocities, root_accelerations, root_drive_response
    use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate, assemble_strain_rate, &
-      & factor_strain_rate, solve_strain_rate
+      & factor_strain_rate, solve_strain_rate, strain_rate_rcond
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
+   use fekap_solver_change_point, only: change_verdict, change_regular, hermite_fill, correct_fill, fill_order, &
+      & rates_drop, fill_shift, response_trusted
    use fekap_output_format, only: es_text
    implicit none
    private
@@ -100,6 +102,10 @@ module fekap_solver_fem
       !> Largest pivot ratio of a tangent at an accepted configuration so far
       !> (the reference for singular and near-singular configurations).
       real(dp) :: reference_pivot = 0
+      !> Largest reciprocal condition number (system_rcond) of the material
+      !> tangent at an accepted configuration so far: the reference of the
+      !> change-point detection and of the trust in a drive response.
+      real(dp) :: reference_rcond = 0
       !> Remark on the configuration for the listing (empty if none).
       character(len=note_length) :: note = ''
    end type fem_state_type
@@ -179,6 +185,22 @@ module fekap_solver_fem
       logical :: root_form = .false.
       !> Scratch over the equations for the square-root form's solves.
       real(dp), allocatable :: root_work(:)
+      !> Change points (see step_over): whether the step being solved checks its
+      !> predictor's tangent, whether it found it near singular, and that
+      !> tangent's condition estimate.
+      logical :: detect_change = .false., change_found = .false.
+      real(dp) :: predictor_rcond = 0
+      !> Whether this step's predictor was checked and found regular: its
+      !> estimate then stands for the accepted configuration's in the
+      !> branch-jump check (one estimate a step, not two).
+      logical :: predictor_regular = .false.
+      !> The regular states on either side of a change point stepped over: the
+      !> state before it, and the one solved at the next output time, kept for
+      !> the next advance with its iterations, residual and cuts.
+      type(fem_state_type) :: before_change, ahead
+      logical :: has_ahead = .false.
+      integer :: ahead_iterations = 0, ahead_cuts = 0
+      real(dp) :: ahead_residual = 0
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
@@ -264,7 +286,7 @@ contains
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
       integer :: info
-      real(dp) :: clock, pivot
+      real(dp) :: clock, pivot, rcond
       clock = clock_seconds()
       self%system%timing = .true.
       self%state%t = self%model%analysis%t_start
@@ -275,6 +297,7 @@ contains
       self%state%history%filled = 0
       self%factor_current = .false.
       self%state%has_jump_response = .false.
+      self%has_ahead = .false.
       result%iterations = 0
       call assemble_system_residual(self%system, self%mesh, self%state%q, self%state%t, self%seg, self%counts)
       result%residual = residual_norm(self%system, self%mesh)
@@ -294,6 +317,8 @@ contains
             pivot = accepted_pivot(self)
             call note_response_pivot(self, pivot)
             call accepted_response(self, self%state%jump_response)
+            call accepted_rcond(self, rcond)
+            self%state%reference_rcond = rcond
          end if
          call record_velocity(self)
       end if
@@ -312,13 +337,43 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(step_cuts_type) :: cuts
       real(dp) :: clock
+      logical :: filled
       self%advances = self%advances + 1
       ! The phases are timed on a sample of the steps (and at the start); the
       ! summary scales them to the run (see phase_seconds).
       self%system%timing = phase_timed(self%advances)
       if (self%system%timing) clock = clock_seconds()
+      if (self%has_ahead) then
+         self%has_ahead = .false.
+         if (t == self%ahead%t) then
+            ! The step over a change point solved this time already (with its rates).
+            call restore_state(self, self%ahead)
+            result%iterations = self%ahead_iterations
+            result%residual = self%ahead_residual
+            self%last_cuts = self%ahead_cuts
+            result%cuts = self%last_cuts
+            call fill_result(self, result)
+            if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
+            return
+         end if
+         ! Another time: from the regular state before the change point.
+         call restore_state(self, self%before_change)
+      end if
+      ! The paper's `previous` predictor is the last configuration: its tangent
+      ! says nothing about the new time's.
+      self%detect_change = .not. self%loaded .and. self%model%analysis%predictor /= predictor_previous
+      self%change_found = .false.
       call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
+      self%detect_change = .false.
       if (allocated(error)) return
+      if (self%change_found) then
+         call step_over(self, t, result, cuts, filled, error)
+         if (allocated(error)) return
+         if (filled) then
+            if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
+            return
+         end if
+      end if
       self%last_cuts = cuts%cuts
       result%cuts = self%last_cuts
       call solve_rates(self)
@@ -333,6 +388,208 @@ contains
       call fill_result(self, result)
       if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
    end subroutine fem_advance
+
+   !> The step onto time t found its predictor's tangent near singular (a
+   !> change point; detected in solve_step): instead of iterating there, solve
+   !> the next output time from the last regular state as one double step
+   !> (the usual predictor, Newton, branch-jump check and rates), keep that
+   !> state for the next advance, and fill the row at t for output only, from
+   !> both sides: positions by Hermite interpolation through the two regular
+   !> states (quintic with their velocities and accelerations, cubic with
+   !> velocities), corrected onto the mechanism (correct_fill). The filled
+   !> row never enters the predictor's history. Its rates are left out: at a
+   !> bifurcation they are fixed only by the second-order (bifurcation)
+   !> equations, which this does not solve (docs/hard-cases.md). Where the
+   !> tangent at the filled configuration is regular enough (near, not on, a
+   !> change point), the row is solved as without the detection instead
+   !> (filled false), its interpolation being no closer than a nearby branch;
+   !> and so it is if the double step fails.
+   subroutine step_over(self, t, result, cuts, filled, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(step_result_type), intent(inout) :: result
+      type(step_cuts_type), intent(out) :: cuts
+      logical, intent(out) :: filled
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: over_error, near_error
+      type(step_cuts_type) :: over_cuts
+      real(dp), allocatable :: v0(:), a0(:), v1(:), a1(:), q_fill(:)
+      real(dp) :: t_next, rcond, rcond_fill, residual, correction
+      integer :: its, order, info, i
+      logical :: has_v0, has_a0, has_v1, has_a1, singular
+      character(:), allocatable :: what
+      character(len=360) :: text
+      filled = .false.
+      rcond = self%predictor_rcond
+      self%change_found = .false.
+      ! The tangent at the accepted state again (the drive increment's residual scale).
+      self%factor_current = .false.
+      call refactor_at_accepted(self, info)
+      self%before_change = self%state
+      t_next = next_output_time(self, t)
+      call advance_to(self, t_next, 0, its, residual, over_cuts, over_error)
+      if (allocated(over_error) .or. self%change_found) then
+         ! The double step failed: solve at t itself, as without the detection.
+         self%change_found = .false.
+         call restore_state(self, self%before_change)
+         call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
+         return
+      end if
+      call solve_rates(self)
+      if (allocated(over_cuts%first)) then
+         if (has_note(self%state%note)) then
+            self%state%note = over_cuts%note()//'; '//trim(self%state%note)
+         else
+            self%state%note = over_cuts%note()
+         end if
+      end if
+      self%ahead = self%state
+      self%ahead_iterations = its
+      self%ahead_residual = residual
+      self%ahead_cuts = over_cuts%cuts
+      self%has_ahead = .true.
+      ! The rates of the two sides: the solved ones, else the predictor's history velocities.
+      associate (bf => self%before_change, n => self%ahead, q => self%qt)
+         call side_rates(bf, v0, a0, has_v0, has_a0)
+         call side_rates(n, v1, a1, has_v1, has_a1)
+         order = fill_order(has_v0 .and. has_v1, has_a0 .and. has_a1)
+         call hermite_fill(order, bf%t, bf%q, v0, a0, n%t, n%q, v1, a1, t, q)
+         do i = 1, self%mesh%ndof
+            if (self%mesh%status(i) == dof_fixed) q(i) = self%mesh%q0(i)
+         end do
+         call set_driven(self, t, q)
+         self%seg = bf%seg
+         call correct_fill(self%system, self%mesh, q, t, self%seg, self%dof_length, self%conv%length, fill_shift, &
+            & its, correction, residual, self%counts)
+         call fill_tangent(self, q, t, rcond_fill)
+         q_fill = q
+         singular = rcond_fill < rates_drop*bf%reference_rcond
+      end associate
+      if (.not. singular) then
+         ! Near, not on, a change point (the tangent at the filled configuration
+         ! is regular enough): solve the row itself as without the detection,
+         ! from the state before it; the state at the next time stays ahead.
+         call restore_state(self, self%before_change)
+         call advance_to(self, t, 0, result%iterations, result%residual, cuts, near_error)
+         if (.not. allocated(near_error)) then
+            self%change_found = .false.
+            return
+         end if
+         ! It failed: the fill, finished by plain Newton, with rates there.
+         call correct_fill(self%system, self%mesh, q_fill, t, self%seg, self%dof_length, &
+            & predictor_margin*self%conv%length, 0.0_dp, i, correction, residual, self%counts)
+         its = its + i
+         call fill_tangent(self, q_fill, t, rcond_fill)
+      end if
+      associate (bf => self%before_change, n => self%ahead)
+         self%state = bf
+         self%state%t = t
+         self%state%q = q_fill
+         self%state%has_velocity = .false.
+         self%state%has_acceleration = .false.
+         what = ': near a change point ('
+         if (singular) what = ': singular configuration (a change point: '
+         write (text, '(a,es12.5,a,es9.2,a,es9.2,a,es12.5,a,es12.5,a,i0,a,es9.2,a)') 't = ', t, &
+            & what//'the tangent''s condition ', rcond/max(bf%reference_rcond, tiny(1.0_dp)), ' at the predictor, ', &
+            & rcond_fill/max(bf%reference_rcond, tiny(1.0_dp)), ' at the configuration, of the run''s best): '// &
+            & 'stepped over from t = ', bf%t, ' to ', n%t, '; positions interpolated from both sides (order ', order, &
+            & ') and corrected (residual ', residual, ')'
+         self%state%note = trim(text)
+         if (singular) then
+            if (self%model%analysis%velocities) self%state%note = trim(self%state%note)// &
+               & ': velocities and accelerations are left out of this step'
+         else if (self%model%analysis%velocities) then
+            self%state%note = trim(self%state%note)//': velocities and accelerations are ill-conditioned'
+            call self%model%drives%law%eval(t, self%law_value, self%law_rate, self%law_rate2)
+            call solve_velocities(self%system, self%mesh, self%law_rate, self%state%v, self%counts)
+            self%state%has_velocity = .true.
+            if (self%model%analysis%accelerations) then
+               call solve_accelerations(self%system, self%mesh, q_fill, self%state%v, self%seg, self%law_rate2, &
+                  & self%state%a, self%work, self%counts)
+               self%state%has_acceleration = .true.
+            end if
+         end if
+      end associate
+      self%factor_current = .false.
+      result%iterations = its
+      result%residual = residual
+      result%cuts = 0
+      self%last_cuts = 0
+      call fill_result(self, result)
+      filled = .true.
+   end subroutine step_over
+
+   !> Assemble and factor the material tangent at the filled configuration q
+   !> at time t; its condition estimate (0 if singular), B_f's squared in the
+   !> square-root form.
+   subroutine fill_tangent(self, q, t, rcond)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: q(:)
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: rcond
+      integer :: info
+      integer :: root_info
+      call assemble_system(self%system, self%mesh, q, t, self%seg, huge(1.0_dp), self%counts)
+      call factor_system(self%system, info, self%counts)
+      self%factor_current = .false.
+      rcond = 0
+      if (self%root_form) then
+         ! On the scale of the run's best, which is B_f's in the square-root form.
+         call factor_root(self, q, self%seg, root_info)
+         if (root_info == 0) call strain_rate_rcond(self%root, rcond)
+      else if (info == 0) then
+         call system_rcond(self%system, rcond, self%counts)
+      end if
+   end subroutine fill_tangent
+
+   !> Velocities and accelerations of an accepted state for the fill of a
+   !> change point, as far as known: the solved rates, else the velocity of
+   !> its newest history entry (a positions-only run), and whether each is known.
+   subroutine side_rates(state, v, a, known_v, known_a)
+      type(fem_state_type), intent(in) :: state
+      real(dp), allocatable, intent(out) :: v(:), a(:)
+      logical, intent(out) :: known_v, known_a
+      allocate (v(size(state%q)), a(size(state%q)), source=0.0_dp)
+      known_v = .false.
+      known_a = .false.
+      if (state%has_velocity) then
+         v = state%v
+         known_v = .true.
+         if (state%has_acceleration) then
+            a = state%a
+            known_a = .true.
+         end if
+      else if (state%history%has_velocity(state%history%newest)) then
+         v = state%history%velocity(:, state%history%newest)
+         known_v = .true.
+      end if
+   end subroutine side_rates
+
+   !> The output time after t of the run's uniform steps (as the time loop
+   !> makes them: t_start + n dt, the last one t_end), or t plus the last
+   !> step if t is not one of them or is the last.
+   real(dp) function next_output_time(self, t) result(t_next)
+      type(fem_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      real(dp) :: span
+      integer :: n, nsteps
+      t_next = t + (t - self%state%t)
+      associate (an => self%model%analysis)
+         if (.not. an%dt > 0) return
+         span = an%t_end - an%t_start
+         nsteps = nint(span/an%dt)
+         if (abs(nsteps*an%dt - span) > 1.0e-9_dp*an%dt) nsteps = ceiling(span/an%dt)
+         nsteps = max(nsteps, 1)
+         n = nint((t - an%t_start)/an%dt)
+         if (n + 1 > nsteps .or. n < 0) return
+         if (abs(an%t_start + n*an%dt - t) > 1.0e-9_dp*an%dt .and. t /= an%t_end) return
+         if (n + 1 == nsteps) then
+            t_next = an%t_end
+         else
+            t_next = an%t_start + (n + 1)*an%dt
+         end if
+      end associate
+   end function next_output_time
 
    !> Advance the accepted state to time t under step control (cut after a
    !> failure, grow back after a success). A step that the branch check finds
@@ -360,6 +617,9 @@ contains
          self%verify_depth = depth
          call solve_step(self, t_try, it, step_residual, step_error)
          iterations = iterations + it
+         ! Only a run's step, at its first try, checks for a change point.
+         self%detect_change = .false.
+         if (self%change_found) return
          if (self%verify_pending) then
             ! The branch-jump check asked for the step to be confirmed by two half steps.
             self%verify_pending = .false.
@@ -403,12 +663,13 @@ contains
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r0, increment_residual, correction, previous, strain, kg_above, stalled_correction, pivot
+      real(dp) :: r0, increment_residual, correction, previous, strain, kg_above, stalled_correction, pivot, rcond
       integer :: i, info, element, pass, at_floor
       logical :: moved, by_estimate, at_predictor, root_solved
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof, system => self%system)
          self%seg = self%state%seg
+         self%predictor_regular = .false.
          call predict(self, t, qt)
          ! Scale of the residual: what the drive (and load) increment alone
          ! produces from the last configuration, to first order -K_fd dq_d +
@@ -470,9 +731,26 @@ contains
                      if (.not. root_solved) call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
                   end if
                   if (.not. root_solved) call factor_system(system, info, self%counts)
-                  if (root_solved) then
-                     info = 0
-                  else if (info > 0 .and. kg_above > 0) then
+                  if (root_solved) info = 0
+                  if (i == 0 .and. self%detect_change) then
+                     ! A change point at the predictor: Newton does not iterate on a
+                     ! near-singular tangent (see step_over). The estimate is of the
+                     ! factor just made: B_f's (squared) or K's.
+                     self%detect_change = .false.
+                     rcond = 0
+                     if (root_solved) then
+                        call strain_rate_rcond(self%root, rcond)
+                     else if (info == 0) then
+                        call system_rcond(system, rcond, self%counts)
+                     end if
+                     self%predictor_rcond = rcond
+                     self%predictor_regular = change_verdict(rcond, self%state%reference_rcond) == change_regular
+                     if (.not. self%predictor_regular) then
+                        self%change_found = .true.
+                        return
+                     end if
+                  end if
+                  if (.not. root_solved .and. info > 0 .and. kg_above > 0) then
                      ! The material tangent is singular at a stationary configuration;
                      ! the geometric stiffness of the iterate's stresses may still
                      ! carry Newton there (full Newton from here on in this step).
@@ -832,6 +1110,18 @@ contains
       end if
    end function accepted_pivot
 
+   !> The condition estimate of the factor at the accepted configuration, on
+   !> K's scale: B_f's squared in the square-root form, else K's.
+   subroutine accepted_rcond(self, rcond)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(out) :: rcond
+      if (self%root_form) then
+         call strain_rate_rcond(self%root, rcond)
+      else
+         call system_rcond(self%system, rcond, self%counts)
+      end if
+   end subroutine accepted_rcond
+
    !> The drive response at the accepted configuration, whose factor the
    !> system (or root) holds: from B_f in the square-root form, else from K_ff.
    subroutine accepted_response(self, resp)
@@ -872,15 +1162,25 @@ contains
       logical, intent(in) :: factored
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: swap(:, :)
-      real(dp) :: step_floor, turn, pivot
+      real(dp) :: step_floor, turn, pivot, rcond
       integer :: verdict, crossing(3)
       logical :: has_response
       associate (state => self%state, resp => self%jump_response_new)
          call drive_increment(self%branch, self%mesh, state%q, qt, self%drive_step, step_floor)
-         ! Response at the new configuration (unless its tangent is singular).
+         ! Response at the new configuration, unless its tangent is near singular
+         ! (against the run's best condition: at a change point the response is
+         ! arbitrary in size and sign, and would reject the step after it).
          pivot = 0
-         if (factored) pivot = accepted_pivot(self)
-         has_response = pivot >= singular_floor
+         rcond = 0
+         if (factored) then
+            pivot = accepted_pivot(self)
+            if (self%predictor_regular) then
+               rcond = self%predictor_rcond
+            else
+               call accepted_rcond(self, rcond)
+            end if
+         end if
+         has_response = factored .and. pivot >= singular_floor .and. response_trusted(rcond, state%reference_rcond)
          if (has_response) then
             if (self%root_form) then
                call root_drive_response(self%root, self%mesh, resp, self%root_work)
@@ -917,6 +1217,7 @@ contains
             ! branch_accept: the step stands.
          end select
          state%has_jump_response = has_response
+         state%reference_rcond = max(state%reference_rcond, rcond)
       end associate
       ! The new response becomes the accepted one (a swap of the two arrays, no copy).
       call move_alloc(self%state%jump_response, swap)

@@ -17,7 +17,7 @@ module fekap_solver_linear_system
 
    public :: linear_system_type, new_linear_system, assemble_system, assemble_system_residual, factor_system
    public :: system_pivot, residual_norm, newton_correction, apply_correction, drive_response, drive_load_rhs
-   public :: solve_system, apply_response, assemble_second_derivative_at
+   public :: solve_system, apply_response, assemble_second_derivative_at, system_rcond
 
    !> Tangent, residual and right-hand side of the free equations.
    type :: linear_system_type
@@ -40,6 +40,9 @@ module fekap_solver_linear_system
       !> Pivot ratio of the factor in kff, once computed (see system_pivot).
       real(dp) :: pivot = 0
       logical :: pivot_known = .false.
+      !> Condition estimate of the factor in kff, once computed (see system_rcond).
+      real(dp) :: rcond = 0
+      logical :: rcond_known = .false.
       !> Whether the phases of the current step are timed (a sample of the steps).
       logical :: timing = .true.
    end type linear_system_type
@@ -104,6 +107,7 @@ contains
       call self%kff%factor(info)
       call phase_end(self, clock, counts%seconds_factorisation)
       self%pivot_known = .false.
+      self%rcond_known = .false.
       if (self%kff%is_lu) then
          counts%lu_factorisations = counts%lu_factorisations + 1
       else
@@ -123,6 +127,24 @@ contains
       end if
       ratio = self%pivot
    end subroutine system_pivot
+
+   !> The reciprocal condition number of the factor in kff (band_rcond: 1-norm,
+   !> a few solves), computed once per factorisation and timed with the
+   !> solves: the change-point detection and the branch-jump check ask for it.
+   !> The factor must be regular (factor_system's info = 0).
+   subroutine system_rcond(self, rcond, counts)
+      type(linear_system_type), intent(inout) :: self
+      real(dp), intent(out) :: rcond
+      type(work_counts_type), intent(inout) :: counts
+      real(dp) :: clock
+      if (.not. self%rcond_known) then
+         clock = phase_start(self)
+         call self%kff%rcond(self%rcond)
+         call phase_end(self, clock, counts%seconds_solves)
+         self%rcond_known = .true.
+      end if
+      rcond = self%rcond
+   end subroutine system_rcond
 
    !> Solve for rhs with the current factor, in place, timed.
    subroutine solve_system(self, counts)
