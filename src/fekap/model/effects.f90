@@ -100,6 +100,8 @@ contains
       case (effects_statics)
          if (masses) then
             plan%left_out = 'left out: inertia (statics: the masses act through their weight only), dynamics'
+         else if (gravity) then
+            plan%left_out = plan%left_out//'; left out: inertia and dynamics (there are no masses)'
          else
             plan%left_out = 'left out: inertia and dynamics (there are no masses)'
          end if
@@ -230,17 +232,19 @@ contains
    !> less: the drives move the mechanism, or it is a structure.
    pure integer function mobility(model) result(m)
       type(model_type), intent(in) :: model
-      integer :: n, l, i, ends
+      integer :: n, l, i
+      integer, allocatable :: ends(:)
       m = 0
       if (.not. allocated(model%nodes) .or. .not. allocated(model%links)) return
-      do n = 1, size(model%nodes)
-         ends = 0
-         do l = 1, size(model%links)
-            ends = ends + count(model%links(l)%node == n)
+      ! Link ends per node, in one pass over the links (a search per node is quadratic).
+      allocate (ends(size(model%nodes)), source=0)
+      do l = 1, size(model%links)
+         do i = 1, 2
+            n = model%links(l)%node(i)
+            if (n >= 1 .and. n <= size(ends)) ends(n) = ends(n) + 1
          end do
-         if (ends == 0) cycle
-         m = m + 2 + ends
       end do
+      m = sum(2 + ends, mask=ends > 0)
       if (allocated(model%welds)) then
          do i = 1, size(model%welds)
             m = m - (size(model%welds(i)%links) - 1)

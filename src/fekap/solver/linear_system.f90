@@ -199,6 +199,11 @@ contains
          end do
          norm = 0
          if (.not. biggest > 0) return
+         ! Subnormal entries: 1/biggest would overflow; the residual is zero to round-off.
+         if (biggest < tiny(1.0_dp)) then
+            norm = biggest
+            return
+         end if
          factor = 1/biggest
          do k = 1, mesh%nfree
             norm = norm + (r(k)*factor)**2
