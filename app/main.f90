@@ -4,10 +4,11 @@ program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
    use fekap_error, only: error_type, error_input, error_analysis, error_output
-   use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics
+   use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_dynamics
    use fekap_deck, only: read_deck
    use fekap_model_effects, only: check_effects_request, planned_effects
    use fekap_effects_kinetostatic_stepper, only: kinetostatic_stepper_type, new_kinetostatic_stepper
+   use fekap_effects_dynamic_stepper, only: dynamic_stepper_type, new_dynamic_stepper, energy_names
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
@@ -108,10 +109,17 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(fem_stepper_type), allocatable :: fem
       type(kinetostatic_stepper_type), allocatable :: kinetostatic
+      type(dynamic_stepper_type), allocatable :: dynamic
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
       select case (model%analysis%method)
       case (method_fem)
+         if (planned_effects(model) == effects_dynamics) then
+            allocate (dynamic)
+            call new_dynamic_stepper(dynamic, model)
+            call move_alloc(dynamic, stepper)
+            return
+         end if
          allocate (fem)
          call new_fem_stepper(fem, model)
          if (planned_effects(model) == effects_kinetostatics) then
@@ -153,8 +161,13 @@ contains
          if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/nodes.csv', units%nodes, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
-         if (.not. allocated(error) .and. planned_effects(model) == effects_kinetostatics) then
+         if (.not. allocated(error) .and. (planned_effects(model) == effects_kinetostatics .or. &
+            & planned_effects(model) == effects_dynamics)) then
             call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
+         end if
+         if (.not. allocated(error) .and. planned_effects(model) == effects_dynamics) then
+            call open_replace(outdir//'/energy.csv', units%energy, error, stream=.true.)
+            units%energy_names = energy_names
          end if
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)

@@ -15,6 +15,7 @@ module fekap_deck
    use fekap_deck_settings, only: read_title, read_analysis, read_output
    use fekap_deck_inertia, only: read_masses, read_gravity, check_effects
    use fekap_deck_parameters, only: override_type, read_parameters
+   use fekap_model_effects, only: has_masses
    implicit none
    private
 
@@ -160,7 +161,8 @@ contains
       call require(card_nodes, 'NODEs', 'name x y')
       call require(card_sections, 'SECTions', 'name E=... G=... A=... I=... k=...')
       call require(card_links, 'LINKs', 'name first-node second-node section')
-      if (count(block == card_drives) + count(block == card_loads) == 0) then
+      ! Masses move a mechanism by themselves (dynamics, under gravity).
+      if (count(block == card_drives) + count(block == card_loads) == 0 .and. .not. has_masses(model)) then
          call ctx%error(last, 1, 'missing required block DRIVes or LOADs: nothing moves the mechanism', &
             & label='add DRIVes (e.g. rotation LINK rate 2*pi) or LOADs')
       end if

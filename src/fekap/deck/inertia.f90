@@ -183,7 +183,7 @@ contains
       if (model%analysis%effects == effects_auto .or. model%analysis%effects == effects_kinematics) return
       plan = plan_effects(model)
       if (len(plan%problem) > 0) call ctx%error(type_line, 2, plan%problem, &
-         & label='ANALysis type auto|kinematics|kinetostatics (statics and dynamics are not available yet)')
+         & label='ANALysis type auto|kinematics|kinetostatics|dynamics (statics is not available yet)')
    end subroutine check_effects
 
 end module fekap_deck_inertia

@@ -4,7 +4,8 @@
 !> auto (the default) takes kinetostatics when the deck gives masses and
 !> nothing stands in its way, kinematics otherwise; an explicit type that
 !> cannot run is a problem the deck reader (and the app, after the command
-!> line's overrides) reports. Statics and dynamics are not available yet.
+!> line's overrides) reports. Masses on a mechanism without drives, or with
+!> loads or sliding joints, ask for dynamics (auto); statics is not available yet.
 module fekap_model_effects
    use fekap_error, only: error_type, input_error
    use fekap_model, only: model_type, method_fem, effects_auto, effects_kinematics, effects_kinetostatics, &
@@ -37,10 +38,18 @@ contains
       plan%problem = ''
       obstacle = kinetostatics_obstacle(model)
       select case (model%analysis%effects)
-      case (effects_statics, effects_dynamics)
-         plan%problem = 'ANALysis type '//effects_name(model%analysis%effects)//' is not available yet '// &
-            & '(only kinematics and kinetostatics are, issue 19)'
-         plan%why = 'ANALysis type '//effects_name(model%analysis%effects)//' is not available'
+      case (effects_statics)
+         plan%problem = 'ANALysis type statics is not available yet (issue 19)'
+         plan%why = 'ANALysis type statics is not available'
+      case (effects_dynamics)
+         if (.not. masses) then
+            plan%problem = 'dynamics needs masses: give rho= (or rhoA=) on SECTions, or a MASSes block'
+         else if (model%analysis%method /= method_fem) then
+            plan%problem = 'dynamics runs with method fem only'
+         else
+            plan%effects = effects_dynamics
+            plan%why = 'ANALysis type dynamics'
+         end if
       case (effects_kinematics)
          plan%why = 'ANALysis type kinematics'
          if (masses .or. gravity) plan%left_out = 'masses and gravity are not used (ANALysis type kinematics)'
@@ -54,7 +63,10 @@ contains
             plan%why = 'ANALysis type kinetostatics'
          end if
       case default
-         if (masses .and. len(obstacle) == 0) then
+         if (masses .and. model%analysis%method == method_fem .and. len(dynamics_reason(model)) > 0) then
+            plan%effects = effects_dynamics
+            plan%why = 'auto: masses on '//dynamics_reason(model)
+         else if (masses .and. len(obstacle) == 0) then
             plan%effects = effects_kinetostatics
             plan%why = 'auto: masses on a mechanism moved by its drives'
          else if (masses) then
@@ -68,6 +80,8 @@ contains
          & 'SECTions, no MASSes)'
       if (plan%effects == effects_kinetostatics) plan%left_out = 'left out: the elastic deflection''s effect on the '// &
          & 'motion (the motion is the kinematic one), statics under loads, dynamics'
+      if (plan%effects == effects_dynamics) plan%left_out = 'left out: the slidelines'' penalty energy in the '// &
+         & 'energy balance (its work is in the balance column)'
    end function plan_effects
 
    !> The effects the plan of `model` simulates (effects_kinematics, ...).
@@ -89,6 +103,28 @@ contains
       if (len(plan%problem) > 0) call input_error(error, model%file//': '//plan%problem)
    end subroutine check_effects_request
 
+   !> Why the masses of `model` move it by themselves (dynamics), or '': a
+   !> mechanism without drives, or one with loads or sliding joints (which
+   !> kinetostatics does not take).
+   pure function dynamics_reason(model) result(text)
+      type(model_type), intent(in) :: model
+      character(:), allocatable :: text
+      text = ''
+      if (count_of_drives(model) == 0) then
+         text = 'a mechanism without drives'
+      else if (count_of_loads(model) > 0) then
+         text = 'a mechanism with LOADs'
+      else if (count_of_slidelines(model) > 0) then
+         text = 'a mechanism with sliding joints (SLIDelines)'
+      end if
+   end function dynamics_reason
+
+   pure integer function count_of_drives(model) result(n)
+      type(model_type), intent(in) :: model
+      n = 0
+      if (allocated(model%drives)) n = size(model%drives)
+   end function count_of_drives
+
    !> What keeps the model from kinetostatics, or ''.
    pure function kinetostatics_obstacle(model) result(text)
       type(model_type), intent(in) :: model
@@ -99,7 +135,7 @@ contains
       else if (.not. (model%analysis%velocities .and. model%analysis%accelerations)) then
          text = 'kinetostatics needs the accelerations (compute ... accelerations)'
       else if (count_of_loads(model) > 0) then
-         text = 'masses with LOADs ask for statics or dynamics, which are not available yet'
+         text = 'masses with LOADs ask for dynamics'
       else if (count_of_slidelines(model) > 0) then
          text = 'sliding joints (SLIDelines) are not in kinetostatics yet'
       end if

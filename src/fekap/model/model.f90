@@ -67,6 +67,8 @@ module fekap_model
       real(dp) :: ea = 0, kga = 0, ei = 0
       !> Mass per length rho*A and rotary inertia per length rho*I (0: massless).
       real(dp) :: rho_a = 0, rho_i = 0
+      !> Rayleigh damping of dynamics, C = alpha M + beta K (0: undamped).
+      real(dp) :: alpha = 0, beta = 0
       type(source_loc_type) :: loc
    end type section_type
 
@@ -122,6 +124,10 @@ module fekap_model
       real(dp) :: moment = 0
       !> The link end (at node) that carries the moment.
       integer :: link = 0
+      !> Whether the load is a function of time: force and moment times law(t)
+      !> (dynamics); otherwise times the load factor t.
+      logical :: timed = .false.
+      type(law_type) :: law
       type(source_loc_type) :: loc
    end type load_type
 
@@ -177,6 +183,9 @@ module fekap_model
       integer :: solver = solver_band
       !> Effects asked for (ANALysis type): effects_auto, effects_kinematics, ...
       integer :: effects = effects_auto
+      !> Spectral radius at infinite frequency of the generalized-alpha
+      !> integrator of dynamics (Chung & Hulbert 1993): 1 is the trapezoidal rule.
+      real(dp) :: rho_inf = 0.8_dp
    end type analysis_type
 
    !> What to write.
