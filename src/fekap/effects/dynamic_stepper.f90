@@ -27,6 +27,7 @@ module fekap_effects_dynamic_stepper
       & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, reaction_count
    use fekap_output_format, only: es_text
+   use fekap_deck_velocities, only: link_point_velocity
    implicit none
    private
 
@@ -175,10 +176,13 @@ contains
       real(dp) :: ratio
       info = 0
       associate (state => self%state, mesh => self%mesh, system => self%system)
+         if (.not. allocated(self%v_start) .and. allocated(self%model%start_velocities)) then
+            if (size(self%model%start_velocities) > 0) call deck_velocities(self)
+         end if
          if (allocated(self%v_start)) then
             state%v = self%v_start
             call drive_motion(self, state%t, self%qt, state%v, self%acct)
-            self%start_velocity = 'velocities given'
+            self%start_velocity = 'velocities given (VELOcities), the other links at rest'
             return
          end if
          self%start_velocity = 'at rest'
@@ -202,6 +206,32 @@ contains
          self%start_velocity = 'the drives'' kinematic velocities'
       end associate
    end subroutine start_velocities
+
+   !> v_start from the deck's VELOcities: each listed link's rigid motion on
+   !> its elements' dofs; the dofs of links not listed at rest, but for their
+   !> ends at nodes of listed links.
+   subroutine deck_velocities(self)
+      type(dynamic_stepper_type), intent(inout) :: self
+      integer :: i, e, a, l
+      real(dp) :: x1(2)
+      allocate (self%v_start(self%mesh%ndof), source=0.0_dp)
+      associate (mesh => self%mesh, model => self%model)
+         do i = 1, size(model%start_velocities)
+            associate (sv => model%start_velocities(i))
+               l = sv%link
+               x1 = model%nodes(model%links(l)%node(1))%x
+               do e = 1, size(mesh%elements)
+                  if (mesh%elink(e) /= l) cycle
+                  do a = 0, 1
+                     self%v_start(mesh%edof(3*a + 1:3*a + 2, e)) = link_point_velocity(sv, x1, &
+                        & mesh%q0(mesh%edof(3*a + 1:3*a + 2, e)))
+                     self%v_start(mesh%edof(3*a + 3, e)) = sv%omega
+                  end do
+               end do
+            end associate
+         end do
+      end associate
+   end subroutine deck_velocities
 
    !> The consistent accelerations at the start: M_ff a_f = -R_f with R at
    !> a_f = 0 (the drives' second rates on theirs). A free dof without mass

@@ -1,0 +1,104 @@
+"""The dynamics benchmarks of decks/dynamics/ against their exact answers
+(issue 19 item 4), run through the command line: the stiff pendulum's first
+pass through the bottom, and the A02 N-four-bar (N = 2 and 40) against its
+energy integral, with the energy balance of energy.csv."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from apptest import ROOT, check, read_rows, run_fekap
+
+#: The rigid pendulum (L = 1, g = 9.81) released from the horizontal: T/4 and the speed there.
+BOTTOM_TIME = 0.591960487
+BOTTOM_SPEED = 4.429446918
+
+
+def run_deck(deck: str, outdir: Path, *args: str) -> None:
+    run = run_fekap(str(ROOT / "decks" / "dynamics" / deck), "-o", str(outdir), *args)
+    check(run.returncode == 0, f"{deck} failed: {run.stderr}")
+
+
+def test_pendulum_deck_passes_the_bottom_at_the_exact_time(tmp_path: Path) -> None:
+    run_deck("pendulum.deck", tmp_path)
+    rows = read_rows(tmp_path / "points.csv")
+    listing = (tmp_path / "pendulum.lis").read_text()
+    check("effects: dynamics (ANALysis type dynamics)" in listing, "the plan does not say dynamics")
+    for before, after in zip(rows, rows[1:]):
+        x0, x1 = float(before["x"]), float(after["x"])
+        if x0 > 0 >= x1:
+            t0, t1 = float(before["t"]), float(after["t"])
+            h = t1 - t0
+            v0, v1 = float(before["vx"]) * h, float(after["vx"]) * h
+            s = x0 / (x0 - x1)
+            for _ in range(30):  # the cubic Hermite interpolant of x through both steps
+                f = (2*s**3 - 3*s**2 + 1)*x0 + (s**3 - 2*s**2 + s)*v0 + (-2*s**3 + 3*s**2)*x1 + (s**3 - s**2)*v1
+                df = (6*s**2 - 6*s)*x0 + (3*s**2 - 4*s + 1)*v0 + (-6*s**2 + 6*s)*x1 + (3*s**2 - 2*s)*v1
+                s -= f / df
+            t = t0 + s * h
+            speed = (1 - s) * math.hypot(float(before["vx"]), float(before["vy"])) + \
+                s * math.hypot(float(after["vx"]), float(after["vy"]))
+            check(abs(t - BOTTOM_TIME) < 1e-5, f"bottom pass at t = {t!r}, exact {BOTTOM_TIME}")
+            check(abs(speed - BOTTOM_SPEED) < 1e-5 * BOTTOM_SPEED, f"speed {speed!r}, exact {BOTTOM_SPEED}")
+            break
+    else:
+        check(False, "the pendulum did not reach the bottom")
+    energy = read_rows(tmp_path / "energy.csv")
+    worst = max(abs(float(row["balance"])) for row in energy)
+    check(worst < 1e-4 * 9.81, f"energy balance {worst!r} J")
+
+
+def a02_errors(outdir: Path, n: int) -> tuple[float, float, float, float]:
+    """Worst errors of the first crank's rate (away from the change points)
+    and angle against the energy integral, the worst energy balance, and the
+    last angle."""
+    inertia = (n + 1) / 3 + n
+    moment = ((n + 1) / 2 + n) * 9.81
+    rows = read_rows(outdir / "links.csv")
+    y = [math.pi / 2, -1.0]
+
+    def f(y: list[float]) -> list[float]:
+        return [y[1], -moment / inertia * math.cos(y[0])]
+
+    worst_rate = worst_angle = 0.0
+    previous = 0.0
+    for row in rows:
+        t = float(row["t"])
+        sub = 50
+        h = (t - previous) / sub
+        for _ in range(sub if t > previous else 0):  # RK4 of I theta'' = -G cos(theta)
+            k1 = f(y)
+            k2 = f([y[i] + h / 2 * k1[i] for i in range(2)])
+            k3 = f([y[i] + h / 2 * k2[i] for i in range(2)])
+            k4 = f([y[i] + h * k3[i] for i in range(2)])
+            y = [y[i] + h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]) for i in range(2)]
+        previous = t
+        angle, omega = float(row["angle"]), float(row["omega"])
+        exact = -math.sqrt(1 + 2 * moment / inertia * (1 - math.sin(angle)))
+        # Within 0.15 rad of a change point the elastic couplers swing briefly.
+        if abs(math.sin(angle)) > 0.15:
+            worst_rate = max(worst_rate, abs(omega - exact))
+        worst_angle = max(worst_angle, abs(angle - y[0]))
+    balance = max(abs(float(row["balance"])) for row in read_rows(outdir / "energy.csv"))
+    return worst_rate, worst_angle, balance / moment, float(rows[-1]["angle"])
+
+
+def test_a02_two_four_bar_follows_its_energy_integral(tmp_path: Path) -> None:
+    run_deck("a02-n2.deck", tmp_path)
+    listing = (tmp_path / "a02-n2.lis").read_text()
+    check("effects: dynamics (auto: masses on a mechanism without drives)" in listing, "auto did not choose dynamics")
+    rate, angle, balance, last = a02_errors(tmp_path, 2)
+    check(last < -6 * math.pi, f"the chain did not go round three times: last angle {last}")
+    check(rate < 1e-3, f"crank rate {rate!r} off its energy integral")
+    check(angle < 5e-3, f"crank angle {angle!r} rad off its energy integral over 20 s")
+    check(balance < 1e-3, f"energy balance {balance!r} of G")
+
+
+def test_a02_forty_four_bar_follows_its_energy_integral(tmp_path: Path) -> None:
+    run_deck("a02-n40.deck", tmp_path, "--set", "t_end=5")
+    rate, angle, balance, last = a02_errors(tmp_path, 40)
+    check(last < -2 * math.pi, f"the chain did not go round: last angle {last}")
+    check(rate < 2e-3, f"crank rate {rate!r} off its energy integral")
+    check(angle < 2e-3, f"crank angle {angle!r} rad off its energy integral over 5 s")
+    check(balance < 1e-3, f"energy balance {balance!r} of G")
