@@ -13,17 +13,13 @@
 !> 9 equations, kd = 5) that overhead costs as much as the arithmetic. Such a
 !> narrow factorisation or solve is a chain of dependent operations, row
 !> after row; without the square root, with a unit diagonal, with the sums of
-!> Crout's form and within the envelope (21 entries above the diagonal in
-!> Example 1 instead of the band's 30) the chain is shorter. On a 2.1 GHz
-!> Xeon with the reference BLAS, Example 1's tangent, per call in loops of
-!> 2 million: factor 0.31 us (dpbtrf), 0.22 (dpbtf2's loops), 0.22-0.26
-!> (U^T D U in dpbtf2's right-looking order over the band), 0.12-0.18 (Crout
-!> within the envelope); solve 0.20 (dpbtrs), 0.15 (over the band), 0.06-0.10
-!> (within the envelope). With the reference BLAS the
-!> loops stay faster up to kd of about 100, but above kd = 32 dpbtrf switches
-!> to its blocked algorithm, whose level-3 BLAS an optimised BLAS makes much
-!> faster. So narrow_band = 32: every model in decks/ and the scissor lifts
-!> (kd = 12) take the loops.
+!> Crout's form and within the envelope (Example 1: 21 entries above the
+!> diagonal instead of the band's 30) the chain is shorter. With the
+!> reference BLAS the loops stay faster up to kd of about 100, but above
+!> kd = 32 dpbtrf switches to its blocked algorithm, whose level-3 BLAS an
+!> optimised BLAS makes much faster. So narrow_band = 32: every model in
+!> decks/ and the scissor lifts take the loops. The timings behind this are
+!> in docs/performance.md ("Narrow band loops against LAPACK").
 !>
 !> A matrix made with `dense=.true.` keeps the same band assembly storage but
 !> factors and solves the matrix as a full n x n array with dgetrf/dgetrs: a
@@ -232,8 +228,7 @@ contains
             oi = kd + 1 - i
             s = 0
             ! The loops of this module run a few times each (kd = 5 in Example 1):
-            ! vectorised, their set-up costs more than it saves (factor and solve
-            ! 25-40 % slower, measured).
+            ! vectorised, their set-up costs more than it saves (docs/performance.md).
             !GCC$ novector
             do k = max(top(i), top(j)), i - 1
                s = s + f(oi + k, i)*f(oj + k, j)

@@ -17,7 +17,7 @@ module fekap_assembly_mesh
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, joint_prismatic
    use fekap_element_beam, only: beam_type, new_beam
-   use fekap_contact_slideline, only: default_penalty, default_tie_penalty
+   use fekap_contact_slideline, only: default_penalty
    use fekap_union_find, only: find_root, join, flatten
    implicit none
    private
@@ -627,7 +627,7 @@ contains
                end if
             end do
             sl%kp = default_penalty(ea_m, ea_s, l_m, l_s)
-            sl%kr = default_tie_penalty(ei_m, ei_s, l_m, l_s)
+            sl%kr = default_penalty(ei_m, ei_s, l_m, l_s)
             if (ms%penalty > 0) sl%kp = ms%penalty
             if (ms%kind == joint_prismatic) sl%slave_rot = end_dof(self, model, ms%slave_link, ms%slave)
          end associate

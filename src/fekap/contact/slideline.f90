@@ -22,7 +22,7 @@ module fekap_contact_slideline
 
    public :: slide_geometry, slide_force, slide_second_derivative
    public :: slide_tie_offset, slide_tie_force, slide_tie_second_derivative
-   public :: slide_locate, default_penalty, default_tie_penalty
+   public :: slide_locate, default_penalty
 
    !> Status of `slide_locate`: the slave stays on its master element.
    integer, parameter, public :: slide_on_element = 0
@@ -287,40 +287,30 @@ contains
       end if
    end subroutine slide_locate
 
-   !> Default penalty constant k_p = factor * max(EA/L) over the elements the spring couples
-   !> (the master element and the slave node's element). Pass ea = 0 for an absent
-   !> element (a ground guide). Why this scale: at a converged kinematic configuration all
-   !> forces vanish, so the gap is zero whatever k_p is, and k_p only affects the
-   !> iteration. Too small a k_p makes the gap direction soft against the links, so Newton
-   !> first strains the links and needs more iterations; too large a k_p dominates K - K^c
-   !> and ill-conditions it. The stiffest axial stiffness it couples is the largest scale
-   !> already present in K, so it adds no new one to the condition number.
-   pure function default_penalty(ea_master, ea_slave, l_master, l_slave, factor) result(kp)
-      !> Axial stiffness EA of the master element and of the slave node's element.
-      real(dp), intent(in) :: ea_master, ea_slave
-      !> Lengths of the master element and of the slave node's element.
+   !> Default penalty constant factor * max(S/L) over the elements a penalty
+   !> spring couples (the master element and the slave's element), S their
+   !> stiffness: EA for the gap spring k_p (force per length), EI for a
+   !> prismatic joint's rotational tie k_r (moment per radian). Pass S = 0 for
+   !> an absent element (a ground guide). Why this scale: at a converged
+   !> kinematic configuration all forces vanish, so the gap is zero whatever
+   !> k_p is, and k_p only affects the iteration. Too small a k_p makes the
+   !> gap direction soft against the links, so Newton first strains the links
+   !> and needs more iterations; too large a k_p dominates K - K^c and
+   !> ill-conditions it. The stiffest stiffness it couples is the largest
+   !> scale already present in K, so it adds no new one to the condition
+   !> number; EI/L is likewise the scale of the beams' own rotational stiffness.
+   pure function default_penalty(stiff_master, stiff_slave, l_master, l_slave, factor) result(kp)
+      !> Stiffness (EA or EI) of the master element and of the slave's element.
+      real(dp), intent(in) :: stiff_master, stiff_slave
+      !> Lengths of the master element and of the slave's element.
       real(dp), intent(in) :: l_master, l_slave
       !> Factor on the stiffness; default 1.
       real(dp), intent(in), optional :: factor
       real(dp) :: kp
       kp = 0
-      if (l_master > 0) kp = max(kp, ea_master/l_master)
-      if (l_slave > 0) kp = max(kp, ea_slave/l_slave)
+      if (l_master > 0) kp = max(kp, stiff_master/l_master)
+      if (l_slave > 0) kp = max(kp, stiff_slave/l_slave)
       if (present(factor)) kp = factor*kp
    end function default_penalty
-
-   !> Default rotational penalty k_r = factor * max(EI/L) of the master element and the
-   !> slave link's element (moment per radian), by the same reasoning as default_penalty:
-   !> EI/L is the scale of the beams' own rotational stiffness.
-   pure function default_tie_penalty(ei_master, ei_slave, l_master, l_slave, factor) result(kr)
-      !> Bending stiffness EI of the master element and of the slave link's element.
-      real(dp), intent(in) :: ei_master, ei_slave
-      !> Lengths of the master element and of the slave link's element.
-      real(dp), intent(in) :: l_master, l_slave
-      !> Factor on the stiffness; default 1.
-      real(dp), intent(in), optional :: factor
-      real(dp) :: kr
-      kr = default_penalty(ei_master, ei_slave, l_master, l_slave, factor)
-   end function default_tie_penalty
 
 end module fekap_contact_slideline

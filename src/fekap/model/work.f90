@@ -23,8 +23,8 @@ module fekap_model_work
       !> a measure of how close the run came to a singular configuration.
       real(dp) :: min_pivot_ratio = 1
       !> Wall-clock seconds in residual/tangent assembly, factorisations and
-      !> solves, measured on a sample of the steps (a clock read costs about
-      !> 40 ns, a step of a small mechanism about 2 us), and the analysis
+      !> solves, measured on a sample of the steps (a clock read is not free
+      !> next to a step of a small mechanism), and the analysis
       !> seconds of those steps (0: no sample, the phases were not timed).
       !> phase_seconds scales them to the whole run.
       real(dp) :: seconds_assembly = 0

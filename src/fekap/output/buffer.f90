@@ -1,6 +1,6 @@
 !> The text of an output file gathered in memory and written in large
-!> pieces. A Fortran write statement costs 0.2 to 0.5 us however short its
-!> text, as much as the text of several numbers, so the per-step rows are
+!> pieces. A Fortran write statement costs as much however short its text as
+!> the text of several numbers (docs/performance.md), so the per-step rows are
 !> appended here (whole lines) and written when the buffer is full and when
 !> the run flushes its files. A flush checks that the file on disk holds all
 !> that was written (fekap_output_checked_file); after a failed write the

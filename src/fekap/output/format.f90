@@ -12,9 +12,8 @@
 !> fast_digits takes the values of a kinematic run (0 <= k <= 31: |x| from
 !> about 10**(n - 32) to 10**n): which of the two E is, one comparison with
 !> a table of powers of ten tells; m 5**k is one product and 2**(e + k) a
-!> shift; the code has no loop and no branch on the digits (about 200
-!> instructions, some 20 ns, a number with the 17 digits of the CSV files,
-!> against about 1 us for the formatted write). decimal_digits takes the
+!> shift; the code has no loop and no branch on the digits (a small fraction
+!> of a formatted write's cost: docs/performance.md). decimal_digits takes the
 !> rest of the exact path: m times the two 64-bit halves of 5**k up to
 !> k = 54 (|x| down to about 1e-38), a 128-bit division for k < 0 (down to
 !> -21, |x| < 1e38). Other values (subnormals, NaN, infinities, magnitudes

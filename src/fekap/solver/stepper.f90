@@ -17,14 +17,14 @@ module fekap_solver_stepper
    public :: phase_timed, split_timed
 
    !> The two samples of steps that the timers read the precise clock on (a
-   !> read costs 30-60 ns, a step of Example 1 about 2 us): a method times the
+   !> read is not free next to a step of Example 1): a method times the
    !> phases of its analysis (assembly, factorisation, solves) on the first
    !> `sample` steps and every `sample`-th after them; the time loop splits
    !> its time into analysis and output as on the steps halfway between those,
    !> and on every step of a run of at most split_all steps. The two samples
    !> are kept apart: the phase timers' clock reads slow what follows them
-   !> too, and on Example 1 a split sampled on the same steps put the output
-   !> at 1.8 times its time measured on every step.
+   !> too: on Example 1 a split sampled on the same steps overstated the
+   !> output's time (figures in docs/performance.md, "Timers").
    integer, parameter :: sample = 16, split_all = 256
 
    !> Linux's CLOCK_MONOTONIC_COARSE (<linux/time.h>).
@@ -110,7 +110,7 @@ contains
       if (sum(sampled) > 0) seconds = sampled*(total/sum(sampled))
    end function split_seconds
 
-   !> Wall-clock time in seconds, for the phase timers (30-60 ns a read here).
+   !> Wall-clock time in seconds, for the phase timers.
    real(dp) function clock_seconds() result(seconds)
       integer(int64) :: ticks, rate
       call system_clock(ticks, rate)
@@ -119,9 +119,8 @@ contains
 
    !> Wall-clock time in seconds to a few milliseconds (the kernel's tick),
    !> for decisions on the scale of a tenth of a second, such as when to flush
-   !> output: Linux's coarse monotonic clock costs about 6 ns a read, against
-   !> about 32 for clock_seconds (measured on this project's 2.1 GHz Xeon).
-   !> Without it, clock_seconds.
+   !> output: Linux's coarse monotonic clock, a fraction of clock_seconds'
+   !> cost a read (docs/performance.md). Without it, clock_seconds.
    real(dp) function coarse_clock_seconds() result(seconds)
       type(timespec_type) :: time
       if (clock_gettime(clock_monotonic_coarse, time) /= 0) then
