@@ -37,6 +37,9 @@ module fekap_effects_dynamic_stepper
    character(*), parameter :: energy_names = 'kinetic,strain,gravity,work_loads,work_drives,dissipated,'// &
       & 'balance,px,py,angular'
    integer, parameter, public :: energy_count = 10
+   !> A step that creates more energy than this fraction of the kinetic and
+   !> strain energy (or of the step's work) is rejected and cut.
+   real(dp), parameter :: max_created = 0.05_dp
 
    !> The accepted state: time, configuration, velocity, acceleration, the
    !> integrator's acceleration variable a, the external forces, the residual
@@ -47,6 +50,8 @@ module fekap_effects_dynamic_stepper
       integer, allocatable :: seg(:)
       !> Work of the loads, of the drives, and the energy the damping dissipated.
       real(dp) :: work_loads = 0, work_drives = 0, dissipated = 0
+      !> Kinetic and strain energy, and their sum with the gravity potential.
+      real(dp) :: kinetic = 0, strain = 0, energy = 0
    end type dynamic_state_type
 
    type, extends(stepper_type) :: dynamic_stepper_type
@@ -157,8 +162,10 @@ contains
          state%work_loads = 0
          state%work_drives = 0
          state%dissipated = 0
-         self%energy0 = kinetic_energy(self%dynamics, mesh, state%v) + strain_energy(mesh, state%q) - &
-            & dot_product(self%dynamics%weight, state%q)
+         state%kinetic = kinetic_energy(self%dynamics, mesh, state%v)
+         state%strain = strain_energy(mesh, state%q)
+         state%energy = state%kinetic + state%strain - dot_product(self%dynamics%weight, state%q)
+         self%energy0 = state%energy
          result%iterations = 0
          result%residual = 0
          call fill_result(self, result)
@@ -348,8 +355,9 @@ contains
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
       type(alpha_coefficients_type) :: c
-      real(dp) :: correction, r0
+      real(dp) :: correction, r0, work_loads, work_drives, dissipated, kinetic, strain, energy, created
       integer :: info, k, d
+      integer :: seg(size(self%state%seg))
       logical :: moved
       character(len=300) :: msg
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
@@ -410,20 +418,42 @@ contains
             call analysis_error(error, 'the configuration is not finite')
             return
          end if
-         call relocate(mesh, self%model, t_new, self%qt, state%seg, moved, error)
-         if (allocated(error)) return
          ! Work over the step: the trapezoidal rule of the forces on the
          ! displacement (exact for the trapezoidal integrator of a linear system).
+         work_loads = 0
+         work_drives = 0
          do d = 1, mesh%ndof
             associate (dq => self%qt(d) - state%q(d))
-               state%work_loads = state%work_loads + 0.5_dp*(state%g(d) + self%gt(d) - 2*dyn%weight(d))*dq
-               if (mesh%status(d) == dof_driven) state%work_drives = state%work_drives + 0.5_dp*(state%r(d) + &
-                  & system%r(d))*dq
+               work_loads = work_loads + 0.5_dp*(state%g(d) + self%gt(d) - 2*dyn%weight(d))*dq
+               if (mesh%status(d) == dof_driven) work_drives = work_drives + 0.5_dp*(state%r(d) + system%r(d))*dq
             end associate
          end do
-         if (has_damping(dyn)) then
-            call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, state%dissipated)
+         dissipated = 0
+         if (has_damping(dyn)) call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
+         kinetic = kinetic_energy(dyn, mesh, self%vt)
+         strain = strain_energy(mesh, self%qt)
+         energy = kinetic + strain - dot_product(dyn%weight, self%qt)
+         ! The integrator dissipates (rho_inf < 1) or keeps (1) energy: a step
+         ! that creates much of it has jumped to another solution of its
+         ! nonlinear equations (stiff modes of a large motion); a shorter one does not.
+         created = energy - state%energy - work_loads - work_drives + dissipated
+         if (created > max_created*max(kinetic + strain, state%kinetic + state%strain, abs(work_loads + work_drives))) &
+            & then
+            write (msg, '(a,a,a,a,a)') 'the step creates energy (', es_text(created, 12, 4), ' against ', &
+               & es_text(kinetic + strain, 12, 4), ' kinetic and strain): a jump to another solution of its equations'
+            call analysis_error(error, trim(msg))
+            return
          end if
+         seg = state%seg
+         call relocate(mesh, self%model, t_new, self%qt, seg, moved, error)
+         if (allocated(error)) return
+         state%seg = seg
+         state%work_loads = state%work_loads + work_loads
+         state%work_drives = state%work_drives + work_drives
+         state%dissipated = state%dissipated + dissipated
+         state%kinetic = kinetic
+         state%strain = strain
+         state%energy = energy
          state%t = t_new
          state%q = self%qt
          state%v = self%vt
@@ -455,7 +485,7 @@ contains
    subroutine fill_result(self, result)
       type(dynamic_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
-      real(dp) :: kinetic, strain, gravity, p(3)
+      real(dp) :: p(3)
       associate (state => self%state, mesh => self%mesh, dyn => self%dynamics)
          result%t = state%t
          result%has_velocity = .true.
@@ -465,14 +495,11 @@ contains
          if (.not. allocated(result%reactions)) allocate (result%reactions(3, reaction_count(self%model)))
          call fill_reactions(self, result%reactions)
          result%has_reactions = all(abs(result%reactions) <= huge(1.0_dp))
-         kinetic = kinetic_energy(dyn, mesh, state%v)
-         strain = strain_energy(mesh, state%q)
-         gravity = -dot_product(dyn%weight, state%q)
          p = momentum(dyn, mesh, state%q, state%v)
          if (.not. allocated(result%energy)) allocate (result%energy(energy_count))
-         result%energy = [kinetic, strain, gravity, state%work_loads, state%work_drives, state%dissipated, &
-            & kinetic + strain + gravity - state%work_loads - state%work_drives + state%dissipated - self%energy0, &
-            & p(1), p(2), p(3)]
+         result%energy = [state%kinetic, state%strain, state%energy - state%kinetic - state%strain, state%work_loads, &
+            & state%work_drives, state%dissipated, &
+            & state%energy - state%work_loads - state%work_drives + state%dissipated - self%energy0, p(1), p(2), p(3)]
          result%has_energy = .true.
       end associate
    end subroutine fill_result
