@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import pytest
+
 from apptest import ROOT, check, read_rows, run_fekap
 
 #: The rigid pendulum (L = 1, g = 9.81) released from the horizontal: T/4 and the speed there.
@@ -127,3 +129,38 @@ def test_spin_up_beam_settles_at_the_centrifugal_stretch(tmp_path: Path) -> None
     check(abs(stretch - 5.1432e-4) < 1e-3 * 5.1432e-4, f"tip axial stretch {stretch!r}, published 5.1432e-4")
     check(max(transverse) < 0.01, f"transverse tip deflection {max(transverse)!r} after the spin-up")
     check(-0.7 < peak < -0.4, f"transverse tip deflection during the spin-up peaks at {peak!r}")
+
+
+def pendulum_variant(tmp_path: Path, extra: str) -> Path:
+    """decks/dynamics/pendulum.deck with a second link and `extra` cards before END."""
+    text = (ROOT / "decks" / "dynamics" / "pendulum.deck").read_text()
+    text = text.replace("  B   1   0\n", "  B   1   0\n  C   2   0\n").replace(
+        "  AB  A  B  rod  1\n", "  AB  A  B  rod  1\n  BC  B  C  rod  1\n").replace("END", extra + "END")
+    deck = tmp_path / "variant.deck"
+    deck.write_text(text)
+    return deck
+
+
+@pytest.mark.parametrize("card, message", [
+    ("VELOcities\n  XY 0 0 1\n", "undefined link 'XY'"),
+    ("VELOcities\n  AB 0 0\n", "missing field 'omega'"),
+    ("VELOcities\n  AB 0 0 1 2\n", "a VELOcities line has 4 fields"),
+    ("VELOcities\n  AB 0 0 1\n  AB 0 0 1\n", "link AB has a velocity already"),
+    ("VELOcities\n  AB 0 0 1\n  BC 0 0 1\n", "links AB and BC give node B different velocities"),
+    ("VELOcities\n  AB 0 0 1e20\n", "velocity too large"),
+])
+def test_bad_start_velocities_are_deck_errors(tmp_path: Path, card: str, message: str) -> None:
+    run = run_fekap("-q", "-o", str(tmp_path / "out"), str(pendulum_variant(tmp_path, card)))
+    check(run.returncode == 2, f"exit {run.returncode}: {run.stderr}")
+    check(message in run.stderr, f"no '{message}' in: {run.stderr}")
+
+
+def test_start_velocities_of_two_links_that_agree(tmp_path: Path) -> None:
+    """AB turning at 1 rad/s about A and BC translating with B (0, 1): B's
+    velocity agrees; the run starts with it."""
+    deck = pendulum_variant(tmp_path, "VELOcities\n  AB 0 0 1\n  BC 0 1 0\n")
+    out = tmp_path / "out"
+    run = run_fekap("-q", "-o", str(out), str(deck))
+    check(run.returncode == 0, run.stderr)
+    first = [row for row in read_rows(out / "points.csv") if row["step"] == "0" and row["point"] == "B"]
+    check(first and abs(float(first[0]["vy"]) - 1) < 1e-12, f"B's start velocity: {first}")

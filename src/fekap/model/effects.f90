@@ -80,7 +80,8 @@ contains
          & 'SECTions, no MASSes)'
       if (plan%effects == effects_kinetostatics) plan%left_out = 'left out: the elastic deflection''s effect on the '// &
          & 'motion (the motion is the kinematic one), statics under loads, dynamics'
-      if (plan%effects == effects_dynamics) plan%left_out = 'left out: the slidelines'' penalty energy in the '// &
+      if (plan%effects == effects_dynamics .and. count_of_slidelines(model) > 0) plan%left_out = &
+         & 'left out: the slidelines'' penalty energy in the '// &
          & 'energy balance (its work is in the balance column)'
    end function plan_effects
 
