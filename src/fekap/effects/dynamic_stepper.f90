@@ -24,7 +24,7 @@ module fekap_effects_dynamic_stepper
    use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
       & alpha_update
    use fekap_effects_dynamic_system, only: dynamic_system_type, new_dynamic_system, external_forces, &
-      & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping
+      & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, reaction_count
    use fekap_output_format, only: es_text
    use fekap_deck_velocities, only: link_point_velocity
@@ -75,6 +75,8 @@ module fekap_effects_dynamic_stepper
       !> Velocities at the start over all dofs, if given (tests, benchmarks);
       !> else the drives' kinematic velocities.
       real(dp), allocatable :: v_start(:)
+      !> Whether some element is damped (has_damping).
+      logical :: damped = .false.
       !> Steps and Newton iterations so far.
       integer :: steps = 0, newton_iterations = 0
       !> How the start's velocities were found, for the plan.
@@ -99,6 +101,7 @@ contains
       call new_linear_system(self%system, self%mesh, dense=.false.)
       call new_dynamic_system(self%dynamics, model, self%mesh)
       call new_kinetostatics(self%rows, model, self%mesh)
+      self%damped = has_damping(self%dynamics)
       n = self%mesh%ndof
       nd = self%mesh%ndriven
       allocate (self%state%q(n), self%state%v(n), self%state%acc(n), self%state%a(n), self%state%g(n), &
@@ -362,7 +365,7 @@ contains
       character(len=300) :: msg
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
-         if (has_damping(dyn)) call update_damping(dyn, mesh, state%q)
+         if (self%damped) call update_damping(dyn, mesh, state%q)
          call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
          do d = 1, mesh%ndof
             if (mesh%status(d) == dof_fixed) then
@@ -429,7 +432,7 @@ contains
             end associate
          end do
          dissipated = 0
-         if (has_damping(dyn)) call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
+         if (self%damped) call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
          kinetic = kinetic_energy(dyn, mesh, self%vt)
          strain = strain_energy(mesh, self%qt)
          energy = kinetic + strain - dot_product(dyn%weight, self%qt)
@@ -474,10 +477,14 @@ contains
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: v0(:), v1(:), dq(:)
       real(dp), intent(inout) :: dissipated
-      integer :: e
+      real(dp) :: ve(6), de(6)
+      integer :: e, i
       do e = 1, size(mesh%elements)
-         dissipated = dissipated + 0.5_dp*dot_product(dq(mesh%edof(:, e)), &
-            & matmul(dyn%ce(:, :, e), v0(mesh%edof(:, e)) + v1(mesh%edof(:, e))))
+         do i = 1, 6
+            ve(i) = v0(mesh%edof(i, e)) + v1(mesh%edof(i, e))
+            de(i) = dq(mesh%edof(i, e))
+         end do
+         dissipated = dissipated + 0.5_dp*dot_product(de, times6(dyn%ce, e, ve))
       end do
    end subroutine damping_work
 
@@ -533,13 +540,18 @@ contains
       subroutine end_forces(e, fe)
          integer, intent(in) :: e
          real(dp), intent(out) :: fe(6)
-         real(dp) :: weight(6)
-         associate (state => self%state, mesh => self%mesh, dyn => self%dynamics, dofs => self%mesh%edof(:, e))
-            call element_force(mesh, e, state%q(dofs), fe)
-            ! The element's own weight (point masses belong to the pins).
-            weight = element_weight(self%model, mesh, e)
-            fe = fe + matmul(dyn%me(:, :, e), state%acc(dofs)) + matmul(dyn%ce(:, :, e), state%v(dofs)) - weight
-         end associate
+         real(dp) :: xe(6), ae(6), ve(6), weight(6)
+         integer :: i
+         do i = 1, 6
+            xe(i) = self%state%q(self%mesh%edof(i, e))
+            ae(i) = self%state%acc(self%mesh%edof(i, e))
+            ve(i) = self%state%v(self%mesh%edof(i, e))
+         end do
+         call element_force(self%mesh, e, xe, fe)
+         ! The element's own weight (point masses belong to the pins).
+         weight = element_weight(self%model, self%mesh, e)
+         fe = fe + times6(self%dynamics%me, e, ae) - weight
+         if (self%damped) fe = fe + times6(self%dynamics%ce, e, ve)
       end subroutine end_forces
    end subroutine fill_reactions
 

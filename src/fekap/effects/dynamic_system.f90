@@ -21,7 +21,7 @@ module fekap_effects_dynamic_system
    private
 
    public :: dynamic_system_type, new_dynamic_system, external_forces, assemble_dynamics, update_damping
-   public :: mass_times, kinetic_energy, strain_energy, momentum, has_damping
+   public :: kinetic_energy, strain_energy, momentum, has_damping, times6
 
    type :: dynamic_system_type
       !> (6, 6, nelem): each element's consistent mass and damping matrices.
@@ -128,19 +128,6 @@ contains
       end do
    end subroutine update_damping
 
-   !> y = M x over all dofs.
-   pure subroutine mass_times(self, mesh, x, y)
-      type(dynamic_system_type), intent(in) :: self
-      type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: x(:)
-      real(dp), intent(out) :: y(:)
-      integer :: e
-      y = self%point_mass*x
-      do e = 1, size(mesh%elements)
-         y(mesh%edof(:, e)) = y(mesh%edof(:, e)) + matmul(self%me(:, :, e), x(mesh%edof(:, e)))
-      end do
-   end subroutine mass_times
-
    !> The residual R over all dofs into system%r (g: external_forces at the
    !> time), and with `c1`, `c2` the iteration matrix K + c1 C + c2 M into the
    !> system's band (and free-driven block).
@@ -152,8 +139,10 @@ contains
       integer, intent(in) :: seg(:)
       type(work_counts_type), intent(inout) :: counts
       real(dp), intent(in), optional :: c1, c2
-      real(dp) :: me(36), k
+      real(dp) :: me(36), k, ae(6), ve(6), fe(6)
       integer :: e, m, i
+      logical :: damped
+      damped = has_damping(self)
       if (present(c2)) then
          ! Full geometric stiffness: the motion strains the links.
          call assemble_system(system, mesh, q, 0.0_dp, seg, 0.0_dp, counts)
@@ -163,13 +152,20 @@ contains
       associate (r => system%r)
          r = r - g + self%point_mass*acc
          do e = 1, size(mesh%elements)
-            r(mesh%edof(:, e)) = r(mesh%edof(:, e)) + matmul(self%me(:, :, e), acc(mesh%edof(:, e))) + &
-               & matmul(self%ce(:, :, e), v(mesh%edof(:, e)))
+            do i = 1, 6
+               ae(i) = acc(mesh%edof(i, e))
+               ve(i) = v(mesh%edof(i, e))
+            end do
+            fe = times6(self%me, e, ae)
+            if (damped) fe = fe + times6(self%ce, e, ve)
+            do i = 1, 6
+               r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + fe(i)
+            end do
          end do
       end associate
       if (.not. present(c2)) return
       do e = 1, size(mesh%elements)
-         me = reshape(c2*self%me(:, :, e) + c1*self%ce(:, :, e), [36])
+         call combine(self%me(:, :, e), self%ce(:, :, e), c1, c2, me)
          associate (map => mesh%scatter_map(:, :, e), nb => mesh%scatter_count(1, e), nd => mesh%scatter_count(2, e))
             do m = 1, nb
                call add_band(system%kff%a, size(system%kff%a), map(2, m), me(map(1, m)))
@@ -185,6 +181,26 @@ contains
       end do
    end subroutine assemble_dynamics
 
+   !> c2 m + c1 c, as 36 numbers in memory order.
+   pure subroutine combine(m, c, c1, c2, mc)
+      real(dp), intent(in) :: m(36), c(36), c1, c2
+      real(dp), intent(out) :: mc(36)
+      mc = c2*m + c1*c
+   end subroutine combine
+
+   !> y = m(:, :, e) x for element e's 6 x 6 matrix of m (6, 6, nelem),
+   !> without a copy of it.
+   pure function times6(m, e, x) result(y)
+      real(dp), intent(in) :: m(:, :, :), x(6)
+      integer, intent(in) :: e
+      real(dp) :: y(6)
+      integer :: j
+      y = m(:, 1, e)*x(1)
+      do j = 2, 6
+         y = y + m(:, j, e)*x(j)
+      end do
+   end function times6
+
    !> a(position) += value, a seen as one block of n numbers.
    pure subroutine add_band(a, n, position, value)
       integer, intent(in) :: n, position
@@ -198,12 +214,14 @@ contains
       type(dynamic_system_type), intent(in) :: self
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: v(:)
-      integer :: e
+      real(dp) :: ve(6)
+      integer :: e, i
       energy = 0.5_dp*sum(self%point_mass*v**2)
       do e = 1, size(mesh%elements)
-         associate (ve => v(mesh%edof(:, e)))
-            energy = energy + 0.5_dp*dot_product(ve, matmul(self%me(:, :, e), ve))
-         end associate
+         do i = 1, 6
+            ve(i) = v(mesh%edof(i, e))
+         end do
+         energy = energy + 0.5_dp*dot_product(ve, times6(self%me, e, ve))
       end do
    end function kinetic_energy
 
@@ -211,10 +229,14 @@ contains
    pure real(dp) function strain_energy(mesh, q) result(energy)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:)
-      integer :: e
+      real(dp) :: xe(6)
+      integer :: e, i
       energy = 0
       do e = 1, size(mesh%elements)
-         energy = energy + beam_strain_energy(mesh%elements(e), q(mesh%edof(:, e)))
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+         end do
+         energy = energy + beam_strain_energy(mesh%elements(e), xe)
       end do
    end function strain_energy
 
@@ -237,9 +259,11 @@ contains
          end associate
       end do
       do e = 1, size(mesh%elements)
-         xe = q(mesh%edof(:, e))
-         ve = v(mesh%edof(:, e))
-         mv = matmul(self%me(:, :, e), ve)
+         do ip = 1, 6
+            xe(ip) = q(mesh%edof(ip, e))
+            ve(ip) = v(mesh%edof(ip, e))
+         end do
+         mv = times6(self%me, e, ve)
          p(1:2) = p(1:2) + mv(1:2) + mv(4:5)
          ! int rhoA x cross v with x, v linear: the mass matrix's weights.
          c(1) = xe(1)*mv(2) - xe(2)*mv(1)
