@@ -4,10 +4,13 @@ program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
    use fekap_error, only: error_type, error_input, error_analysis, error_output
-   use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_dynamics
+   use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_statics, &
+      & effects_dynamics
    use fekap_deck, only: read_deck
    use fekap_model_effects, only: check_effects_request, planned_effects
    use fekap_effects_kinetostatic_stepper, only: kinetostatic_stepper_type, new_kinetostatic_stepper
+   use fekap_effects_statics, only: statics_stepper_type, new_statics_stepper
+   use fekap_effects_free_motion, only: check_free_motion
    use fekap_effects_dynamic_stepper, only: dynamic_stepper_type, new_dynamic_stepper, energy_names
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
@@ -110,22 +113,28 @@ contains
       type(fem_stepper_type), allocatable :: fem
       type(kinetostatic_stepper_type), allocatable :: kinetostatic
       type(dynamic_stepper_type), allocatable :: dynamic
+      type(statics_stepper_type), allocatable :: statics
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
       select case (model%analysis%method)
       case (method_fem)
-         if (planned_effects(model) == effects_dynamics) then
-            allocate (dynamic)
-            call new_dynamic_stepper(dynamic, model)
-            call move_alloc(dynamic, stepper)
-            return
-         end if
          allocate (fem)
          call new_fem_stepper(fem, model)
          if (planned_effects(model) == effects_kinetostatics) then
             allocate (kinetostatic)
             call new_kinetostatic_stepper(kinetostatic, fem)
             call move_alloc(kinetostatic, stepper)
+         else if (planned_effects(model) == effects_statics) then
+            allocate (statics)
+            call new_statics_stepper(statics, fem)
+            call move_alloc(statics, stepper)
+         else if (planned_effects(model) == effects_dynamics) then
+            ! Bad input first: a free motion with neither mass nor stiffness.
+            call check_free_motion(fem%mesh, model, fem%mesh%q0, model%analysis%t_start, fem%seg, error)
+            if (allocated(error)) return
+            allocate (dynamic)
+            call new_dynamic_stepper(dynamic, model)
+            call move_alloc(dynamic, stepper)
          else
             call move_alloc(fem, stepper)
          end if
@@ -162,7 +171,7 @@ contains
          if (.not. allocated(error)) call open_replace(outdir//'/nodes.csv', units%nodes, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
          if (.not. allocated(error) .and. (planned_effects(model) == effects_kinetostatics .or. &
-            & planned_effects(model) == effects_dynamics)) then
+            & planned_effects(model) == effects_statics .or. planned_effects(model) == effects_dynamics)) then
             call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
          end if
          if (.not. allocated(error) .and. planned_effects(model) == effects_dynamics) then

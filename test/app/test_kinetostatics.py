@@ -1,5 +1,5 @@
 """Kinetostatics through the fekap executable: the deck chooses the effects,
-reactions.csv is written only by kinetostatics runs (rows per step: the
+reactions.csv is written only by kinetostatics and statics runs (rows per step: the
 drives, the supports, both ends of every link), the listing's plan says which
 effects run and why, and a type that cannot run is an input error (exit 2)."""
 
@@ -57,7 +57,7 @@ def test_kinematics_decks_write_no_reactions(tmp_path):
     run = run_fekap("-q", "-o", str(out), "decks/fourbar.deck")
     assert run.returncode == 0, run.stderr
     assert not (out / "reactions.csv").exists()
-    assert "effects: kinematics (auto: no masses)" in plan(out)
+    assert "effects: kinematics (auto: no masses, no loads)" in plan(out)
 
 
 @pytest.mark.parametrize("option, why", [
@@ -91,8 +91,9 @@ def test_gravity_without_masses_is_noted(tmp_path):
     assert not (out / "reactions.csv").exists()
 
 
-def test_statics_is_not_available(tmp_path):
+def test_statics_needs_loads(tmp_path):
     deck = variant(tmp_path, "  type kinetostatics", "  type statics")
+    deck.write_text(deck.read_text().replace("GRAVity  0  -9.81", ""))
     run = run_fekap("-q", "-o", str(tmp_path / "s"), str(deck))
     assert run.returncode == 2
-    assert "variant.deck:26:8: error: ANALysis type statics is not available yet" in run.stderr
+    assert "variant.deck:26:8: error: statics cannot run: statics needs loads" in run.stderr

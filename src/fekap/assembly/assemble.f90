@@ -1,5 +1,6 @@
-!> Global assembly of the residual R(q) = P(q) - F^c(q) - lambda f_ext: beam
-!> internal forces P, slideline contact forces F^c (76), external loads; its
+!> Global assembly of the residual R(q) = P(q) - F^c(q) - f(t): beam
+!> internal forces P, slideline contact forces F^c (76), external loads at
+!> time t (mesh%loads: the load factor t times f_ext, and loads with laws); its
 !> tangent K - K^c (77) with the free-free part in band storage and the
 !> free-driven block dense; and its second directional derivative, the
 !> velocity term of the acceleration equations (48)-(53), (81)-(95).
@@ -21,14 +22,16 @@ contains
 
    !> r = R(q) over all dofs (reactions at fixed and driven dofs included).
    !> seg(i) is the master segment slideline i is on.
-   pure subroutine assemble_residual(mesh, q, lambda, seg, r)
+   pure subroutine assemble_residual(mesh, q, t, seg, r)
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), lambda
+      !> The configuration and the time (of the loads).
+      real(dp), intent(in) :: q(:), t
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
       real(dp) :: pe(6), xe(6)
       integer :: e, i
-      r = -lambda*mesh%f_ext
+      call mesh%loads%at(t, r)
+      r = -r
       do e = 1, size(mesh%elements)
          do i = 1, 6
             xe(i) = q(mesh%edof(i, e))
@@ -48,9 +51,10 @@ contains
    !> `strain` and `element` are max_strain's, found on the way.
    !> `section` keeps each element's section cosines and sines for
    !> assemble_second_derivative at the same q.
-   pure subroutine assemble_tangent(mesh, q, lambda, seg, r, kff, kfd, geometric_above, strain, element, section)
+   pure subroutine assemble_tangent(mesh, q, t, seg, r, kff, kfd, geometric_above, strain, element, section)
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), lambda
+      !> The configuration and the time (of the loads).
+      real(dp), intent(in) :: q(:), t
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
       type(band_matrix_type), intent(inout) :: kff
@@ -61,7 +65,8 @@ contains
       real(dp), intent(out), optional :: section(2, max_gauss, size(mesh%elements))
       real(dp) :: pe(6), ke(6, 6), xe(6), s
       integer :: e, i
-      r = -lambda*mesh%f_ext
+      call mesh%loads%at(t, r)
+      r = -r
       call kff%zero()
       kfd = 0
       strain = 0

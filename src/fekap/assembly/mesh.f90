@@ -19,6 +19,10 @@ module fekap_assembly_mesh
    use fekap_element_beam, only: beam_type, new_beam
    use fekap_contact_slideline, only: default_penalty
    use fekap_union_find, only: find_root, join, flatten
+   use fekap_model, only: load_type, effects_statics
+   use fekap_model_effects, only: planned_effects, has_masses
+   use fekap_element_inertia, only: beam_gravity_force
+   use fekap_assembly_loads, only: load_set_type
    implicit none
    private
 
@@ -83,8 +87,12 @@ module fekap_assembly_mesh
       integer, allocatable :: dof_point(:), dof_kind(:)
       !> (ndof): configuration at the start: coordinates for translations, 0 for rotations.
       real(dp), allocatable :: q0(:)
-      !> (ndof): external nodal loads at unit load factor.
+      !> (ndof): external nodal loads at unit load factor (the LOADs without
+      !> a law of their own).
       real(dp), allocatable :: f_ext(:)
+      !> The loads at any time t: f_ext times t, the loads with laws, and in
+      !> statics the weights (fekap_assembly_loads).
+      type(load_set_type) :: loads
       type(slide_type), allocatable :: slides(:)
       !> (2, 36, nelem): where the entries of element e's tangent go, as lists
       !> of (k, position), k = i + 6 (j - 1) the entry of the 6 x 6 tangent and
@@ -228,6 +236,7 @@ contains
       if (allocated(model%loads)) then
          do i = 1, size(model%loads)
             associate (load => model%loads(i))
+               if (load%timed) cycle
                self%f_ext(self%tdof(:, load%node)) = self%f_ext(self%tdof(:, load%node)) + load%force
                if (load%link > 0 .and. load%moment /= 0) then
                   j = end_dof(self, model, load%link, load%node)
@@ -236,6 +245,7 @@ contains
             end associate
          end do
       end if
+      call new_load_set(self, model)
 
    contains
 
@@ -272,6 +282,45 @@ contains
       real(dp) :: c(3)
       c = [model%sections(isec)%ea, model%sections(isec)%kga, model%sections(isec)%ei]
    end function section_stiffness
+
+   !> The loads over the dofs as functions of time: the loads without a law
+   !> (f_ext, times the load factor t), each load with a law, and in statics
+   !> the weights of the masses (a dead load).
+   subroutine new_load_set(self, model)
+      type(mesh_type), intent(inout) :: self
+      type(model_type), intent(in) :: model
+      integer :: i, column, j, e
+      call self%loads%add_column(self%ndof, load_type(), column)
+      self%loads%f(:, column) = self%f_ext
+      if (allocated(model%loads)) then
+         do i = 1, size(model%loads)
+            associate (load => model%loads(i))
+               if (.not. load%timed) cycle
+               call self%loads%add_column(self%ndof, load, column)
+               self%loads%f(self%tdof(:, load%node), column) = load%force
+               if (load%link > 0 .and. load%moment /= 0) then
+                  j = end_dof(self, model, load%link, load%node)
+                  self%loads%f(j, column) = load%moment
+               end if
+            end associate
+         end do
+      end if
+      if (planned_effects(model) /= effects_statics .or. .not. has_masses(model) .or. all(model%gravity == 0)) return
+      call self%loads%add_dead_column(self%ndof, column)
+      do e = 1, size(self%elements)
+         associate (f => self%loads%f(:, column), el => self%elements(e))
+            f(self%edof(:, e)) = f(self%edof(:, e)) + beam_gravity_force(el%length, &
+               & model%sections(model%links(self%elink(e))%section)%rho_a, model%gravity)
+         end associate
+      end do
+      if (allocated(model%masses)) then
+         do i = 1, size(model%masses)
+            associate (f => self%loads%f(:, column), m => model%masses(i))
+               f(self%tdof(:, m%node)) = f(self%tdof(:, m%node)) + m%mass*model%gravity
+            end associate
+         end do
+      end if
+   end subroutine new_load_set
 
    !> The rotation dof of link l at its end on node.
    pure integer function end_dof(self, model, l, node) result(dof)

@@ -36,13 +36,13 @@ contains
       type(model_type), intent(inout) :: model
       !> The card's data lines (indices into ctx%source%lines).
       integer, intent(in) :: lines(:)
-      character(*), parameter :: keys(11) = [character(len=4) :: 'e', 'g', 'a', 'i', 'k', 'ea', 'kga', 'ei', &
-         & 'rho', 'rhoa', 'rhoi']
+      character(*), parameter :: keys(13) = [character(len=5) :: 'e', 'g', 'a', 'i', 'k', 'ea', 'kga', 'ei', &
+         & 'rho', 'rhoa', 'rhoi', 'alpha', 'beta']
       character(*), parameter :: form = 'name E=... G=... A=... I=... [k=...]  or  name EA=... kGA=... EI=...'
       type(section_type), allocatable :: list(:)
-      real(dp) :: value(11), v
-      logical :: given(11), ok, good
-      integer :: n, i, k, iline, eq, key, ikey(11), prev
+      real(dp) :: value(13), v
+      logical :: given(13), ok, good
+      integer :: n, i, k, iline, eq, key, ikey(13), prev
       character(:), allocatable :: field
       allocate (list(size(lines)))
       n = 0
@@ -59,14 +59,14 @@ contains
             eq = index(field, '=')
             if (eq <= 1) then
                call ctx%error(iline, k, "expected PROPERTY=VALUE, not '"//field//"'", &
-                  & label='properties: E= G= A= I= k= EA= kGA= EI= rho= rhoA= rhoI= (no blanks around =)')
+                  & label='properties: E= G= A= I= k= EA= kGA= EI= rho= rhoA= rhoI= alpha= beta= (no blanks around =)')
                good = .false.
                cycle
             end if
             key = findloc(keys, lower(field(:eq - 1)), 1)
             if (key == 0) then
                call ctx%error(iline, k, "unknown section property '"//field(:eq - 1)//"'", &
-                  & label='properties: E= G= A= I= k= EA= kGA= EI= rho= rhoA= rhoI=')
+                  & label='properties: E= G= A= I= k= EA= kGA= EI= rho= rhoA= rhoI= alpha= beta=')
                good = .false.
                cycle
             end if
@@ -78,6 +78,23 @@ contains
             call ctx%real_field(iline, k, v, ok, text=field(eq + 1:))
             if (.not. ok) then
                good = .false.
+               cycle
+            end if
+            if (key >= 12 .and. v < 0) then
+               ! Rayleigh damping: zero is no damping.
+               call ctx%error(iline, k, 'negative Rayleigh damping '//field(:eq - 1), &
+                  & label='C = alpha M + beta K with alpha >= 0 and beta >= 0 (0: undamped)')
+               good = .false.
+               cycle
+            else if (key >= 12 .and. v > max_property) then
+               call ctx%error(iline, k, 'section property '//field(:eq - 1)//' out of range', &
+                  & label='between 0 and 1e100')
+               good = .false.
+               cycle
+            else if (key >= 12) then
+               given(key) = .true.
+               value(key) = v
+               ikey(key) = k
                cycle
             end if
             if (v <= 0) then
@@ -107,6 +124,8 @@ contains
             call derive(list(n)%kga, 7, [5, 2, 3], 'kGA', 'k=, G= and A= (k defaults to 5/6)')
             call derive(list(n)%ei, 8, [1, 4], 'EI', 'E= and I=')
             call derive_density()
+            list(n)%alpha = value(12)
+            list(n)%beta = value(13)
             if (any([list(n)%ea, list(n)%kga, list(n)%ei] > max_property) .or. &
                & any([list(n)%ea, list(n)%kga, list(n)%ei] < min_property .and. &
                & [list(n)%ea, list(n)%kga, list(n)%ei] > 0)) then

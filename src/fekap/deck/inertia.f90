@@ -4,7 +4,7 @@
 !> sections' densities are read with the other section properties (SECTions).
 module fekap_deck_inertia
    use fekap_kinds, only: dp
-   use fekap_model, only: model_type, mass_type, effects_auto, effects_kinematics
+   use fekap_model, only: model_type, mass_type, effects_auto
    use fekap_model_effects, only: effects_plan_type, plan_effects
    use fekap_deck_context, only: context_type
    use fekap_deck_card, only: card_none, is_word_of
@@ -168,7 +168,9 @@ contains
    end subroutine read_gravity
 
    !> The ANALysis type against the deck: a type that cannot run is an error
-   !> at its line (the last type line of the ANALysis lines `lines`).
+   !> at its line (the last type line of the ANALysis lines `lines`); a
+   !> scene that auto finds asking for an analysis that cannot run is an
+   !> error at its first mass.
    subroutine check_effects(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(in) :: model
@@ -179,11 +181,33 @@ contains
       do i = 1, size(lines)
          if (is_word_of(ctx%field(lines(i), 1), 'type', 4)) type_line = lines(i)
       end do
-      if (type_line == 0) return
-      if (model%analysis%effects == effects_auto .or. model%analysis%effects == effects_kinematics) return
       plan = plan_effects(model)
-      if (len(plan%problem) > 0) call ctx%error(type_line, 2, plan%problem, &
-         & label='ANALysis type auto|kinematics|kinetostatics|dynamics (statics is not available yet)')
+      if (len(plan%problem) == 0) return
+      if (type_line > 0 .and. model%analysis%effects /= effects_auto) then
+         call ctx%error(type_line, 2, plan%problem, label='ANALysis type auto|kinematics|kinetostatics|statics|dynamics')
+      else if (allocated(model%masses)) then
+         if (size(model%masses) > 0) then
+            call ctx%error_at(model%masses(1)%loc, plan%problem, label='or set ANALysis type')
+            return
+         end if
+         call at_section()
+      else
+         call at_section()
+      end if
+
+   contains
+
+      !> The problem at the first section with a density.
+      subroutine at_section()
+         integer :: k
+         do k = 1, size(model%sections)
+            if (model%sections(k)%rho_a > 0) then
+               call ctx%error_at(model%sections(k)%loc, plan%problem, label='or set ANALysis type')
+               return
+            end if
+         end do
+      end subroutine at_section
+
    end subroutine check_effects
 
 end module fekap_deck_inertia

@@ -7,7 +7,7 @@ module fekap_deck_motion
    use fekap_model, only: model_type, drive_type, load_type, slideline_type, model_size, &
       & dof_x, dof_y, dof_rot, joint_pin_in_slot, joint_prismatic
    use fekap_model_drive_law, only: law_type, new_rate_law, new_harmonic_law, new_polynomial_law, &
-      & new_table_law, law_rate, law_harmonic, law_polynomial, law_table
+      & new_table_law, new_constant_law, new_linear_law, law_rate, law_harmonic, law_polynomial, law_table
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, same_name
    use fekap_deck_context, only: context_type
@@ -106,38 +106,60 @@ contains
       model%drives = list(:n)
    end subroutine read_drives
 
-   !> The law in fields first... of a DRIVes line.
-   subroutine read_law(ctx, iline, first, law, ok)
+   !> The law in fields first... of a DRIVes line, or of a LOADs line (`load`):
+   !> a load's law is its factor, and may also be `constant [C]` or a
+   !> piecewise-linear `linear T1 V1 T2 V2 ...`; a load's `rate OMEGA` starts at 0.
+   subroutine read_law(ctx, iline, first, law, ok, load)
       type(context_type), intent(inout) :: ctx
       integer, intent(in) :: iline, first
       type(law_type), intent(out) :: law
       logical, intent(out) :: ok
-      character(*), parameter :: laws = 'rate OMEGA [V0] | harmonic MEAN AMP OMEGA [PHASE] | '// &
-         & 'polynomial C0 C1 ... | table T1 V1 T2 V2 ...'
+      logical, intent(in), optional :: load
+      character(:), allocatable :: laws
       real(dp), allocatable :: c(:)
       integer :: k, nc
-      logical :: fine
-      character(:), allocatable :: word, head
+      logical :: fine, for_load, tabular
+      character(:), allocatable :: word, head, what
+      for_load = .false.
+      if (present(load)) for_load = load
+      laws = 'rate OMEGA [V0] | harmonic MEAN AMP OMEGA [PHASE] | polynomial C0 C1 ... | table T1 V1 T2 V2 ...'
+      what = 'drive'
+      if (for_load) then
+         laws = 'constant [C] | '//laws//' | linear T1 V1 T2 V2 ...'
+         what = 'load'
+      end if
       ok = .false.
       word = ctx%field(iline, first)
-      head = ctx%field(iline, 1)//' '//ctx%field(iline, 2)//' '
+      head = ''
+      do k = 1, first - 1
+         head = head//ctx%field(iline, k)//' '
+      end do
+      tabular = is_word_of(word, 'table', 4) .or. (for_load .and. is_word_of(word, 'linear', 4))
       nc = ctx%nfields(iline) - first
       allocate (c(nc))
       ok = .true.
       do k = 1, nc
          call ctx%real_field(iline, first + k, c(k), fine)
          ok = ok .and. fine
-         if (fine .and. .not. is_word_of(word, 'table', 4) .and. abs(c(k)) > law_max) then
-            call ctx%error(iline, first + k, 'drive-law number too large', label='at most 1e15 in magnitude')
+         if (fine .and. .not. tabular .and. abs(c(k)) > law_max) then
+            call ctx%error(iline, first + k, what//'-law number too large', label='at most 1e15 in magnitude')
             ok = .false.
          end if
       end do
-      if (is_word_of(word, 'rate', 4)) then
+      if (for_load .and. is_word_of(word, 'constant', 4)) then
+         if (.not. ok) return
+         if (nc > 1) call extra(first + 2, 'constant [C]')
+         if (.not. ok) return
+         if (nc == 0) c = [1.0_dp]
+         call new_constant_law(law, c(1))
+      else if (is_word_of(word, 'rate', 4)) then
          if (.not. ctx%require(iline, head//'rate OMEGA [V0]', 'a rate law')) ok = .false.
          if (.not. ok) return
          if (nc > 2) call extra(first + 3, 'rate OMEGA [V0]')
          if (.not. ok) return
-         if (nc == 1) then
+         if (nc == 1 .and. for_load) then
+            call new_rate_law(law, c(1), 0.0_dp)
+         else if (nc == 1) then
             call new_rate_law(law, c(1))
          else
             call new_rate_law(law, c(1), c(2))
@@ -153,12 +175,12 @@ contains
          if (.not. ctx%require(iline, head//'polynomial C0 [C1 ...]', 'a polynomial law')) ok = .false.
          if (.not. ok) return
          call new_polynomial_law(law, c)
-      else if (is_word_of(word, 'table', 4)) then
-         if (.not. ctx%require(iline, head//'table T1 V1 T2 V2 [...]', 'a table law')) ok = .false.
+      else if (tabular) then
+         if (.not. ctx%require(iline, head//word//' T1 V1 T2 V2 [...]', 'a table law')) ok = .false.
          if (.not. ok) return
          if (mod(nc, 2) /= 0) then
             call ctx%error(iline, first + nc, 'a table needs pairs T V: the last value is missing', &
-               & label='table T1 V1 T2 V2 ...')
+               & label=word//' T1 V1 T2 V2 ...')
             ok = .false.
             return
          end if
@@ -176,12 +198,16 @@ contains
             end if
          end do
          if (.not. ok) return
-         call new_table_law(law, c(1::2), c(2::2))
+         if (is_word_of(word, 'table', 4)) then
+            call new_table_law(law, c(1::2), c(2::2))
+         else
+            call new_linear_law(law, c(1::2), c(2::2))
+         end if
       else if (len(word) == 0) then
          call ctx%error(iline, first, 'missing field ''law''', label='laws: '//laws)
          ok = .false.
       else
-         call ctx%error(iline, first, "unknown drive law '"//word//"'", label='laws: '//laws)
+         call ctx%error(iline, first, 'unknown '//what//" law '"//word//"'", label='laws: '//laws)
          ok = .false.
       end if
 
@@ -275,14 +301,15 @@ contains
       end select
    end subroutine start_value
 
-   !> LOADs: `node FX FY [moment LINK M]`.
+   !> LOADs: `node FX FY [moment LINK M] [LAW ...]`: the values times the law's
+   !> factor (the load factor t without a law).
    subroutine read_loads(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
-      character(*), parameter :: form = 'node FX FY [moment LINK M]'
+      character(*), parameter :: form = 'node FX FY [moment LINK M] [LAW ...]'
       type(load_type), allocatable :: list(:)
-      integer :: n, i, iline
+      integer :: n, i, iline, first_law
       logical :: ok, fine
       allocate (list(size(lines)))
       n = 0
@@ -298,15 +325,22 @@ contains
          ok = ok .and. fine
          call ctx%real_field(iline, 3, list(n)%force(2), fine)
          ok = ok .and. fine
+         first_law = 4
          if (ctx%nfields(iline) > 3) then
-            if (.not. is_word_of(ctx%field(iline, 4), 'moment', 3)) then
-               call ctx%error(iline, 4, "unexpected field '"//ctx%field(iline, 4)//"'", label='a LOADs line is: '//form)
+            if (is_load_law(ctx%field(iline, 4))) then
+               continue
+            else if (.not. is_word_of(ctx%field(iline, 4), 'moment', 3)) then
+               call ctx%error(iline, 4, "unexpected field '"//ctx%field(iline, 4)//"'", &
+                  & label='a LOADs line is: '//form//'; laws: constant rate harmonic polynomial table linear')
                ok = .false.
             else if (ctx%require(iline, 'node FX FY moment LINK M', 'a LOADs line')) then
+               first_law = 7
                if (ctx%nfields(iline) > 6) then
-                  call ctx%error(iline, 7, "unexpected field '"//ctx%field(iline, 7)//"'", &
-                     & label='a LOADs line is: '//form)
-                  ok = .false.
+                  if (.not. is_load_law(ctx%field(iline, 7))) then
+                     call ctx%error(iline, 7, "unexpected field '"//ctx%field(iline, 7)//"'", &
+                        & label='a LOADs line is: '//form//'; laws: constant rate harmonic polynomial table linear')
+                     ok = .false.
+                  end if
                end if
                list(n)%link = lookup_link(ctx, iline, 5)
                if (list(n)%link > 0 .and. list(n)%node > 0) then
@@ -323,10 +357,23 @@ contains
                ok = .false.
             end if
          end if
+         if (ok .and. ctx%nfields(iline) >= first_law) then
+            call read_law(ctx, iline, first_law, list(n)%law, fine, load=.true.)
+            list(n)%timed = fine
+            ok = ok .and. fine
+         end if
          if (.not. ok) n = n - 1
       end do
       model%loads = list(:n)
    end subroutine read_loads
+
+   !> Whether a LOADs field starts a law.
+   pure logical function is_load_law(field)
+      character(*), intent(in) :: field
+      is_load_law = is_word_of(field, 'constant', 4) .or. is_word_of(field, 'rate', 4) .or. &
+         & is_word_of(field, 'harmonic', 4) .or. is_word_of(field, 'polynomial', 4) .or. &
+         & is_word_of(field, 'table', 4) .or. is_word_of(field, 'linear', 4)
+   end function is_load_law
 
    !> SLIDelines: `name slave on LINK [LINK ...] [pin | prismatic LINK] [penalty=VALUE]`
    !> or `name slave guide X1 Y1 X2 Y2 [pin | prismatic LINK] [penalty=VALUE]`.

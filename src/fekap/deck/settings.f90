@@ -7,7 +7,7 @@ module fekap_deck_settings
       & predictor_previous, &
       & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, &
       & solver_band, solver_dense, effects_auto, effects_kinematics, effects_kinetostatics, effects_statics, &
-      & effects_dynamics
+      & effects_dynamics, integrator_names, integrator_generalized_alpha
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, word_index
    use fekap_deck_context, only: context_type
@@ -49,13 +49,14 @@ contains
    end subroutine read_title
 
    !> ANALysis: `method`, `time`, `compute`, `tolerance`, `length`, `iterations`,
-   !> `predictor`, `convergence`, `gauss`, `redundant`, `solver`, `type` lines; then the time span is checked.
+   !> `predictor`, `convergence`, `gauss`, `redundant`, `solver`, `type`, `integrator` lines; then the time
+   !> span is checked.
    subroutine read_analysis(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
       character(*), parameter :: keys = 'method time compute tolerance length iterations predictor convergence '// &
-         & 'gauss redundant solver type'
+         & 'gauss redundant solver type integrator'
       integer :: i, iline, k, time_line, ivalue
       real(dp) :: t(3), span, v
       logical :: ok, fine
@@ -187,6 +188,22 @@ contains
             case (5)
                model%analysis%effects = effects_dynamics
             end select
+         else if (is_word_of(key, 'integrator', 4)) then
+            ! integrator generalized-alpha [RHO_INF]: Chung-Hulbert with rho_inf in [0, 1].
+            if (.not. ctx%require(iline, 'integrator generalized-alpha [RHO_INF]', 'an integrator line')) cycle
+            if (extra(4, 'integrator generalized-alpha [RHO_INF]')) cycle
+            if (choice(2, integrator_names) /= 1) cycle
+            model%analysis%integrator = integrator_generalized_alpha
+            if (ctx%nfields(iline) < 3) cycle
+            call ctx%real_field(iline, 3, v, ok)
+            if (.not. ok) cycle
+            if (v < 0 .or. v > 1) then
+               call ctx%error(iline, 3, 'rho_inf of generalized-alpha must lie in [0, 1]', &
+                  & label='the spectral radius at infinite frequency: 1 no numerical damping (trapezoidal rule), '// &
+                  & '0 the most; default 0.8')
+               cycle
+            end if
+            model%analysis%rho_inf = v
          else
             call ctx%error(iline, 1, "unknown ANALysis parameter '"//ctx%field(iline, 1)//"'", label='allowed: '//keys)
          end if

@@ -25,7 +25,8 @@ module fekap_effects_dynamic_stepper
       & alpha_update
    use fekap_effects_dynamic_system, only: dynamic_system_type, new_dynamic_system, external_forces, &
       & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6
-   use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, reaction_count
+   use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
+   use fekap_model_reactions, only: reaction_count
    use fekap_output_format, only: es_text
    use fekap_deck_velocities, only: link_point_velocity
    implicit none
@@ -197,7 +198,7 @@ contains
          end if
          self%start_velocity = 'at rest'
          if (mesh%ndriven == 0 .or. all(self%law_rate == 0)) return
-         call assemble_system(system, mesh, state%q, 0.0_dp, state%seg, huge(1.0_dp), self%counts)
+         call assemble_system(system, mesh, state%q, state%t, state%seg, huge(1.0_dp), self%counts)
          call factor_system(system, info, self%counts)
          ratio = 0
          if (info == 0) call system_pivot(system, ratio)
@@ -252,11 +253,11 @@ contains
       integer :: k, e, m, info
       real(dp) :: me(36), mdiag
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
-         call external_forces(dyn, self%model, state%t, state%g)
+         call external_forces(dyn, mesh, state%t, state%g)
          do k = 1, mesh%nfree
             state%acc(mesh%eq_dof(k)) = 0
          end do
-         call assemble_dynamics(dyn, system, mesh, state%q, state%v, state%acc, state%g, state%seg, self%counts)
+         call assemble_dynamics(dyn, system, mesh, state%q, state%v, state%acc, state%t, state%seg, self%counts)
          state%r = system%r
          call system%kff%zero()
          do e = 1, size(mesh%elements)
@@ -285,7 +286,7 @@ contains
             state%acc(mesh%eq_dof(k)) = system%rhs(k, 1)
          end do
          ! The start's residual with its accelerations: the reactions there.
-         call assemble_dynamics(dyn, system, mesh, state%q, state%v, state%acc, state%g, state%seg, self%counts)
+         call assemble_dynamics(dyn, system, mesh, state%q, state%v, state%acc, state%t, state%seg, self%counts)
          state%r = system%r
       end associate
    end subroutine start_accelerations
@@ -375,12 +376,12 @@ contains
             end if
          end do
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
-         call external_forces(dyn, self%model, t_new, self%gt)
+         call external_forces(dyn, mesh, t_new, self%gt)
          iterations = 0
          r0 = 0
          residual = huge(1.0_dp)
          do
-            call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, self%gt, state%seg, self%counts, &
+            call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts, &
                & c%c1, c%c2)
             residual = residual_norm(system, mesh)
             if (.not. residual <= huge(1.0_dp)) then
@@ -412,7 +413,7 @@ contains
             self%counts%iterations = self%counts%iterations + 1
             if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
                ! The residual at the converged iterate: the reactions.
-               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, self%gt, state%seg, self%counts)
+               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
                residual = residual_norm(system, mesh)
                exit
             end if
@@ -528,6 +529,9 @@ contains
                call end_forces(e, pe)
                ge = pe
                reactions(:, row) = ge(3*rows%row_end(row) - 2:3*rows%row_end(row))
+            else if (rows%row_slide(row) > 0) then
+               ! A sliding joint: the penalty force on the slave.
+               call slider_force(mesh, rows%row_slide(row), state%q, state%seg, reactions(:, row))
             else
                do k = 1, 3
                   dof = rows%row_dof(k, row)

@@ -32,8 +32,6 @@ module fekap_effects_dynamic_system
       real(dp), allocatable :: point_mass(:)
       !> (ndof): the weights (consistent element weights and point masses' weights).
       real(dp), allocatable :: weight(:)
-      !> Per load of the model: its dofs (x, y, rotation; 0 without a moment).
-      integer, allocatable :: load_dof(:, :)
       !> (ndof) work.
       real(dp), allocatable :: work(:)
    end type dynamic_system_type
@@ -71,18 +69,6 @@ contains
             end associate
          end do
       end if
-      allocate (self%load_dof(3, 0))
-      if (allocated(model%loads)) then
-         deallocate (self%load_dof)
-         allocate (self%load_dof(3, size(model%loads)), source=0)
-         do i = 1, size(model%loads)
-            associate (load => model%loads(i))
-               self%load_dof(1:2, i) = mesh%tdof(:, load%node)
-               if (load%link > 0) self%load_dof(3, i) = &
-                  & mesh%link_rot(merge(1, 2, model%links(load%link)%node(1) == load%node), load%link)
-            end associate
-         end do
-      end if
    end subroutine new_dynamic_system
 
    !> Whether some element is damped.
@@ -91,24 +77,15 @@ contains
       has_damping = any(self%alpha /= 0 .or. self%beta /= 0)
    end function has_damping
 
-   !> g(t): the weights and the loads at time t (a timed load: its law's
-   !> value; otherwise the load factor t).
-   subroutine external_forces(self, model, t, g)
+   !> g(t): the weights and the loads at time t (the mesh's load set: the
+   !> loads with a law at its value, the others times the load factor t).
+   subroutine external_forces(self, mesh, t, g)
       type(dynamic_system_type), intent(in) :: self
-      type(model_type), intent(in) :: model
+      type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: t
       real(dp), intent(out) :: g(:)
-      real(dp) :: factor, df, ddf
-      integer :: i
-      g = self%weight
-      do i = 1, size(self%load_dof, 2)
-         associate (load => model%loads(i))
-            factor = t
-            if (load%timed) call load%law%eval(t, factor, df, ddf)
-            g(self%load_dof(1:2, i)) = g(self%load_dof(1:2, i)) + factor*load%force
-            if (self%load_dof(3, i) > 0) g(self%load_dof(3, i)) = g(self%load_dof(3, i)) + factor*load%moment
-         end associate
-      end do
+      call mesh%loads%at(t, g)
+      g = g + self%weight
    end subroutine external_forces
 
    !> Each element's damping matrix alpha M + beta K_m at q (the material
@@ -128,14 +105,14 @@ contains
       end do
    end subroutine update_damping
 
-   !> The residual R over all dofs into system%r (g: external_forces at the
-   !> time), and with `c1`, `c2` the iteration matrix K + c1 C + c2 M into the
+   !> The residual R over all dofs at time t into system%r, and with `c1`, `c2` the iteration matrix K + c1 C + c2 M into the
    !> system's band (and free-driven block).
-   subroutine assemble_dynamics(self, system, mesh, q, v, acc, g, seg, counts, c1, c2)
+   subroutine assemble_dynamics(self, system, mesh, q, v, acc, t, seg, counts, c1, c2)
       type(dynamic_system_type), intent(inout) :: self
       type(linear_system_type), intent(inout) :: system
       type(mesh_type), intent(in) :: mesh
-      real(dp), contiguous, intent(in) :: q(:), v(:), acc(:), g(:)
+      real(dp), contiguous, intent(in) :: q(:), v(:), acc(:)
+      real(dp), intent(in) :: t
       integer, intent(in) :: seg(:)
       type(work_counts_type), intent(inout) :: counts
       real(dp), intent(in), optional :: c1, c2
@@ -145,12 +122,13 @@ contains
       damped = has_damping(self)
       if (present(c2)) then
          ! Full geometric stiffness: the motion strains the links.
-         call assemble_system(system, mesh, q, 0.0_dp, seg, 0.0_dp, counts)
+         call assemble_system(system, mesh, q, t, seg, 0.0_dp, counts)
       else
-         call assemble_system_residual(system, mesh, q, 0.0_dp, seg, counts)
+         call assemble_system_residual(system, mesh, q, t, seg, counts)
       end if
+      ! The assembly subtracted the loads at t; the weights are the masses'.
       associate (r => system%r)
-         r = r - g + self%point_mass*acc
+         r = r - self%weight + self%point_mass*acc
          do e = 1, size(mesh%elements)
             do i = 1, 6
                ae(i) = acc(mesh%edof(i, e))

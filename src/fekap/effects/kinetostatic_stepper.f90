@@ -3,7 +3,9 @@
 !> gravity along that motion, the elastic deflection they cause (solved with
 !> the FEM's factor of the material tangent at the accepted configuration,
 !> the one its rates used) and the reactions (fekap_effects_kinetostatics).
-!> The FEM itself is untouched: a kinematics run does not pass here.
+!> The FEM itself is untouched: a kinematics run does not pass here. The
+!> external loads (LOADs) act in kinetostatics' loads, not on the motion: the
+!> stepper takes them from the FEM's mesh, whose kinematics then runs unloaded.
 module fekap_effects_kinetostatic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type
@@ -11,7 +13,9 @@ module fekap_effects_kinetostatic_stepper
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, kinetostatic_loads, &
-      & kinetostatic_reactions, reaction_count
+      & kinetostatic_reactions
+   use fekap_model_reactions, only: reaction_count
+   use fekap_assembly_loads, only: load_set_type
    implicit none
    private
 
@@ -21,7 +25,9 @@ module fekap_effects_kinetostatic_stepper
       type(fem_stepper_type) :: fem
       type(kinetostatics_type) :: kinetostatics
       !> Work over the dofs: the loads and the deflection; over the equations: the right-hand side.
-      real(dp), allocatable :: f(:), u(:), rhs(:, :)
+      real(dp), allocatable :: f(:), u(:), rhs(:, :), external(:)
+      !> The external loads (LOADs), which the FEM's motion does not see.
+      type(load_set_type) :: loads
    contains
       procedure :: start => kinetostatic_start
       procedure :: advance => kinetostatic_advance
@@ -35,8 +41,13 @@ contains
       type(kinetostatic_stepper_type), intent(out) :: self
       type(fem_stepper_type), intent(in) :: fem
       self%fem = fem
+      ! The motion is the kinematic one: the loads leave the FEM for the reactions.
+      self%loads = self%fem%mesh%loads
+      self%fem%mesh%loads%f = 0
+      self%fem%loaded = .false.
       call new_kinetostatics(self%kinetostatics, fem%model, fem%mesh)
-      allocate (self%f(self%fem%mesh%ndof), self%u(self%fem%mesh%ndof), source=0.0_dp)
+      allocate (self%f(self%fem%mesh%ndof), self%u(self%fem%mesh%ndof), self%external(self%fem%mesh%ndof), &
+         & source=0.0_dp)
       allocate (self%rhs(self%fem%mesh%nfree, 1), source=0.0_dp)
    end subroutine new_kinetostatic_stepper
 
@@ -79,6 +90,10 @@ contains
       if (.not. result%has_reactions) return
       associate (mesh => self%fem%mesh)
          call kinetostatic_loads(self%kinetostatics, mesh, self%fem%state%a, self%f)
+         if (self%loads%is_loaded()) then
+            call self%loads%at(self%fem%state%t, self%external)
+            self%f = self%f + self%external
+         end if
          do k = 1, mesh%nfree
             self%rhs(k, 1) = self%f(mesh%eq_dof(k))
          end do
@@ -87,8 +102,8 @@ contains
          do k = 1, mesh%nfree
             self%u(mesh%eq_dof(k)) = self%rhs(k, 1)
          end do
-         call kinetostatic_reactions(self%kinetostatics, mesh, self%fem%state%q, self%fem%state%a, self%f, self%u, &
-            & result%reactions)
+         call kinetostatic_reactions(self%kinetostatics, mesh, self%fem%state%q, self%fem%state%seg, &
+            & self%fem%state%a, self%f, self%u, result%reactions)
          ! Loads near the deck's limits on sections near theirs could overflow the
          ! deflection: such a step gets empty reaction columns, never an Inf or NaN.
          result%has_reactions = all(abs(result%reactions) <= huge(1.0_dp))

@@ -1,22 +1,26 @@
-!> Time laws of drives: value, rate and second rate, all exact.
+!> Time laws of drives and loads: value, rate and second rate, all exact.
 module fekap_model_drive_law
    use fekap_kinds, only: dp
    implicit none
    private
 
-   public :: law_type, new_rate_law, new_harmonic_law, new_polynomial_law, new_table_law
+   public :: law_type, new_rate_law, new_harmonic_law, new_polynomial_law, new_table_law, new_constant_law, &
+      & new_linear_law
 
-   integer, parameter, public :: law_rate = 1, law_harmonic = 2, law_polynomial = 3, law_table = 4
+   !> Law kinds; constant and linear (a piecewise-linear table) are taken by LOADs only.
+   integer, parameter, public :: law_rate = 1, law_harmonic = 2, law_polynomial = 3, law_table = 4, &
+      & law_constant = 5, law_linear = 6
 
    !> A time law f(t) with exact f'(t) and f''(t).
    type :: law_type
-      !> law_rate, law_harmonic, law_polynomial or law_table.
+      !> law_rate, law_harmonic, law_polynomial, law_table, law_constant or law_linear.
       integer :: kind = 0
-      !> rate: (omega, v0); harmonic: (mean, amplitude, omega, phase); polynomial: c0, c1, ...
+      !> rate: (omega, v0); harmonic: (mean, amplitude, omega, phase); polynomial: c0, c1, ...;
+      !> constant: (value)
       real(dp), allocatable :: c(:)
       !> rate only: false when v0 was not given (the drive starts from the initial configuration).
       logical :: absolute = .true.
-      !> table only: knots, values and the natural cubic spline's second derivatives.
+      !> table and linear: knots and values; table only: the natural cubic spline's second derivatives.
       real(dp), allocatable :: tt(:), tv(:), tm(:)
    contains
       procedure :: eval => law_eval
@@ -50,6 +54,25 @@ contains
       self%kind = law_polynomial
       self%c = coeff
    end subroutine new_polynomial_law
+
+   !> f(t) = value.
+   pure subroutine new_constant_law(self, value)
+      type(law_type), intent(out) :: self
+      real(dp), intent(in) :: value
+      self%kind = law_constant
+      self%c = [value]
+   end subroutine new_constant_law
+
+   !> Piecewise-linear through (t(i), v(i)), t strictly increasing, at least 2
+   !> points; before the first point and after the last the end values hold
+   !> (a hat function rises and falls back to a lasting zero).
+   pure subroutine new_linear_law(self, t, v)
+      type(law_type), intent(out) :: self
+      real(dp), intent(in) :: t(:), v(:)
+      self%kind = law_linear
+      self%tt = t
+      self%tv = v
+   end subroutine new_linear_law
 
    !> Natural cubic spline through (t(i), v(i)); t strictly increasing, at least 2 points.
    pure subroutine new_table_law(self, t, v)
@@ -126,6 +149,35 @@ contains
          f = a*self%tv(lo) + b*self%tv(hi) + ((a**3 - a)*self%tm(lo) + (b**3 - b)*self%tm(hi))*h**2/6
          df = (self%tv(hi) - self%tv(lo))/h + (-(3*a**2 - 1)*self%tm(lo) + (3*b**2 - 1)*self%tm(hi))*h/6
          ddf = a*self%tm(lo) + b*self%tm(hi)
+      case (law_constant)
+         f = self%c(1)
+         df = 0
+         ddf = 0
+      case (law_linear)
+         ! Rate of the segment that t is in (at a knot, the one after it); 0 outside.
+         ddf = 0
+         if (t < self%tt(1)) then
+            f = self%tv(1)
+            df = 0
+         else if (t >= self%tt(size(self%tt))) then
+            f = self%tv(size(self%tv))
+            df = 0
+         else
+            lo = 1
+            hi = size(self%tt)
+            do while (hi - lo > 1)
+               i = (lo + hi)/2
+               if (t >= self%tt(i)) then
+                  lo = i
+               else
+                  hi = i
+               end if
+            end do
+            h = self%tt(hi) - self%tt(lo)
+            b = (t - self%tt(lo))/h
+            f = (1 - b)*self%tv(lo) + b*self%tv(hi)
+            df = (self%tv(hi) - self%tv(lo))/h
+         end if
       case default
          f = 0
          df = 0

@@ -1,19 +1,35 @@
-!> Which effects a run simulates, chosen from the deck: pure kinematics, or
+!> Which effects a run simulates, chosen from the deck: pure kinematics,
 !> kinetostatics (the drive torques and forces and the joint reactions that
-!> the masses and gravity ask for along the computed motion). ANALysis type
-!> auto (the default) takes kinetostatics when the deck gives masses and
-!> nothing stands in its way, kinematics otherwise; an explicit type that
-!> cannot run is a problem the deck reader (and the app, after the command
-!> line's overrides) reports. Masses on a mechanism without drives, or with
-!> loads or sliding joints, ask for dynamics (auto); statics is not available yet.
+!> the masses and gravity ask for along the computed motion), statics
+!> (equilibrium under loads) or dynamics. ANALysis type auto (the default)
+!> decides from the deck (docs/dynamics.md):
+!>
+!> - no masses and no loads: kinematics;
+!> - loads without masses: statics;
+!> - masses on a fully driven mechanism (drives, and a mobility count of 0
+!>   or less: the drives leave no free motion): kinetostatics;
+!> - masses on an under-driven scene (a positive mobility count) or a
+!>   flexible one (no drives): dynamics.
+!>
+!> An effect that cannot run (another method, no accelerations, ...) leaves
+!> auto at kinematics, and the plan says why and what is left out; an
+!> explicit type that cannot run is a problem the deck reader (and the app,
+!> after the command line's overrides) reports.
 module fekap_model_effects
    use fekap_error, only: error_type, input_error
    use fekap_model, only: model_type, method_fem, effects_auto, effects_kinematics, effects_kinetostatics, &
-      & effects_statics, effects_dynamics
+      & effects_statics, effects_dynamics, joint_prismatic
+   use fekap_strings, only: int_text
+   use fekap_model_loads, only: load_count
    implicit none
    private
 
    public :: effects_plan_type, plan_effects, planned_effects, check_effects_request, has_masses, has_gravity, effects_name
+   public :: mobility
+
+   !> Whether the dynamics stepper exists: until it does, a plan for dynamics
+   !> is refused with "not available yet" (the dynamics engineer sets this).
+   logical, parameter, public :: dynamics_available = .true.
 
    !> The plan: the effects, why they were chosen, what is left out, and why
    !> an explicit request cannot be met ('' if it can).
@@ -29,31 +45,25 @@ contains
       type(model_type), intent(in) :: model
       type(effects_plan_type) :: plan
       character(:), allocatable :: obstacle
-      logical :: masses, gravity
+      logical :: masses, gravity, loads, driven
+      integer :: m
       masses = has_masses(model)
       gravity = has_gravity(model)
+      loads = load_count(model) > 0
+      driven = count_of_drives(model) > 0
+      m = mobility(model)
       plan%effects = effects_kinematics
       plan%why = ''
       plan%left_out = ''
       plan%problem = ''
-      obstacle = kinetostatics_obstacle(model)
       select case (model%analysis%effects)
-      case (effects_statics)
-         plan%problem = 'ANALysis type statics is not available yet (issue 19)'
-         plan%why = 'ANALysis type statics is not available'
-      case (effects_dynamics)
-         if (.not. masses) then
-            plan%problem = 'dynamics needs masses: give rho= (or rhoA=) on SECTions, or a MASSes block'
-         else if (model%analysis%method /= method_fem) then
-            plan%problem = 'dynamics runs with method fem only'
-         else
-            plan%effects = effects_dynamics
-            plan%why = 'ANALysis type dynamics'
-         end if
       case (effects_kinematics)
          plan%why = 'ANALysis type kinematics'
          if (masses .or. gravity) plan%left_out = 'masses and gravity are not used (ANALysis type kinematics)'
+         if (loads) plan%problem = 'LOADs ask for statics (the finite element method always takes them): '// &
+            & 'ANALysis type statics or auto'
       case (effects_kinetostatics)
+         obstacle = kinetostatics_obstacle(model)
          if (.not. masses) then
             plan%problem = 'kinetostatics needs masses: give rho= (or rhoA=) on SECTions, or a MASSes block'
          else if (len(obstacle) > 0) then
@@ -62,28 +72,94 @@ contains
             plan%effects = effects_kinetostatics
             plan%why = 'ANALysis type kinetostatics'
          end if
-      case default
-         if (masses .and. model%analysis%method == method_fem .and. len(dynamics_reason(model)) > 0) then
-            plan%effects = effects_dynamics
-            plan%why = 'auto: masses on '//dynamics_reason(model)
-         else if (masses .and. len(obstacle) == 0) then
-            plan%effects = effects_kinetostatics
-            plan%why = 'auto: masses on a mechanism moved by its drives'
-         else if (masses) then
-            plan%why = 'auto: masses are given, but '//obstacle
-            plan%left_out = 'masses and gravity are left out'
+      case (effects_statics)
+         obstacle = statics_obstacle(model)
+         if (len(obstacle) > 0) then
+            plan%problem = 'statics cannot run: '//obstacle
          else
-            plan%why = 'auto: no masses'
+            plan%effects = effects_statics
+            plan%why = 'ANALysis type statics'
          end if
+      case (effects_dynamics)
+         obstacle = dynamics_obstacle(model)
+         if (len(obstacle) > 0) then
+            plan%problem = 'dynamics cannot run: '//obstacle
+         else
+            plan%effects = effects_dynamics
+            plan%why = 'ANALysis type dynamics'
+         end if
+      case default
+         call plan_auto(model, masses, gravity, loads, driven, m, plan)
       end select
       if (gravity .and. .not. masses) plan%left_out = 'GRAVity does nothing without masses (no rho= or rhoA= on '// &
          & 'SECTions, no MASSes)'
-      if (plan%effects == effects_kinetostatics) plan%left_out = 'left out: the elastic deflection''s effect on the '// &
-         & 'motion (the motion is the kinematic one), statics under loads, dynamics'
-      if (plan%effects == effects_dynamics .and. count_of_slidelines(model) > 0) plan%left_out = &
-         & 'left out: the slidelines'' penalty energy in the '// &
-         & 'energy balance (its work is in the balance column)'
+      select case (plan%effects)
+      case (effects_kinetostatics)
+         plan%left_out = 'left out: the elastic deflection''s effect on the motion (the motion is the kinematic '// &
+            & 'one), statics under loads, dynamics'
+      case (effects_statics)
+         if (masses) then
+            plan%left_out = 'left out: inertia (statics: the masses act through their weight only), dynamics'
+         else
+            plan%left_out = 'left out: inertia and dynamics (there are no masses)'
+         end if
+      case default
+         continue
+      end select
+
    end function plan_effects
+
+   !> ANALysis type auto: the rule of this module's header.
+   pure subroutine plan_auto(model, masses, gravity, loads, driven, m, plan)
+      type(model_type), intent(in) :: model
+      logical, intent(in) :: masses, gravity, loads, driven
+      !> The mobility count.
+      integer, intent(in) :: m
+      type(effects_plan_type), intent(inout) :: plan
+      character(:), allocatable :: scene, obstacle
+      if (.not. masses .and. .not. loads) then
+         plan%why = 'auto: no masses, no loads'
+         if (gravity) plan%why = 'auto: no masses'
+         return
+      end if
+      if (.not. masses) then
+         obstacle = statics_obstacle(model)
+         if (len(obstacle) == 0) then
+            plan%effects = effects_statics
+            plan%why = 'auto: loads without masses'
+         else
+            plan%why = 'auto: loads are given, but '//obstacle
+            plan%left_out = 'the loads are left out'
+         end if
+         return
+      end if
+      if (driven .and. m <= 0) then
+         obstacle = kinetostatics_obstacle(model)
+         if (len(obstacle) == 0) then
+            plan%effects = effects_kinetostatics
+            plan%why = 'auto: masses on a mechanism moved by its drives'
+         else
+            plan%why = 'auto: masses are given, but '//obstacle
+            plan%left_out = 'masses and gravity are left out'
+         end if
+         return
+      end if
+      if (driven) then
+         scene = 'masses on an under-driven mechanism (mobility '//int_text(m)//' with its drives held)'
+      else
+         scene = 'masses on a flexible scene without drives'
+      end if
+      obstacle = dynamics_obstacle(model)
+      if (len(obstacle) == 0) then
+         plan%effects = effects_dynamics
+         plan%why = 'auto: '//scene
+      else
+         ! Auto does not fall back to another analysis of a moving scene: it says what to write.
+         plan%why = 'auto: '//scene//' asks for dynamics'
+         plan%problem = scene//' ask for dynamics, which cannot run: '//obstacle// &
+            & '; ANALysis type statics (weights and loads only) or kinematics runs without inertia'
+      end if
+   end subroutine plan_auto
 
    !> The effects the plan of `model` simulates (effects_kinematics, ...).
    pure integer function planned_effects(model) result(effects)
@@ -95,7 +171,7 @@ contains
 
    !> An input error when the ANALysis type asked for cannot run (the deck
    !> reader reports this at the type line; this catches what the command
-   !> line's overrides changed, e.g. --method cartesian).
+   !> line's overrides changed, e.g. --method cartesian, and auto's plans).
    subroutine check_effects_request(model, error)
       type(model_type), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
@@ -103,28 +179,6 @@ contains
       plan = plan_effects(model)
       if (len(plan%problem) > 0) call input_error(error, model%file//': '//plan%problem)
    end subroutine check_effects_request
-
-   !> Why the masses of `model` move it by themselves (dynamics), or '': a
-   !> mechanism without drives, or one with loads or sliding joints (which
-   !> kinetostatics does not take).
-   pure function dynamics_reason(model) result(text)
-      type(model_type), intent(in) :: model
-      character(:), allocatable :: text
-      text = ''
-      if (count_of_drives(model) == 0) then
-         text = 'a mechanism without drives'
-      else if (count_of_loads(model) > 0) then
-         text = 'a mechanism with LOADs'
-      else if (count_of_slidelines(model) > 0) then
-         text = 'a mechanism with sliding joints (SLIDelines)'
-      end if
-   end function dynamics_reason
-
-   pure integer function count_of_drives(model) result(n)
-      type(model_type), intent(in) :: model
-      n = 0
-      if (allocated(model%drives)) n = size(model%drives)
-   end function count_of_drives
 
    !> What keeps the model from kinetostatics, or ''.
    pure function kinetostatics_obstacle(model) result(text)
@@ -135,24 +189,82 @@ contains
          text = 'kinetostatics runs with method fem only'
       else if (.not. (model%analysis%velocities .and. model%analysis%accelerations)) then
          text = 'kinetostatics needs the accelerations (compute ... accelerations)'
-      else if (count_of_loads(model) > 0) then
-         text = 'masses with LOADs ask for dynamics'
-      else if (count_of_slidelines(model) > 0) then
-         text = 'sliding joints (SLIDelines) are not in kinetostatics yet'
+      else if (count_of_drives(model) == 0) then
+         text = 'kinetostatics needs drives (DRIVes) that move the mechanism'
       end if
    end function kinetostatics_obstacle
 
-   pure integer function count_of_loads(model) result(n)
+   !> What keeps the model from statics, or ''.
+   pure function statics_obstacle(model) result(text)
       type(model_type), intent(in) :: model
-      n = 0
-      if (allocated(model%loads)) n = size(model%loads)
-   end function count_of_loads
+      character(:), allocatable :: text
+      text = ''
+      if (model%analysis%method /= method_fem) then
+         text = 'statics runs with method fem only'
+      else if (load_count(model) == 0 .and. .not. (has_masses(model) .and. has_gravity(model))) then
+         text = 'statics needs loads: LOADs, or masses under GRAVity'
+      end if
+   end function statics_obstacle
 
-   pure integer function count_of_slidelines(model) result(n)
+   !> What keeps the model from dynamics, or ''.
+   pure function dynamics_obstacle(model) result(text)
+      type(model_type), intent(in) :: model
+      character(:), allocatable :: text
+      text = ''
+      if (.not. has_masses(model)) then
+         text = 'dynamics needs masses: give rho= (or rhoA=) on SECTions, or a MASSes block'
+      else if (model%analysis%method /= method_fem) then
+         text = 'dynamics runs with method fem only'
+      else if (.not. dynamics_available) then
+         text = 'ANALysis type dynamics is not available yet (issue 19)'
+      end if
+   end function dynamics_obstacle
+
+   !> The mobility count (Gruebler-Kutzbach) of the scene with its supports
+   !> and drives held: the free degrees of freedom at the nodes (two
+   !> translations and one rotation per rigid group of link ends, less the
+   !> supported and driven ones), less three per link (a link meshed with
+   !> several elements adds as many dofs as constraints), less one per
+   !> pin-in-slot and two per prismatic slideline. Positive: the drives leave
+   !> a free motion (under-driven; special geometry can only add to it); 0 or
+   !> less: the drives move the mechanism, or it is a structure.
+   pure integer function mobility(model) result(m)
+      type(model_type), intent(in) :: model
+      integer :: n, l, i, ends
+      m = 0
+      if (.not. allocated(model%nodes) .or. .not. allocated(model%links)) return
+      do n = 1, size(model%nodes)
+         ends = 0
+         do l = 1, size(model%links)
+            ends = ends + count(model%links(l)%node == n)
+         end do
+         if (ends == 0) cycle
+         m = m + 2 + ends
+      end do
+      if (allocated(model%welds)) then
+         do i = 1, size(model%welds)
+            m = m - (size(model%welds(i)%links) - 1)
+         end do
+      end if
+      if (allocated(model%supports)) then
+         do i = 1, size(model%supports)
+            m = m - count(model%supports(i)%fix)
+         end do
+      end if
+      if (allocated(model%drives)) m = m - size(model%drives)
+      m = m - 3*size(model%links)
+      if (allocated(model%slidelines)) then
+         do i = 1, size(model%slidelines)
+            m = m - merge(2, 1, model%slidelines(i)%kind == joint_prismatic)
+         end do
+      end if
+   end function mobility
+
+   pure integer function count_of_drives(model) result(n)
       type(model_type), intent(in) :: model
       n = 0
-      if (allocated(model%slidelines)) n = size(model%slidelines)
-   end function count_of_slidelines
+      if (allocated(model%drives)) n = size(model%drives)
+   end function count_of_drives
 
    !> Whether some link has a section with mass or some node a point mass or rotary inertia.
    pure logical function has_masses(model)

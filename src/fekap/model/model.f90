@@ -39,11 +39,14 @@ module fekap_model
    !> prismatic joint (slave link keeps its angle relative to the master).
    integer, parameter, public :: joint_pin_in_slot = 1, joint_prismatic = 2
    !> Effects a run simulates (ANALysis type): chosen from the deck (auto), pure
-   !> kinematics, or kinetostatics (drive and joint reactions of the computed
-   !> motion); statics and dynamics are named so that the deck can say they
-   !> are not available yet.
+   !> kinematics, kinetostatics (drive and joint reactions of the computed
+   !> motion), statics (equilibrium under loads) or dynamics (see fekap_model_effects).
    integer, parameter, public :: effects_auto = 0, effects_kinematics = 1, effects_kinetostatics = 2, &
       & effects_statics = 3, effects_dynamics = 4
+   !> Time integrators of dynamics (ANALysis integrator): generalized-alpha (Chung & Hulbert 1993).
+   integer, parameter, public :: integrator_generalized_alpha = 1
+   !> The integrators' names, each at the position of its code (as method_names).
+   character(*), parameter, public :: integrator_names = 'generalized-alpha'
 
    !> Where an entity was declared: for diagnostics that point into the deck.
    type :: source_loc_type
@@ -67,7 +70,8 @@ module fekap_model
       real(dp) :: ea = 0, kga = 0, ei = 0
       !> Mass per length rho*A and rotary inertia per length rho*I (0: massless).
       real(dp) :: rho_a = 0, rho_i = 0
-      !> Rayleigh damping of dynamics, C = alpha M + beta K (0: undamped).
+      !> Rayleigh damping of the section's elements, C_e = alpha M_e + beta K_e
+      !> (K_e the material tangent), both >= 0 (0: undamped).
       real(dp) :: alpha = 0, beta = 0
       type(source_loc_type) :: loc
    end type section_type
@@ -117,15 +121,17 @@ module fekap_model
       type(source_loc_type) :: loc
    end type drive_type
 
-   !> An external nodal load, scaled by the load factor t (see docs/deck-format.md).
+   !> An external nodal load: its values times a factor of time, the load
+   !> factor t by default, or its own law (see fekap_model_loads for the
+   !> values at a time, docs/deck-format.md for the deck).
    type :: load_type
       integer :: node = 0
       real(dp) :: force(2) = 0
       real(dp) :: moment = 0
       !> The link end (at node) that carries the moment.
       integer :: link = 0
-      !> Whether the load is a function of time: force and moment times law(t)
-      !> (dynamics); otherwise times the load factor t.
+      !> Whether the load has a law of its own (`timed`), and the law: its
+      !> factor at time t; without one the factor is the load factor t.
       logical :: timed = .false.
       type(law_type) :: law
       type(source_loc_type) :: loc
@@ -192,8 +198,9 @@ module fekap_model
       integer :: solver = solver_band
       !> Effects asked for (ANALysis type): effects_auto, effects_kinematics, ...
       integer :: effects = effects_auto
-      !> Spectral radius at infinite frequency of the generalized-alpha
-      !> integrator of dynamics (Chung & Hulbert 1993): 1 is the trapezoidal rule.
+      !> Dynamics: the time integrator and its spectral radius at infinite
+      !> frequency rho_inf in [0, 1] (1: the trapezoidal rule, no numerical damping).
+      integer :: integrator = integrator_generalized_alpha
       real(dp) :: rho_inf = 0.8_dp
    end type analysis_type
 

@@ -10,6 +10,7 @@ module fekap_output_csv
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot
    use fekap_model_results, only: step_result_type
+   use fekap_model_reactions, only: reaction_row_type, reaction_rows
    use fekap_output_format, only: append_real, append_integer, append_text, real_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
    implicit none
@@ -323,43 +324,30 @@ contains
    end subroutine write_reactions_header
 
    !> `step,t,kind,link,node,fx,fy,m` for every reaction row of a kinetostatics
-   !> step (fekap_effects_kinetostatics): `drive` rows (the force or torque of
-   !> each drive, in its component), `support` rows (each support's reactions,
-   !> zero in a direction it leaves free), and `joint` rows, two per link (the
-   !> force and moment the joint at each end exerts on the link). The force
-   !> columns are empty at a step without accelerations (a singular configuration).
+   !> or statics step, in the order and with the labels of fekap_model_reactions:
+   !> `drive` rows (the force or torque of each drive, in its component),
+   !> `support` rows (each support's reactions, zero in a direction it leaves
+   !> free), `slider` rows (the force, and the moment of a prismatic joint, that
+   !> each sliding joint exerts on its slave), and `joint` rows, two per link
+   !> (the force and moment the joint at each end exerts on the link). The force
+   !> columns are empty at a step without reactions (a singular configuration).
    subroutine write_reactions_rows(out, model, result, prefix)
       type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       type(row_prefix_type), intent(in) :: prefix
-      integer :: row, i, l, end_
-      row = 0
-      do i = 1, size(model%drives)
-         row = row + 1
-         associate (d => model%drives(i))
-            if (d%dof == dof_rot) then
-               call append_reaction(out, 'drive', model%links(d%link)%name, model%nodes(d%node)%name, row)
+      character(*), parameter :: kinds(4) = [character(len=7) :: 'drive', 'support', 'slider', 'joint']
+      type(reaction_row_type), allocatable :: rows(:)
+      integer :: row
+      rows = reaction_rows(model)
+      do row = 1, size(rows)
+         associate (r => rows(row))
+            if (r%link > 0) then
+               call append_reaction(out, trim(kinds(r%kind)), model%links(r%link)%name, model%nodes(r%node)%name, row)
             else
-               call append_reaction(out, 'drive', '', model%nodes(d%node)%name, row)
+               call append_reaction(out, trim(kinds(r%kind)), '', model%nodes(r%node)%name, row)
             end if
          end associate
-      end do
-      do i = 1, size(model%supports)
-         row = row + 1
-         associate (s => model%supports(i))
-            if (s%fix(dof_rot)) then
-               call append_reaction(out, 'support', model%links(s%link)%name, model%nodes(s%node)%name, row)
-            else
-               call append_reaction(out, 'support', '', model%nodes(s%node)%name, row)
-            end if
-         end associate
-      end do
-      do l = 1, size(model%links)
-         do end_ = 1, 2
-            row = row + 1
-            call append_reaction(out, 'joint', model%links(l)%name, model%nodes(model%links(l)%node(end_))%name, row)
-         end do
       end do
 
    contains

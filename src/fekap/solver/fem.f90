@@ -128,6 +128,8 @@ module fekap_solver_fem
       real(dp) :: model_length = 1
       !> Whether the model has external loads (a flexible, stressed analysis).
       logical :: loaded = .false.
+      !> Work over the dofs: a change or rate of the loads (mesh%loads).
+      real(dp), allocatable :: load_work(:)
       !> Work arrays over the dofs, allocated once (nothing is allocated in the
       !> step loop): the iterate, scratch, and the responses to a step's drive
       !> increment at its two ends.
@@ -190,7 +192,8 @@ contains
       end do
       self%model_length = model_size(model)
       self%dof_length = merge(self%model_length, 1.0_dp, self%mesh%dof_kind == dof_rot)
-      self%loaded = any(abs(self%mesh%f_ext) > 0)
+      self%loaded = self%mesh%loads%is_loaded()
+      allocate (self%load_work(self%mesh%ndof), source=0.0_dp)
       self%conv%mode = model%analysis%convergence
       self%conv%tol = model%analysis%tol
       self%conv%length = model%analysis%length_tol*self%model_length
@@ -578,7 +581,7 @@ contains
       self%counts%iterations = self%counts%iterations + 1
    end subroutine take_correction
 
-   !> Norm of -K_fd (q_d(t) - q_d) + (t - t_q) f_ext over the free dofs, with
+   !> Norm of -K_fd (q_d(t) - q_d) + f(t) - f(t_q) over the free dofs, with
    !> the driven dofs at t taken from the predictor qt (set_driven's values).
    subroutine drive_increment_residual(self, t, qt, norm)
       type(fem_stepper_type), intent(inout) :: self
@@ -587,7 +590,12 @@ contains
       real(dp), intent(out) :: norm
       associate (dqd => self%drive_step, dd => self%mesh%driven_dof)
          dqd = qt(dd) - self%state%q(dd)
-         call drive_load_rhs(self%system, self%mesh, dqd, merge(t - self%state%t, 0.0_dp, self%loaded))
+         if (self%loaded) then
+            call self%mesh%loads%change(self%state%t, t, self%load_work)
+            call drive_load_rhs(self%system, self%mesh, dqd, self%load_work)
+         else
+            call drive_load_rhs(self%system, self%mesh, dqd)
+         end if
       end associate
       norm = sqrt(sum(self%system%rhs(:, 1)**2))
    end subroutine drive_increment_residual
@@ -655,7 +663,7 @@ contains
       end if
    end function guard_extrapolation
 
-   !> qt = q + dq with K_ff dq_f = -K_fd dq_d + (t - t_q) f_ext: the tangent at
+   !> qt = q + dq with K_ff dq_f = -K_fd dq_d + f(t) - f(t_q): the tangent at
    !> the accepted configuration applied to the drive and load increments.
    subroutine tangent_predictor(self, t, qt)
       type(fem_stepper_type), intent(inout) :: self
@@ -669,7 +677,10 @@ contains
       if (info > 0) return
       associate (eqd => self%mesh%eq_dof, dd => self%mesh%driven_dof, rhs => self%system%rhs)
          rhs(:, 1) = -matmul(self%system%kfd, qt(dd) - self%state%q(dd))
-         if (self%loaded) rhs(:, 1) = rhs(:, 1) + (t - self%state%t)*self%mesh%f_ext(eqd)
+         if (self%loaded) then
+            call self%mesh%loads%change(self%state%t, t, self%load_work)
+            rhs(:, 1) = rhs(:, 1) + self%load_work(eqd)
+         end if
          call self%system%kff%solve(rhs)
          qt(eqd) = qt(eqd) + rhs(:, 1)
       end associate
@@ -916,15 +927,27 @@ contains
          else if (state%has_jump_response .and. .not. self%loaded) then
             call apply_response(state%jump_response, self%law_rate, state%v)
          else
-            call solve_velocities(self%system, self%mesh, self%law_rate, self%loaded, state%v, self%counts)
+            if (self%loaded) then
+               call self%mesh%loads%rate(state%t, 1, self%load_work)
+               call solve_velocities(self%system, self%mesh, self%law_rate, state%v, self%counts, self%load_work)
+            else
+               call solve_velocities(self%system, self%mesh, self%law_rate, state%v, self%counts)
+            end if
          end if
          self%counts%velocity_solves = self%counts%velocity_solves + 1
          state%has_velocity = .true.
          if (.not. self%model%analysis%accelerations) return
          ! The system holds the factor of the tangent at q (factor_current), so
          ! its last tangent assembly, whose section angles it keeps, was at q.
-         call solve_accelerations(self%system, self%mesh, state%q, state%v, self%seg, self%law_rate2, state%a, &
-            & self%work, self%counts)
+         if (self%loaded .and. size(self%mesh%loads%f, 2) > 1) then
+            ! Loads with laws of their own have second rates (the load factor t has none).
+            call self%mesh%loads%rate(state%t, 2, self%load_work)
+            call solve_accelerations(self%system, self%mesh, state%q, state%v, self%seg, self%law_rate2, state%a, &
+               & self%work, self%counts, self%load_work)
+         else
+            call solve_accelerations(self%system, self%mesh, state%q, state%v, self%seg, self%law_rate2, state%a, &
+               & self%work, self%counts)
+         end if
          self%counts%acceleration_solves = self%counts%acceleration_solves + 1
          state%has_acceleration = .true.
       end associate

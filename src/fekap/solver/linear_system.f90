@@ -213,19 +213,19 @@ contains
       end do
    end subroutine apply_correction
 
-   !> rhs(:, 1) = -K_fd x + lambda f_ext over the free equations: the
-   !> right-hand side of a drive (and load) change x (lambda), by columns of
-   !> the free-driven block.
-   subroutine drive_load_rhs(self, mesh, x, lambda)
+   !> rhs(:, 1) = -K_fd x + f over the free equations: the right-hand side of
+   !> a drive change x (and a load change f over all dofs, when given), by
+   !> columns of the free-driven block.
+   subroutine drive_load_rhs(self, mesh, x, f)
       type(linear_system_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: lambda
       real(dp), contiguous, intent(in) :: x(:)
+      real(dp), intent(in), optional :: f(:)
       integer :: j, k
       associate (rhs => self%rhs(:, 1), eqd => mesh%eq_dof)
-         if (lambda /= 0) then
+         if (present(f)) then
             do k = 1, mesh%nfree
-               rhs(k) = lambda*mesh%f_ext(eqd(k))
+               rhs(k) = f(eqd(k))
             end do
          else
             rhs = 0

@@ -51,33 +51,34 @@ contains
       end if
    end subroutine pivot_note
 
-   !> Velocities K v_f = -K_fd v_d + lambda' f (47) with the factor in the
-   !> system (the load factor is lambda = t, so lambda' = 1 when loaded).
-   subroutine solve_velocities(system, mesh, vd, loaded, v, counts)
+   !> Velocities K v_f = -K_fd v_d + f' (47) with the factor in the system;
+   !> f' the loads' rate over all dofs, when loaded (f_ext for the load factor t).
+   subroutine solve_velocities(system, mesh, vd, v, counts, load_rate)
       type(linear_system_type), intent(inout) :: system
       type(mesh_type), intent(in) :: mesh
       !> The drives' rates.
       real(dp), contiguous, intent(in) :: vd(:)
-      logical, intent(in) :: loaded
       real(dp), contiguous, intent(out) :: v(:)
       type(work_counts_type), intent(inout) :: counts
+      real(dp), intent(in), optional :: load_rate(:)
       integer :: i, k
       v = 0
       do i = 1, mesh%ndriven
          v(mesh%driven_dof(i)) = vd(i)
       end do
-      call drive_load_rhs(system, mesh, vd, merge(1.0_dp, 0.0_dp, loaded))
+      call drive_load_rhs(system, mesh, vd, load_rate)
       call solve_system(system, counts)
       do k = 1, mesh%nfree
          v(mesh%eq_dof(k)) = system%rhs(k, 1)
       end do
    end subroutine solve_velocities
 
-   !> Accelerations K a_f = -K_fd a_d - d2P[v, v] + lambda'' f (48)-(53)
-   !> (lambda'' = 0) at q with velocities v, with the factor in the system,
-   !> which must be that of the tangent at q: its last tangent assembly, whose
-   !> section angles it keeps, was at q. work is scratch over the dofs.
-   subroutine solve_accelerations(system, mesh, q, v, seg, ad, a, work, counts)
+   !> Accelerations K a_f = -K_fd a_d - d2P[v, v] + f'' (48)-(53) at q with
+   !> velocities v, with the factor in the system, which must be that of the
+   !> tangent at q: its last tangent assembly, whose section angles it keeps,
+   !> was at q. work is scratch over the dofs; f'' the loads' second rate over
+   !> all dofs, when a load has a law (0 for the load factor t).
+   subroutine solve_accelerations(system, mesh, q, v, seg, ad, a, work, counts, load_rate2)
       type(linear_system_type), intent(inout) :: system
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: q(:), v(:)
@@ -88,13 +89,14 @@ contains
       real(dp), contiguous, intent(out) :: a(:)
       real(dp), contiguous, intent(inout) :: work(:)
       type(work_counts_type), intent(inout) :: counts
+      real(dp), intent(in), optional :: load_rate2(:)
       integer :: i, k
       call assemble_second_derivative_at(system, mesh, q, v, seg, work, counts)
       a = 0
       do i = 1, mesh%ndriven
          a(mesh%driven_dof(i)) = ad(i)
       end do
-      call drive_load_rhs(system, mesh, ad, 0.0_dp)
+      call drive_load_rhs(system, mesh, ad, load_rate2)
       do k = 1, mesh%nfree
          system%rhs(k, 1) = system%rhs(k, 1) - work(mesh%eq_dof(k))
       end do

@@ -1,0 +1,118 @@
+"""Statics and kinetostatics with sliders and loads through the fekap
+executable, against closed forms: a cantilever's tip deflection under a tip
+force and its own weight and its clamp's reactions (exact by equilibrium),
+the roll-up's clamp moment, a load with a time law of its own, and a
+slider-crank's drive torque from the rigid-body power balance with a slider
+mass and a load, and the guide's force normal to the guide."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from apptest import ROOT, read_rows, run_fekap  # noqa: E402
+
+CANTILEVER = "decks/statics-cantilever.deck"
+SLIDER_CRANK = "decks/slider-crank-kinetostatics.deck"
+
+# decks/statics-cantilever.deck
+L, EI, KGA, P, N, WEIGHT = 2.0, 1.0e4, 1.0e8, 1.0, 16, 0.5 * 2.0 * 9.81
+
+
+def run(tmp_path: Path, deck: str | Path, name: str) -> Path:
+    out = tmp_path / name
+    result = run_fekap("-q", "-o", str(out), str(deck))
+    assert result.returncode == 0, result.stderr
+    return out
+
+
+def rows_of(out: Path, kind: str, node: str) -> list[dict[str, str]]:
+    return [r for r in read_rows(out / "reactions.csv") if r["kind"] == kind and r["node"] == node]
+
+
+def tip_y(out: Path) -> list[float]:
+    return [float(r["y"]) for r in read_rows(out / "points.csv") if r["point"] == "T"]
+
+
+def test_cantilever_tip_deflection_against_timoshenko(tmp_path):
+    out = run(tmp_path, CANTILEVER, "c")
+    y = tip_y(out)
+    # The tip force alone (t = 1 less t = 0): Timoshenko's beam with n linear
+    # one-point elements, P L^3/(3 EI) (1 - 1/(4 n^2)) + P L/kGA.
+    want = P * L**3 / (3 * EI) * (1 - 1 / (4 * N**2)) + P * L / KGA
+    assert abs((y[0] - y[-1]) / want - 1) < 5e-6, (y[0] - y[-1], want)
+    # The weight alone (t = 0): q L^4/(8 EI) + q L^2/(2 kGA).
+    q = WEIGHT / L
+    want = q * L**4 / (8 * EI) + q * L**2 / (2 * KGA)
+    assert abs(-y[0] / want - 1) < 5e-6, (y[0], want)
+
+
+def test_cantilever_reactions_are_the_loads_resultant(tmp_path):
+    out = run(tmp_path, CANTILEVER, "c")
+    support = rows_of(out, "support", "R")
+    joint = [r for r in rows_of(out, "joint", "R") if r["link"] == "RT"]
+    assert len(support) == 5 and len(joint) == 5
+    for s, j in zip(support, joint):
+        t = float(s["t"])
+        fx, fy, m = (float(s[k]) for k in ("fx", "fy", "m"))
+        assert abs(fx) < 1e-6 * WEIGHT
+        assert abs(fy / (WEIGHT + P * t) - 1) < 1e-9
+        # Moments about the clamp, on the deflected arm (within its shortening).
+        assert abs(m / (WEIGHT * L / 2 + P * L * t) - 1) < 1e-6
+        # The clamp's reaction is the force the joint exerts on the link end.
+        for k in ("fx", "fy", "m"):
+            assert abs(float(j[k]) - float(s[k])) < 1e-8 * (WEIGHT + P)
+
+
+def test_rollup_clamp_moment(tmp_path):
+    out = run(tmp_path, "decks/cantilever-rollup.deck", "r")
+    for s in rows_of(out, "support", "R"):
+        t = float(s["t"])
+        assert abs(float(s["m"]) + 2 * math.pi * t) < 1e-9 * 2 * math.pi
+
+
+def test_load_with_a_law_of_its_own(tmp_path):
+    text = (ROOT / CANTILEVER).read_text()
+    deck = tmp_path / "harmonic.deck"
+    deck.write_text(text.replace("  T  0  -1                                    ! times the load factor t",
+                                 "  T  0  -1  harmonic 0 1 2*pi").replace("time 0 1 0.25", "time 0 1 0.125"))
+    out = run(tmp_path, deck, "h")
+    support = rows_of(out, "support", "R")
+    assert len(support) == 9
+    for s in support:
+        t = float(s["t"])
+        assert abs(float(s["fy"]) - (WEIGHT + math.cos(2 * math.pi * t))) < 1e-9 * (WEIGHT + 1)
+
+
+def slider_closed_form(t: float) -> tuple[float, float, float, float]:
+    """Crank angle, slider velocity and acceleration, and the rod's slope at time t."""
+    r, l, w = 1.0, 3.0, 2 * math.pi
+    th = w * t
+    s = math.sqrt(l**2 - r**2 * math.sin(th) ** 2)
+    v = -r * w * math.sin(th) - r**2 * w * math.sin(th) * math.cos(th) / s
+    a = (-r * w**2 * math.cos(th) - r**2 * w**2 * (math.cos(th) ** 2 - math.sin(th) ** 2) / s
+         - r**4 * w**2 * math.sin(th) ** 2 * math.cos(th) ** 2 / s**3)
+    slope = (0 - r * math.sin(th)) / (r * math.cos(th) + s - r * math.cos(th))
+    return th, v, a, slope
+
+
+def test_slider_crank_torque_from_the_power_balance(tmp_path):
+    out = run(tmp_path, SLIDER_CRANK, "s")
+    mass, force, w = 2.0, -5.0, 2 * math.pi
+    drive = rows_of(out, "drive", "O")
+    slider = rows_of(out, "slider", "B")
+    assert len(drive) == 101 and len(slider) == 101
+    largest = max(abs(float(d["m"])) for d in drive)
+    assert largest > 10
+    worst = 0.0
+    for d, s in zip(drive, slider):
+        th, v, a, slope = slider_closed_form(float(d["t"]))
+        torque = (mass * a - force) * v / w
+        worst = max(worst, abs(float(d["m"]) - torque))
+        # The guide pushes across itself only, and balances the rod's force across it:
+        # the rod (massless, pinned) pushes along itself with x component m a - F.
+        assert abs(float(s["fx"])) < 1e-9 * largest
+        assert abs(float(s["fy"]) - (-(mass * a - force) * slope)) < 1e-6 * largest
+    assert worst < 1e-6 * largest, worst
