@@ -48,7 +48,7 @@ def deck(n, dt=2e-3, t_end=20.0):
     lines += [
         "GRAVity  0  -9.81",
         "ANALysis",
-        "  ! type auto: masses on a mechanism without drives give dynamics",
+        "  ! type auto: masses on a scene without drives give dynamics",
         "  time 0 t_end dt",
         "OUTPut",
         "  track T0",
