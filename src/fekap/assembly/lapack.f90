@@ -8,6 +8,7 @@ module fekap_assembly_lapack
 
    public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dgeqp3
    public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
+   public :: band_lu_factor, band_lu_solve
 
    interface
       !> Cholesky factorisation of a symmetric positive definite band matrix.
@@ -109,6 +110,29 @@ contains
       integer, intent(out) :: info
       call dgetrs('N', size(a, 1), 1, a, max(1, size(a, 1)), ipiv, b, max(1, size(b)), info)
    end subroutine dense_lu_solve
+
+   !> LU factorisation with partial pivoting of the square band matrix in ab
+   !> (dgbtrf): kl subdiagonals, ku superdiagonals, A(i, j) at
+   !> ab(kl + ku + 1 + i - j, j) with rows 1:kl of ab free for the fill.
+   !> info > 0: U(info, info) is exactly zero.
+   subroutine band_lu_factor(ab, kl, ku, ipiv, info)
+      !> (2 kl + ku + 1, n): the matrix on entry, its factors on return.
+      real(dp), contiguous, intent(inout) :: ab(:, :)
+      integer, intent(in) :: kl, ku
+      integer, contiguous, intent(out) :: ipiv(:)
+      integer, intent(out) :: info
+      call dgbtrf(size(ab, 2), size(ab, 2), kl, ku, ab, size(ab, 1), ipiv, info)
+   end subroutine band_lu_factor
+
+   !> Solve A x = b with the factors from band_lu_factor (dgbtrs); b becomes x.
+   subroutine band_lu_solve(ab, kl, ku, ipiv, b, info)
+      real(dp), contiguous, intent(in) :: ab(:, :)
+      integer, intent(in) :: kl, ku
+      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp), contiguous, intent(inout) :: b(:)
+      integer, intent(out) :: info
+      call dgbtrs('N', size(ab, 2), kl, ku, 1, ab, size(ab, 1), ipiv, b, max(1, size(b)), info)
+   end subroutine band_lu_solve
 
    !> QR factorisation with column pivoting of a (dgeqp3): a P = Q R.
    !> On return the upper triangle of a holds R and jpvt the column order.

@@ -14,6 +14,16 @@
 !> Newton iteration of a step, with its choices of tangent, and the
 !> step-doubling verification that the branch check asks for.
 !>
+!> An exactly constrained kinematic model (assembly/strain_rate: as many
+!> strain and gap rows as free dofs, no loads) solves its Newton
+!> corrections, drive responses and rates in the square-root form, with the
+!> band LU of the strain-rate operator B_f instead of the factor of K_ff =
+!> B_f^T W B_f, whose condition number is the square of B_f's
+!> (docs/theory.md, "Rates at scale"). The factor at the accepted
+!> configuration (factor_current) is then B_f's, and the pivot ratio of the
+!> listing's notes its square (strain_rate_type%pivot_ratio, on K's scale).
+!> Kinetostatics and loaded models keep the tangent K throughout.
+!>
 !> Why one module of over 600 lines: the Newton iteration (solve_step), the
 !> step loop (advance_to) and the verification by half steps (verify_step)
 !> call one another recursively and act on the whole of the stepper's state
@@ -25,7 +35,8 @@ module fekap_solver_fem
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type, model_size, dof_rot, predictor_previous, predictor_taylor, &
-      & convergence_paper, solver_dense
+      & convergence_paper, solver_dense, effects_kinematics
+   use fekap_model_effects, only: planned_effects
    use fekap_model_results, only: step_result_type, note_length, has_note
    use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
    use fekap_assembly_assemble, only: max_strain
@@ -41,7 +52,9 @@ module fekap_solver_fem
    use fekap_solver_branch, only: branch_check_type, new_branch_check, drive_increment, branch_verdict, &
       & branch_reject, branch_verify, branch_unverifiable, max_verify_depth
    use fekap_solver_rates, only: pivot_note, solve_velocities, solve_accelerations, near_singular_drop, &
-      & singular_floor
+      & singular_floor, root_velocities, root_accelerations, root_drive_response
+   use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate, assemble_strain_rate, &
+      & factor_strain_rate, solve_strain_rate
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_output_format, only: es_text
@@ -159,6 +172,13 @@ module fekap_solver_fem
       logical :: guard_pending = .false.
       !> Steps advanced so far.
       integer :: advances = 0
+      !> The strain-rate operator B_f and its factor (see the module header),
+      !> and whether the square-root form is used (then factor_current refers
+      !> to the factor of the stress-free B_f in root).
+      type(strain_rate_type) :: root
+      logical :: root_form = .false.
+      !> Scratch over the equations for the square-root form's solves.
+      real(dp), allocatable :: root_work(:)
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
@@ -194,6 +214,11 @@ contains
       self%dof_length = merge(self%model_length, 1.0_dp, self%mesh%dof_kind == dof_rot)
       self%loaded = self%mesh%loads%is_loaded()
       allocate (self%load_work(self%mesh%ndof), source=0.0_dp)
+      call new_strain_rate(self%root, self%mesh)
+      ! Kinetostatics solves its deflection with the factor of K at the accepted configuration.
+      self%root_form = self%root%applies .and. .not. self%loaded .and. model%analysis%solver /= solver_dense .and. &
+         & planned_effects(model) == effects_kinematics
+      allocate (self%root_work(self%mesh%nfree), source=0.0_dp)
       self%conv%mode = model%analysis%convergence
       self%conv%tol = model%analysis%tol
       self%conv%length = model%analysis%length_tol*self%model_length
@@ -266,9 +291,9 @@ contains
          call refactor_at_accepted(self, info)
          self%state%has_jump_response = info == 0
          if (info == 0) then
-            call system_pivot(self%system, pivot)
+            pivot = accepted_pivot(self)
             call note_response_pivot(self, pivot)
-            call drive_response(self%system, self%mesh, self%state%jump_response, self%counts)
+            call accepted_response(self, self%state%jump_response)
          end if
          call record_velocity(self)
       end if
@@ -380,7 +405,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: r0, increment_residual, correction, previous, strain, kg_above, stalled_correction, pivot
       integer :: i, info, element, pass, at_floor
-      logical :: moved, by_estimate, at_predictor
+      logical :: moved, by_estimate, at_predictor, root_solved
       character(len=300) :: msg
       associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof, system => self%system)
          self%seg = self%state%seg
@@ -418,13 +443,11 @@ contains
             relocations: do pass = 0, size(mesh%slides)*8
                at_predictor = .false.
                do i = 0, self%model%analysis%max_iter
-                  call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
+                  call newton_assembly(self, qt, t, kg_above)
                   ! The predictor's guard, once per step: it needs the strains of this first assembly.
                   if (self%guard_pending) then
                      self%guard_pending = .false.
-                     if (guard_extrapolation(self, t, qt)) then
-                        call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
-                     end if
+                     if (guard_extrapolation(self, t, qt)) call newton_assembly(self, qt, t, kg_above)
                   end if
                   residual = residual_norm(system, mesh)
                   if (i == 0) then
@@ -440,8 +463,16 @@ contains
                      call analysis_error(error, trim(msg)//')')
                      return
                   end if
-                  call factor_system(system, info, self%counts)
-                  if (info > 0 .and. kg_above > 0) then
+                  root_solved = .false.
+                  if (self%root_form .and. system%assembled_strain < kg_above) then
+                     call root_correction(self, qt, .false., correction, root_solved)
+                     ! B_f singular at the iterate: K's Newton step (its tangent was not assembled).
+                     if (.not. root_solved) call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
+                  end if
+                  if (.not. root_solved) call factor_system(system, info, self%counts)
+                  if (root_solved) then
+                     info = 0
+                  else if (info > 0 .and. kg_above > 0) then
                      ! The material tangent is singular at a stationary configuration;
                      ! the geometric stiffness of the iterate's stresses may still
                      ! carry Newton there (full Newton from here on in this step).
@@ -455,7 +486,7 @@ contains
                      call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
                      return
                   end if
-                  call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+                  if (.not. root_solved) call newton_correction(system, mesh, self%dof_length, correction, self%counts)
                   if (correction > divergence_length*self%model_length) then
                      write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
                      call analysis_error(error, trim(msg))
@@ -472,7 +503,8 @@ contains
                   ! stationary configuration: the residual there hardly sees an
                   ! error along the near-singular direction (a predictor kept
                   ! past collinear is then rejected by the branch-jump check).
-                  if (i == 0 .and. .not. self%loaded .and. self%conv%mode /= convergence_paper) then
+                  if (i == 0 .and. .not. self%loaded .and. self%conv%mode /= convergence_paper .and. &
+                     & .not. root_solved) then
                      at_predictor = correction <= predictor_margin*self%conv%length .and. &
                         & system%assembled_strain < kg_above .and. &
                         & is_converged(self%conv, residual, r0, increment_residual, correction)
@@ -520,14 +552,25 @@ contains
             call assemble_system(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
             ! The residual reported for the step is the one at the accepted configuration.
             residual = residual_norm(system, mesh)
-            call factor_system(system, info, self%counts)
-            if (.not. by_estimate .or. info /= 0) exit verification
-            ! A stop on the estimate is checked with this factor (one back
-            ! substitution): the correction it gives must pass the estimate's own
-            ! margin, or it is applied as one more Newton iteration and Newton
-            ! goes on (with a stiff slideline penalty the estimate can miss).
-            call newton_correction(system, mesh, self%dof_length, correction, self%counts)
-            if (correction <= estimate_margin*self%conv%length) exit verification
+            if (self%root_form) then
+               ! The estimate is checked by one more correction of B_f; then the
+               ! factor of the stress-free B_f at qt serves as K's does below.
+               root_solved = .false.
+               if (by_estimate) call root_correction(self, qt, .true., correction, root_solved)
+               if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
+                  call factor_root(self, qt, self%seg, info)
+                  exit verification
+               end if
+            else
+               call factor_system(system, info, self%counts)
+               if (.not. by_estimate .or. info /= 0) exit verification
+               ! A stop on the estimate is checked with this factor (one back
+               ! substitution): the correction it gives must pass the estimate's own
+               ! margin, or it is applied as one more Newton iteration and Newton
+               ! goes on (with a stiff slideline penalty the estimate can miss).
+               call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+               if (correction <= estimate_margin*self%conv%length) exit verification
+            end if
             call take_correction(self, qt, iterations)
             if (iterations >= self%model%analysis%max_iter) then
                write (msg, '(a,es12.5,a,i0,a,es9.2)') 't = ', t, ': Newton did not converge in ', iterations, &
@@ -672,6 +715,15 @@ contains
       integer :: info
       qt = self%state%q
       call set_driven(self, t, qt)
+      if (self%root_form) then
+         ! The drive response from B_f (if the configuration is not singular).
+         if (.not. self%state%has_jump_response) return
+         associate (dd => self%mesh%driven_dof)
+            call apply_response(self%state%jump_response, qt(dd) - self%state%q(dd), self%work)
+         end associate
+         qt = self%state%q + self%work
+         return
+      end if
       ! At a singular configuration there is no tangent response: start from the last configuration.
       call refactor_at_accepted(self, info)
       if (info > 0) return
@@ -700,10 +752,96 @@ contains
       if (self%factor_current) return
       call assemble_system(self%system, self%mesh, self%state%q, self%state%t, self%seg, &
          & merge(0.0_dp, huge(1.0_dp), self%loaded), self%counts)
-      call factor_system(self%system, info, self%counts)
+      if (self%root_form) then
+         call factor_root(self, self%state%q, self%state%seg, info)
+      else
+         call factor_system(self%system, info, self%counts)
+      end if
       self%factor_current = info == 0
       self%accepted_singular = info /= 0
    end subroutine refactor_at_accepted
+
+   !> The assembly of a Newton iteration at qt: the residual and the tangent
+   !> (K form), or the residual, B and the strains (square-root form), with
+   !> the largest element strain in the system either way. The square-root
+   !> form's correction is Newton's with the material tangent (K = B^T W B,
+   !> B_f square), which is the K form's below kg_above; an iterate strained
+   !> more takes the K form's full Newton step, as before (its path, e.g.
+   !> from a poor predictor, stays the one the branch check was built on),
+   !> and K is assembled too.
+   subroutine newton_assembly(self, qt, t, kg_above)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: qt(:)
+      real(dp), intent(in) :: t, kg_above
+      if (.not. self%root_form) then
+         call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
+         return
+      end if
+      call assemble_system_residual(self%system, self%mesh, qt, t, self%seg, self%counts)
+      call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work, &
+         & self%system%assembled_strain, self%system%assembled_element)
+      if (self%system%assembled_strain >= kg_above) &
+         & call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
+   end subroutine newton_assembly
+
+   !> The Newton correction of the square-root form at qt: B_f dq = -eps with
+   !> B the exact gradient of the strains and gaps eps at qt (assembled here,
+   !> or by newton_assembly with eps in root_work), into the system's
+   !> right-hand side (as newton_correction), and its length; solved =
+   !> .false. if B_f is singular there (the caller uses K).
+   subroutine root_correction(self, qt, assemble, correction, solved)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: qt(:)
+      logical, intent(in) :: assemble
+      real(dp), intent(out) :: correction
+      logical, intent(out) :: solved
+      integer :: info, k
+      correction = 0
+      if (assemble) call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
+      call factor_strain_rate(self%root, info)
+      solved = info == 0
+      if (.not. solved) return
+      self%root_work = -self%root_work
+      call solve_strain_rate(self%root, self%root_work)
+      self%system%rhs(:, 1) = self%root_work
+      do k = 1, self%mesh%nfree
+         correction = max(correction, abs(self%root_work(k))*self%dof_length(self%mesh%eq_dof(k)))
+      end do
+   end subroutine root_correction
+
+   !> Assemble and factor the stress-free B at q (slidelines on seg): the
+   !> square-root form's factor at a configuration; info > 0 if B_f is singular there.
+   subroutine factor_root(self, q, seg, info)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      integer, intent(out) :: info
+      call assemble_strain_rate(self%root, self%mesh, q, seg, .true.)
+      call factor_strain_rate(self%root, info)
+   end subroutine factor_root
+
+   !> The pivot ratio of the factor at the accepted configuration (B_f's on
+   !> K's scale in the square-root form, else K's).
+   real(dp) function accepted_pivot(self) result(ratio)
+      type(fem_stepper_type), intent(inout) :: self
+      if (self%root_form) then
+         ratio = self%root%pivot_ratio
+      else
+         call system_pivot(self%system, ratio)
+      end if
+   end function accepted_pivot
+
+   !> The drive response at the accepted configuration, whose factor the
+   !> system (or root) holds: from B_f in the square-root form, else from K_ff.
+   subroutine accepted_response(self, resp)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), contiguous, intent(inout) :: resp(:, :)
+      if (self%root_form) then
+         call root_drive_response(self%root, self%mesh, resp, self%root_work)
+      else
+         call drive_response(self%system, self%mesh, resp, self%counts)
+      end if
+   end subroutine accepted_response
 
    !> Driven dofs at time t: the initial value plus the law's change since t_start.
    subroutine set_driven(self, t, q)
@@ -740,10 +878,14 @@ contains
          call drive_increment(self%branch, self%mesh, state%q, qt, self%drive_step, step_floor)
          ! Response at the new configuration (unless its tangent is singular).
          pivot = 0
-         if (factored) call system_pivot(self%system, pivot)
+         if (factored) pivot = accepted_pivot(self)
          has_response = pivot >= singular_floor
          if (has_response) then
-            call drive_response(self%system, self%mesh, resp, self%counts)
+            if (self%root_form) then
+               call root_drive_response(self%root, self%mesh, resp, self%root_work)
+            else
+               call drive_response(self%system, self%mesh, resp, self%counts)
+            end if
          else
             resp = 0
          end if
@@ -910,7 +1052,7 @@ contains
       if (self%accepted_singular) then
          ratio = 0
       else if (self%factor_current) then
-         call system_pivot(self%system, ratio)
+         ratio = accepted_pivot(self)
       else
          return
       end if
@@ -920,6 +1062,17 @@ contains
          call pivot_note(state%t, ratio, state%reference_pivot, self%model%analysis%velocities, state%note, regular)
          if (.not. regular .or. .not. self%model%analysis%velocities) return
          call self%model%drives%law%eval(state%t, self%law_value, self%law_rate, self%law_rate2)
+         if (self%root_form) then
+            ! The square-root form, refined (see fekap_solver_rates).
+            call root_velocities(self%root, self%mesh, self%law_rate, state%v, self%root_work)
+            self%counts%velocity_solves = self%counts%velocity_solves + 1
+            state%has_velocity = .true.
+            if (.not. self%model%analysis%accelerations) return
+            call root_accelerations(self%root, self%mesh, state%v, self%law_rate2, state%a, self%root_work)
+            self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+            state%has_acceleration = .true.
+            return
+         end if
          if (history%has_velocity(history%newest)) then
             ! (47) is R vd with the drive response R of this factor: record_velocity
             ! made it already, for the predictor.

@@ -1,17 +1,28 @@
 !> Velocities and accelerations of an accepted FEM configuration, (47) and
 !> (48)-(53), with the factor of the tangent there, and what the factor's
 !> pivot ratio says about the configuration: singular (no rates), near a
-!> stationary configuration (ill-conditioned rates), or regular.
+!> stationary configuration (ill-conditioned rates), or regular. An exactly
+!> constrained mechanism solves them in the square-root form instead, with
+!> the band LU of its stress-free strain-rate operator B_f and one step of
+!> refinement (root_velocities, root_accelerations; docs/theory.md, "Rates
+!> at scale").
 module fekap_solver_rates
    use fekap_kinds, only: dp
    use fekap_model_work, only: work_counts_type
    use fekap_model_results, only: note_length
    use fekap_assembly_mesh, only: mesh_type
    use fekap_solver_linear_system, only: linear_system_type, drive_load_rhs, solve_system, assemble_second_derivative_at
+   use fekap_assembly_strain_rate, only: strain_rate_type, solve_strain_rate, strain_rates, strain_accelerations
    implicit none
    private
 
    public :: pivot_note, solve_velocities, solve_accelerations
+   public :: root_velocities, root_accelerations, root_drive_response
+
+   !> Solves of a rate in the square-root form: the plain solve and one
+   !> refinement whose residual is the element strain rates (one more gains
+   !> nothing: the error is then at the floor of the positions' round-off).
+   integer, parameter :: root_passes = 2
 
    !> Pivot ratios (see band_pivot_ratio) below which the tangent at a
    !> configuration counts as singular or as near-singular (a warning),
@@ -105,5 +116,77 @@ contains
          a(mesh%eq_dof(k)) = system%rhs(k, 1)
       end do
    end subroutine solve_accelerations
+
+   !> Velocities of an exactly constrained mechanism: B_f v_f = -B_d v_d with
+   !> the factor of the stress-free B in `root`, then one refinement
+   !> B_f dv = -B v with the strain rates B v computed element by element
+   !> from nodal differences. work is scratch over the equations.
+   subroutine root_velocities(root, mesh, vd, v, work)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      !> The drives' rates.
+      real(dp), contiguous, intent(in) :: vd(:)
+      real(dp), contiguous, intent(out) :: v(:)
+      real(dp), contiguous, intent(inout) :: work(:)
+      integer :: i, k, pass
+      v = 0
+      do i = 1, mesh%ndriven
+         v(mesh%driven_dof(i)) = vd(i)
+      end do
+      do pass = 1, root_passes
+         call strain_rates(root, mesh, v, work)
+         work = -work
+         call solve_strain_rate(root, work)
+         do k = 1, mesh%nfree
+            v(mesh%eq_dof(k)) = v(mesh%eq_dof(k)) + work(k)
+         end do
+      end do
+   end subroutine root_velocities
+
+   !> Accelerations of an exactly constrained mechanism: B_f a_f = -B_d a_d -
+   !> eps2(v) (the strains' second rates vanish) with the factor of the
+   !> stress-free B in `root`, then one refinement with the residual
+   !> B a + eps2(v) element by element (strain_accelerations).
+   subroutine root_accelerations(root, mesh, v, ad, a, work)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: v(:)
+      !> The drives' second rates.
+      real(dp), contiguous, intent(in) :: ad(:)
+      real(dp), contiguous, intent(out) :: a(:)
+      real(dp), contiguous, intent(inout) :: work(:)
+      integer :: i, k, pass
+      a = 0
+      do i = 1, mesh%ndriven
+         a(mesh%driven_dof(i)) = ad(i)
+      end do
+      do pass = 1, root_passes
+         call strain_accelerations(root, mesh, v, a, work)
+         work = -work
+         call solve_strain_rate(root, work)
+         do k = 1, mesh%nfree
+            a(mesh%eq_dof(k)) = a(mesh%eq_dof(k)) + work(k)
+         end do
+      end do
+   end subroutine root_accelerations
+
+   !> Linear response of every dof to unit changes of the drives (as
+   !> drive_response): R_f = -B_f^-1 B_d with the factor in `root`, 1 on the
+   !> drive's own dof; the other entries of resp are left as they are (zero).
+   subroutine root_drive_response(root, mesh, resp, work)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(inout) :: resp(:, :)
+      real(dp), contiguous, intent(inout) :: work(:)
+      integer :: j, k
+      do j = 1, mesh%ndriven
+         work = -root%bd(:, j)
+         call solve_strain_rate(root, work)
+         do k = 1, mesh%nfree
+            resp(mesh%eq_dof(k), j) = work(k)
+         end do
+         resp(mesh%driven_dof(j), j) = 1
+      end do
+   end subroutine root_drive_response
 
 end module fekap_solver_rates

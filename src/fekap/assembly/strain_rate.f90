@@ -1,0 +1,403 @@
+!> The strain-rate operator B of an exactly constrained mechanism and its
+!> band LU: the square-root form of the FEM's linear systems.
+!>
+!> The material tangent (46) is K = B^T W B, with B the gradients of the
+!> elements' strains (Gamma1, Gamma2 and kappa L at the Gauss point, three
+!> rows per element) and of the slidelines' gaps (one row each), W their
+!> stiffnesses. When the mechanism is exactly constrained, B_f (its columns
+!> on the free dofs) is square, and the Newton correction, the drive
+!> response and the rates solve B_f x = r instead of K_ff x = B_f^T W r:
+!> the same solution, with the condition number of B_f instead of its
+!> square (docs/theory.md, "Rates at scale"). The rows are put in band
+!> order (sorted by their least equation in the mesh's equation order), so
+!> that B_f is a band matrix with kl sub- and ku superdiagonals; LAPACK's
+!> dgbtrf/dgbtrs factor and solve it.
+!>
+!> Two forms of B: at the strains of an iterate (the exact Jacobian of the
+!> strains, for Newton), and stress-free (the strains set to zero: it then
+!> depends only on the section angles, for the rates at a converged
+!> configuration). The strain rates B v and the second rates B a + eps2(v)
+!> of the stress-free form are computed element by element from nodal
+!> differences (strain_rates, strain_accelerations), which keeps them free
+!> of the cancellation of a global product: they are the residuals of the
+!> rates' refinement step.
+module fekap_assembly_strain_rate
+   use fekap_kinds, only: dp
+   use fekap_model, only: joint_prismatic
+   use fekap_assembly_mesh, only: mesh_type
+   use fekap_assembly_tracking, only: slide_position
+   use fekap_assembly_lapack, only: band_lu_factor
+   implicit none
+   private
+
+   public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
+   public :: strain_rates, strain_accelerations, strain_rows
+
+   !> B_f of a mesh, in band storage, and its factor.
+   type :: strain_rate_type
+      !> Whether the square-root form applies: B_f square (as many strain and
+      !> gap rows as free dofs), one Gauss point per element, no prismatic joints.
+      logical :: applies = .false.
+      !> Equations (rows = columns), sub- and superdiagonals of B_f.
+      integer :: n = 0, kl = 0, ku = 0
+      !> (3, nelem): band row of each element's strains Gamma1, Gamma2, kappa L.
+      integer, allocatable :: element_row(:, :)
+      !> (nslide): band row of each slideline's gap.
+      integer, allocatable :: slide_row(:)
+      !> (2 kl + ku + 1, n): B_f as dgbtrf stores it, then its LU factor.
+      real(dp), allocatable :: ab(:, :)
+      integer, allocatable :: ipiv(:)
+      !> (n, ndriven): the columns of B on the driven dofs (B_d), by rows.
+      real(dp), allocatable :: bd(:, :)
+      !> (2, nelem): cos and sin of each element's section angle at the last
+      !> assembly; (6, nslide): each gap's gradient N_s (61) there, and (6,
+      !> nslide) T_s (63), (2, nslide) the master's unit normal and length.
+      real(dp), allocatable :: section(:, :), slide_ns(:, :), slide_ts(:, :), slide_nm(:, :)
+      !> (6, nslide): the dofs of each gap at the last assembly (0: a ground point).
+      integer, allocatable :: slide_dofs(:, :)
+      !> (n): the largest magnitude in each column of the assembled B_f.
+      real(dp), allocatable :: column_max(:)
+      !> Whether ab holds a factor, and of a stress-free assembly.
+      logical :: factored = .false., stress_free = .false.
+      !> Pivot ratio of the factor on the scale of the tangent's
+      !> (band_pivot_ratio): min over j of (|U(j, j)| / max_i |B(i, j)|)**2.
+      !> K = B^T W B has the squares of B's pivots (exactly so for the R of
+      !> a QR of B), so a configuration d away from a singular one has a
+      !> ratio of order d**2 in both forms; 0 if B_f is singular.
+      real(dp) :: pivot_ratio = 0
+   end type strain_rate_type
+
+contains
+
+   !> The band order of B_f's rows for a mesh, and its storage, if the
+   !> square-root form applies (self%applies); nothing is allocated otherwise
+   !> but the row maps.
+   subroutine new_strain_rate(self, mesh)
+      type(strain_rate_type), intent(out) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer, allocatable :: least(:), most(:), order(:), count_at(:)
+      integer :: nelem, nslide, nrow, e, i, k, r, row, d, eq, dofs(6)
+      nelem = size(mesh%elements)
+      nslide = size(mesh%slides)
+      nrow = 3*nelem + nslide
+      self%n = mesh%nfree
+      allocate (self%element_row(3, nelem), self%slide_row(nslide), source=0)
+      if (nrow /= mesh%nfree .or. mesh%nfree == 0) return
+      if (any(mesh%elements%ngauss /= 1)) return
+      do i = 1, nslide
+         if (mesh%slides(i)%kind == joint_prismatic) return
+      end do
+      ! Each row's least and largest equation: rows 3 (e - 1) + 1:3 are
+      ! element e's (Gamma1 and Gamma2 on all six dofs, kappa L on the
+      ! rotations), then one per slideline over the dofs of all its segments.
+      allocate (least(nrow), source=huge(1))
+      allocate (most(nrow), source=0)
+      do e = 1, nelem
+         do k = 1, 6
+            eq = mesh%eq(mesh%edof(k, e))
+            if (eq == 0) cycle
+            do r = 1, 3
+               if (r == 3 .and. k /= 3 .and. k /= 6) cycle
+               row = 3*(e - 1) + r
+               least(row) = min(least(row), eq)
+               most(row) = max(most(row), eq)
+            end do
+         end do
+      end do
+      do i = 1, nslide
+         row = 3*nelem + i
+         do k = 1, size(mesh%slides(i)%seg, 2)
+            call slide_dofs_of(mesh, i, k, dofs)
+            do d = 1, 6
+               if (dofs(d) == 0) cycle
+               eq = mesh%eq(dofs(d))
+               if (eq == 0) cycle
+               least(row) = min(least(row), eq)
+               most(row) = max(most(row), eq)
+            end do
+         end do
+      end do
+      if (any(most == 0)) return
+      ! Stable counting sort of the rows by their least equation.
+      allocate (count_at(nrow + 1), source=0)
+      do row = 1, nrow
+         count_at(least(row) + 1) = count_at(least(row) + 1) + 1
+      end do
+      count_at(1) = 1
+      do k = 2, nrow + 1
+         count_at(k) = count_at(k) + count_at(k - 1)
+      end do
+      allocate (order(nrow))
+      do row = 1, nrow
+         order(row) = count_at(least(row))
+         count_at(least(row)) = count_at(least(row)) + 1
+      end do
+      self%kl = 0
+      self%ku = 0
+      do row = 1, nrow
+         self%kl = max(self%kl, order(row) - least(row))
+         self%ku = max(self%ku, most(row) - order(row))
+      end do
+      self%element_row = reshape(order(1:3*nelem), [3, nelem])
+      self%slide_row = order(3*nelem + 1:)
+      allocate (self%ab(2*self%kl + self%ku + 1, nrow), self%bd(nrow, mesh%ndriven), source=0.0_dp)
+      allocate (self%ipiv(nrow), source=0)
+      allocate (self%column_max(nrow), source=0.0_dp)
+      allocate (self%section(2, nelem), self%slide_ns(6, nslide), self%slide_ts(6, nslide), &
+         & self%slide_nm(3, nslide), source=0.0_dp)
+      allocate (self%slide_dofs(6, nslide), source=0)
+      self%applies = .true.
+   end subroutine new_strain_rate
+
+   !> The dofs of slideline i on its segment k (0 for a ground guide's points).
+   pure subroutine slide_dofs_of(mesh, i, k, dofs)
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: i, k
+      integer, intent(out) :: dofs(6)
+      associate (sl => mesh%slides(i))
+         dofs(1:2) = mesh%tdof(:, sl%slave)
+         dofs(3:6) = 0
+         if (.not. sl%ground) then
+            dofs(3:4) = mesh%tdof(:, sl%seg(1, k))
+            dofs(5:6) = mesh%tdof(:, sl%seg(2, k))
+         end if
+      end associate
+   end subroutine slide_dofs_of
+
+   !> B at q (slidelines on their segments seg) into the band storage and
+   !> B_d; stress_free: with the strains set to zero (the rates' form), else
+   !> the exact gradients of the strains (Newton's). With `strain`, the
+   !> strains and gaps themselves by band rows (Newton's residual); with
+   !> `largest`, the largest element strain (as beam_max_strain) and its element.
+   subroutine assemble_strain_rate(self, mesh, q, seg, stress_free, strain, largest, element)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      logical, intent(in) :: stress_free
+      real(dp), contiguous, intent(out), optional :: strain(:)
+      real(dp), intent(out), optional :: largest
+      integer, intent(out), optional :: element
+      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, row(6, 2), xs(2), x1(2), x2(2), s1, t(2), nrm(2), alpha
+      real(dp) :: worst
+      integer :: e, i, k, r
+      self%ab = 0
+      self%bd = 0
+      self%factored = .false.
+      self%stress_free = stress_free
+      if (present(largest)) largest = 0
+      if (present(element)) element = 0
+      do e = 1, size(mesh%elements)
+         associate (el => mesh%elements(e), dofs => mesh%edof(:, e), rows => self%element_row(:, e))
+            do k = 1, 6
+               xe(k) = q(dofs(k))
+            end do
+            rl = 1/el%length
+            phi = el%angle + (xe(3) + xe(6))/2
+            c = cos(phi)
+            s = sin(phi)
+            self%section(:, e) = [c, s]
+            a1 = (xe(4) - xe(1))*rl
+            a2 = (xe(5) - xe(2))*rl
+            g1 = c*a1 + s*a2 - 1                               ! (27)
+            g2 = -s*a1 + c*a2
+            if (present(strain)) then
+               strain(rows(1)) = g1
+               strain(rows(2)) = g2
+               strain(rows(3)) = xe(6) - xe(3)
+            end if
+            if (present(largest) .and. present(element)) then
+               worst = max(abs(g1), abs(g2), abs(xe(6) - xe(3)))
+               if (worst > largest .or. element == 0) then
+                  largest = worst
+                  element = e
+               end if
+            end if
+            if (stress_free) then
+               g1 = 0
+               g2 = 0
+            end if
+            ! Gradients of Gamma1, Gamma2 and kappa L in (x1, y1, theta1, x2, y2, theta2).
+            row(:, 1) = [-c*rl, -s*rl, g2/2, c*rl, s*rl, g2/2]
+            row(:, 2) = [s*rl, -c*rl, -(1 + g1)/2, -s*rl, c*rl, -(1 + g1)/2]
+            do r = 1, 2
+               call scatter_row(self, mesh, rows(r), dofs, row(:, r))
+            end do
+            ! kappa L on the rotations only (its band bounds were found so).
+            call scatter_row(self, mesh, rows(3), dofs([3, 6]), [-1.0_dp, 1.0_dp])
+         end associate
+      end do
+      do i = 1, size(mesh%slides)
+         call slide_position(mesh, mesh%slides(i), seg(i), q, xs, x1, x2, self%slide_dofs(:, i))
+         s1 = norm2(x2 - x1)
+         t = (x2 - x1)/s1
+         nrm = [-t(2), t(1)]
+         alpha = dot_product(xs - x1, t)/s1
+         ! The gap's gradient N_s (61) and T_s (63) on (xs, ys, x1, y1, x2, y2).
+         self%slide_ns(:, i) = [nrm, -(1 - alpha)*nrm, -alpha*nrm]
+         self%slide_ts(:, i) = [t, -(1 - alpha)*t, -alpha*t]
+         self%slide_nm(:, i) = [nrm, s1]
+         if (present(strain)) strain(self%slide_row(i)) = dot_product(xs - x1, nrm)
+         call scatter_row(self, mesh, self%slide_row(i), self%slide_dofs(:, i), self%slide_ns(:, i))
+      end do
+   end subroutine assemble_strain_rate
+
+   !> Row `row` of B on the dofs `dofs` (0: none): free columns into the
+   !> band, driven ones into B_d.
+   pure subroutine scatter_row(self, mesh, row, dofs, values)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: row, dofs(:)
+      real(dp), intent(in) :: values(:)
+      integer :: k, eq, band_row
+      band_row = self%kl + self%ku + 1 + row
+      do k = 1, size(dofs)
+         if (dofs(k) == 0) cycle
+         eq = mesh%eq(dofs(k))
+         if (eq > 0) then
+            self%ab(band_row - eq, eq) = self%ab(band_row - eq, eq) + values(k)
+         else if (mesh%drive_col(dofs(k)) > 0) then
+            self%bd(row, mesh%drive_col(dofs(k))) = self%bd(row, mesh%drive_col(dofs(k))) + values(k)
+         end if
+      end do
+   end subroutine scatter_row
+
+   !> Band LU of the assembled B_f (dgbtrf), in place; info > 0: the band row
+   !> where U has a zero pivot (B_f singular).
+   subroutine factor_strain_rate(self, info)
+      type(strain_rate_type), intent(inout) :: self
+      integer, intent(out) :: info
+      integer :: j, diagonal
+      diagonal = self%kl + self%ku + 1
+      do j = 1, self%n
+         self%column_max(j) = maxval(abs(self%ab(:, j)))
+      end do
+      call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
+      self%factored = info == 0
+      self%pivot_ratio = 0
+      if (.not. self%factored) return
+      self%pivot_ratio = huge(1.0_dp)
+      do j = 1, self%n
+         if (.not. self%column_max(j) > 0) then
+            self%pivot_ratio = 0
+            return
+         end if
+         self%pivot_ratio = min(self%pivot_ratio, (abs(self%ab(diagonal, j))/self%column_max(j))**2)
+      end do
+   end subroutine factor_strain_rate
+
+   !> Solve B_f x = b with the factor (b by band rows in, x by equations out).
+   pure subroutine solve_strain_rate(self, x)
+      type(strain_rate_type), intent(in) :: self
+      real(dp), contiguous, intent(inout) :: x(:)
+      call band_lu_solve_loops(self%ab, self%kl, self%ku, self%ipiv, x)
+   end subroutine solve_strain_rate
+
+   !> Solve with the factor of dgbtrf as dgbtrs ('N') does, the same
+   !> operations in the same order (row interchanges and L's multipliers,
+   !> then back substitution with U as dtbsv), in loops: dgbtrs makes a BLAS
+   !> call per column, whose overhead exceeds the arithmetic of a band this
+   !> narrow (kl + ku = 12 for the scissor lift).
+   pure subroutine band_lu_solve_loops(ab, kl, ku, ipiv, b)
+      real(dp), intent(in) :: ab(:, :)
+      integer, intent(in) :: kl, ku, ipiv(:)
+      real(dp), intent(inout) :: b(:)
+      real(dp) :: temp
+      integer :: n, kv, j, l, i
+      n = size(b)
+      kv = kl + ku
+      do j = 1, n - 1
+         l = ipiv(j)
+         temp = b(l)
+         if (l /= j) then
+            b(l) = b(j)
+            b(j) = temp
+         end if
+         do i = 1, min(kl, n - j)
+            b(j + i) = b(j + i) - temp*ab(kv + 1 + i, j)
+         end do
+      end do
+      do j = n, 1, -1
+         b(j) = b(j)/ab(kv + 1, j)
+         temp = b(j)
+         do i = j - 1, max(1, j - kv), -1
+            b(i) = b(i) - temp*ab(kv + 1 + i - j, j)
+         end do
+      end do
+   end subroutine band_lu_solve_loops
+
+   !> r = B v by band rows, the strain and gap rates of the velocities v over
+   !> all dofs (zero on fixed dofs), with the stress-free B at the section
+   !> angles of the last assembly, element by element from nodal differences.
+   pure subroutine strain_rates(self, mesh, v, r)
+      type(strain_rate_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: v(:)
+      real(dp), contiguous, intent(out) :: r(:)
+      real(dp) :: rl, c, s, d1, d2
+      integer :: e, i
+      do e = 1, size(mesh%elements)
+         associate (dofs => mesh%edof(:, e), rows => self%element_row(:, e))
+            rl = 1/mesh%elements(e)%length
+            c = self%section(1, e)
+            s = self%section(2, e)
+            d1 = (v(dofs(4)) - v(dofs(1)))*rl
+            d2 = (v(dofs(5)) - v(dofs(2)))*rl
+            r(rows(1)) = c*d1 + s*d2
+            r(rows(2)) = -s*d1 + c*d2 - (v(dofs(3)) + v(dofs(6)))/2
+            r(rows(3)) = v(dofs(6)) - v(dofs(3))
+         end associate
+      end do
+      do i = 1, size(mesh%slides)
+         r(self%slide_row(i)) = dot_product(self%slide_ns(:, i), gather(v, self%slide_dofs(:, i)))
+      end do
+   end subroutine strain_rates
+
+   !> r = B a + eps2(v) by band rows: the second rates of the strains and gaps
+   !> for accelerations a and velocities v over all dofs, of the stress-free
+   !> B of the last assembly. With the first rates zero, the second rates of
+   !> (Gamma1, Gamma2, kappa L) are B a + (psi'^2, 0, 0), psi' the section's
+   !> angular velocity (docs/theory.md); of a gap, N_s a - 2 (T_s v)(N_m v)/s1
+   !> (the Hessian of slide_force's header at g = 0).
+   pure subroutine strain_accelerations(self, mesh, v, a, r)
+      type(strain_rate_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: v(:), a(:)
+      real(dp), contiguous, intent(out) :: r(:)
+      real(dp) :: vs(6), psi, vm
+      integer :: e, i
+      call strain_rates(self, mesh, a, r)
+      do e = 1, size(mesh%elements)
+         associate (dofs => mesh%edof(:, e))
+            psi = (v(dofs(3)) + v(dofs(6)))/2
+            r(self%element_row(1, e)) = r(self%element_row(1, e)) + psi*psi
+         end associate
+      end do
+      do i = 1, size(mesh%slides)
+         vs = gather(v, self%slide_dofs(:, i))
+         ! N_m v: the normal's component of the master's relative velocity.
+         vm = dot_product(self%slide_nm(1:2, i), vs(5:6) - vs(3:4))
+         r(self%slide_row(i)) = r(self%slide_row(i)) - 2*dot_product(self%slide_ts(:, i), vs)*vm/self%slide_nm(3, i)
+      end do
+   end subroutine strain_accelerations
+
+   !> v(dofs), with 0 for absent dofs (a ground guide does not move).
+   pure function gather(v, dofs) result(ve)
+      real(dp), intent(in) :: v(:)
+      integer, intent(in) :: dofs(:)
+      real(dp) :: ve(size(dofs))
+      integer :: i
+      ve = 0
+      do i = 1, size(dofs)
+         if (dofs(i) > 0) ve(i) = v(dofs(i))
+      end do
+   end function gather
+
+   !> The number of rows of B for a mesh (3 per element, 1 per slideline):
+   !> B_f is square when it equals the number of free dofs.
+   pure integer function strain_rows(mesh) result(rows)
+      type(mesh_type), intent(in) :: mesh
+      rows = 3*size(mesh%elements) + size(mesh%slides)
+   end function strain_rows
+
+end module fekap_assembly_strain_rate
