@@ -3,7 +3,7 @@
 program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
-   use fekap_error, only: error_type, error_input, error_analysis, error_output, input_error
+   use fekap_error, only: error_type, error_input, error_analysis, error_output
    use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_statics, &
       & effects_dynamics
    use fekap_deck, only: read_deck
@@ -11,6 +11,7 @@ program fekap_main
    use fekap_effects_kinetostatic_stepper, only: kinetostatic_stepper_type, new_kinetostatic_stepper
    use fekap_effects_statics, only: statics_stepper_type, new_statics_stepper
    use fekap_effects_free_motion, only: check_free_motion
+   use fekap_effects_dynamic_stepper, only: dynamic_stepper_type, new_dynamic_stepper, energy_names
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
@@ -111,6 +112,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(fem_stepper_type), allocatable :: fem
       type(kinetostatic_stepper_type), allocatable :: kinetostatic
+      type(dynamic_stepper_type), allocatable :: dynamic
       type(statics_stepper_type), allocatable :: statics
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
@@ -130,9 +132,9 @@ contains
             ! Bad input first: a free motion with neither mass nor stiffness.
             call check_free_motion(fem%mesh, model, fem%mesh%q0, model%analysis%t_start, fem%seg, error)
             if (allocated(error)) return
-            ! The plan refuses dynamics until its stepper lands (dynamics_available).
-            call input_error(error, model%file//': ANALysis type dynamics is not available yet')
-            return
+            allocate (dynamic)
+            call new_dynamic_stepper(dynamic, model)
+            call move_alloc(dynamic, stepper)
          else
             call move_alloc(fem, stepper)
          end if
@@ -169,8 +171,12 @@ contains
          if (.not. allocated(error)) call open_replace(outdir//'/nodes.csv', units%nodes, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
          if (.not. allocated(error) .and. (planned_effects(model) == effects_kinetostatics .or. &
-            & planned_effects(model) == effects_statics)) then
+            & planned_effects(model) == effects_statics .or. planned_effects(model) == effects_dynamics)) then
             call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
+         end if
+         if (.not. allocated(error) .and. planned_effects(model) == effects_dynamics) then
+            call open_replace(outdir//'/energy.csv', units%energy, error, stream=.true.)
+            units%energy_names = energy_names
          end if
          if (allocated(error)) return
          call write_mesh_csv(mesh_unit, model)

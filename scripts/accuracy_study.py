@@ -17,6 +17,11 @@ Studies (deck, what is swept, the exact answer):
              the exact tip lies on the arc x = sin(phi)/kappa,
              y = (1 - cos(phi))/kappa with kappa = 2 pi t, phi = kappa L, L = 1;
              2 ... 128 elements
+  dynamics   (a table of its own) the stiff pendulum (decks/dynamics/pendulum.deck):
+             its first bottom pass against T/4 = 0.591960487 s and 4.429446918 m/s;
+             the A02 chain, N = 2, over 4 s: the crank's rate against the energy
+             integral (away from the change points); dt and rho_inf swept, with
+             Newton iterations and microseconds (analysis) per step
 
 Errors are the largest distance between a tracked point and its exact position
 over every written step (positions), and for Example 1 also the largest
@@ -36,6 +41,7 @@ Usage: python3 scripts/accuracy_study.py [--short] [--bin FEKAP]
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
 import re
@@ -214,6 +220,74 @@ def measure(binary: str, work: Path, item: tuple, repeat: int) -> dict:
     return record(study, case, setting, result, errors)
 
 
+BOTTOM_TIME, BOTTOM_SPEED = 0.591960487, 4.429446918
+
+
+def pendulum_errors(outdir: Path) -> dict:
+    """Errors of the first bottom pass: time (cubic Hermite interpolant of x) and speed."""
+    rows = fb.points(outdir, "B")
+    for a, b in zip(rows, rows[1:]):
+        if a["x"] > 0 >= b["x"]:
+            h = b["t"] - a["t"]
+            x0, x1, v0, v1 = a["x"], b["x"], a["vx"] * h, b["vx"] * h
+            u = x0 / (x0 - x1)
+            for _ in range(30):
+                f = (2*u**3 - 3*u**2 + 1)*x0 + (u**3 - 2*u**2 + u)*v0 + (-2*u**3 + 3*u**2)*x1 + (u**3 - u**2)*v1
+                df = (6*u**2 - 6*u)*x0 + (3*u**2 - 4*u + 1)*v0 + (-6*u**2 + 6*u)*x1 + (3*u**2 - 2*u)*v1
+                u -= f / df
+            speed = (1 - u) * math.hypot(a["vx"], a["vy"]) + u * math.hypot(b["vx"], b["vy"])
+            return {"error": abs(a["t"] + u * h - BOTTOM_TIME), "second": abs(speed - BOTTOM_SPEED)}
+    return {"error": float("nan"), "second": float("nan")}
+
+
+def a02_errors(outdir: Path, n: int = 2) -> dict:
+    """Largest error of the first crank's rate against the energy integral,
+    more than 0.15 rad from the change points."""
+    inertia, moment = (n + 1) / 3 + n, ((n + 1) / 2 + n) * 9.81
+    worst = 0.0
+    with open(outdir / "links.csv", newline="") as handle:
+        for row in csv.DictReader(handle):
+            angle, omega = float(row["angle"]), float(row["omega"])
+            if abs(math.sin(angle)) > 0.15:
+                worst = max(worst, abs(omega + math.sqrt(1 + 2 * moment / inertia * (1 - math.sin(angle)))))
+    return {"error": worst, "second": float("nan")}
+
+
+def dynamics_studies(short: bool) -> list[tuple]:
+    """(case, deck, dt, rho_inf, t_end) of the dynamics table."""
+    out = []
+    for rho in ((0.8, 1.0) if short else (0.5, 0.8, 1.0)):
+        for dt in ((4e-3, 1e-3) if short else (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4)):
+            out.append(("pendulum: bottom pass time (s), speed (m/s)", "dynamics/pendulum.deck", dt, rho, 0.62))
+        for dt in ((4e-3,) if short else (8e-3, 4e-3, 2e-3, 1e-3)):
+            out.append(("A02 N = 2, 4 s: crank rate (rad/s)", "dynamics/a02-n2.deck", dt, rho, 4.0))
+    return out
+
+
+def measure_dynamics(binary: str, work: Path, item: tuple, repeat: int) -> dict:
+    case, deck, dt, rho, t_end = item
+    result = run(binary, work, deck, {"time": f"0 {t_end!r} {dt!r}", "integrator": f"generalized-alpha {rho!r}"},
+                 repeat=repeat)
+    errors = {"error": float("nan"), "second": float("nan")}
+    if result["rc"] == 0:
+        errors = pendulum_errors(result["outdir"]) if "pendulum" in deck else a02_errors(result["outdir"])
+    shutil.rmtree(result["outdir"], ignore_errors=True)
+    s = result.get("summary", {})
+    steps = max(1, s.get("configurations solved", 1) - 1)
+    return {"case": case, "dt": dt, "rho_inf": rho, "rc": result["rc"], **errors,
+            "iterations_per_step": s.get("Newton iterations", 0) / steps,
+            "us_per_step": 1e6 * result["analysis"] / steps}
+
+
+def dynamics_table(rows: list[dict]) -> str:
+    lines = ["| case | dt | rho_inf | exit | error | second error | Newton its/step | analysis (us/step) |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for r in rows:
+        lines.append(f"| {r['case']} | {r['dt']:g} | {r['rho_inf']:g} | {r['rc']} | {fmt(r['error'])} | "
+                     f"{fmt(r['second'])} | {r['iterations_per_step']:.2f} | {r['us_per_step']:.1f} |")
+    return "\n".join(lines)
+
+
 def fmt(value) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "-"
@@ -267,11 +341,16 @@ def main(argv: list[str] | None = None) -> int:
     work = fb.scratch_dir("fekap-accuracy-")
     repeat = args.repeat or (1 if args.short else 5)
     rows = [measure(binary, work, item, repeat) for item in studies(args.short)]
+    dynamics = [measure_dynamics(binary, work, item, repeat) for item in dynamics_studies(args.short)]
     shutil.rmtree(work, ignore_errors=True)
     text = table(rows)
     print(text)
+    dynamics_text = dynamics_table(dynamics)
+    print("\nDynamics: error against the exact answers by dt and rho_inf\n")
+    print(dynamics_text)
     if not args.short:
         fb.replace_block(fb.ROOT / "docs" / "performance.md", "accuracy", text)
+        fb.replace_block(fb.ROOT / "docs" / "performance.md", "accuracy-dynamics", dynamics_text)
         plot(rows, fb.ROOT / "docs" / "performance" / "accuracy.png")
         (fb.ROOT / "docs" / "performance" / "accuracy.json").write_text(json.dumps(rows, indent=1) + "\n")
         print("wrote docs/performance.md (accuracy table), docs/performance/accuracy.png, accuracy.json")

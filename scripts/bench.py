@@ -169,6 +169,38 @@ def scissor_case(binary: str, work: Path, cells: int, solver: str, repeat: int) 
     return median
 
 
+#: Dynamics benchmarks of the bench line: deck, its --set overrides (quick and full).
+DYNAMICS = {"slider-crank": ("slider-crank.deck", {"t_end": "0.02"}, {"t_end": "0.1"}),
+            "a02-n40": ("a02-n40.deck", {"t_end": "0.2"}, {"t_end": "2"})}
+
+
+def dynamics_case(binary: str, work: Path, name: str, quick: bool, repeat: int) -> dict:
+    """Microseconds per step (analysis time) and Newton iterations per step of
+    a dynamics benchmark deck, median of `repeat` runs."""
+    deck, short, full = DYNAMICS[name]
+    sets = [x for key, value in (short if quick else full).items() for x in ("--set", f"{key}={value}")]
+    runs = []
+    for k in range(repeat):
+        result = fb.run_deck(binary, fb.ROOT / "decks" / "dynamics" / deck, work / f"dyn-{name}-{k}", *sets)
+        if result["rc"] != 0 or "summary" not in result:
+            raise SystemExit(f"fekap failed on {deck} (exit {result['rc']}):\n{result['stderr']}")
+        s = result["summary"]
+        steps = max(1, s["configurations solved"] - 1)
+        runs.append({"us_per_step": 1e6 * s["time in analysis (s)"] / steps,
+                     "iterations_per_step": s["Newton iterations"] / steps, "steps": steps,
+                     "equations": result["plan"].get("equations", 0)})
+        shutil.rmtree(result["outdir"], ignore_errors=True)
+    return {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+
+
+def dynamics_table(cases: dict) -> str:
+    rows = ["| benchmark | equations | steps | us per step | Newton iterations per step |", "|---|---|---|---|---|"]
+    for name, c in cases.items():
+        rows.append(f"| {name} | {c['equations']:.0f} | {c['steps']:.0f} | {c['us_per_step']:.1f} | "
+                    f"{c['iterations_per_step']:.2f} |")
+    return "\n".join(rows)
+
+
 def fourbar_table(cases: dict) -> str:
     head = ("| computed | output | us/config analysis | us/config total | assembly | factorisation "
             "| solves | other analysis | output | Newton its/step |\n"
@@ -268,6 +300,13 @@ def main(argv: list[str] | None = None) -> int:
           f"{aim['iterations']:g} Newton iterations over {aim['steps']} steps = {aim['per_step']:.3f} per step "
           f"({aim['configurations']:g} configurations solved, step-doubling checks included)")
 
+    print("\nDynamics (decks/dynamics, generalized-alpha rho_inf 0.8; Exudyn on the slider-crank: "
+          "scripts/exudyn_slider_crank.py)")
+    dynamics = {name: dynamics_case(binary, work, name, args.quick, repeat) for name in DYNAMICS}
+    for name, c in dynamics.items():
+        print(f"  {name:14s} {c['equations']:5.0f} equations, {c['steps']:6.0f} steps: {c['us_per_step']:9.1f} us "
+              f"per step, {c['iterations_per_step']:.2f} Newton iterations per step")
+
     scissor_cases: list[dict] = []
     if not args.no_scissor:
         print(f"\nScissor lift, dt = {SCISSOR_DT}, default tolerances, at most {SCISSOR_ITERATIONS} iterations: "
@@ -297,14 +336,19 @@ def main(argv: list[str] | None = None) -> int:
                          f"and tolerances): {aim['iterations']:g} over {aim['steps']} steps, "
                          f"**{aim['per_step']:.3f} per step** ({aim['configurations']:g} configurations "
                          "solved, step-doubling checks included).")
+        fb.replace_block(doc, "bench-dynamics", dynamics_table(dynamics))
         if scissor_cases:
             fb.replace_block(doc, "bench-scissor", scissor_table(scissor_cases))
             plot_scissor(scissor_cases, fb.ROOT / "docs" / "performance" / "scissor.png")
         record = {"machine": info, "dt": dt, "repeat": repeat, "aim_iterations": aim,
-                  "fourbar": {f"{k[0]}/{k[1]}": v for k, v in cases.items()}, "scissor": scissor_cases}
+                  "fourbar": {f"{k[0]}/{k[1]}": v for k, v in cases.items()}, "scissor": scissor_cases,
+                  "dynamics": dynamics}
         (fb.ROOT / "docs" / "performance").mkdir(parents=True, exist_ok=True)
         (fb.ROOT / "docs" / "performance" / "bench.json").write_text(json.dumps(record, indent=1) + "\n")
 
+    print("dynamics " + " ".join(f"{name}_us_per_step={c['us_per_step']:.2f} "
+                                 f"{name}_iterations_per_step={c['iterations_per_step']:.3f}"
+                                 for name, c in dynamics.items()))
     full = cases[("full", "no_output")]
     print(f"fourbar us_per_config_full={full['analysis_us']:.3f} "
           f"us_per_config_positions={cases[('positions', 'no_output')]['analysis_us']:.3f} "

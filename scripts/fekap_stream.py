@@ -375,3 +375,27 @@ def read_steps(path: Path, buckets: int = MAX_BUCKETS, slow: bool = False) -> Re
         reducer.feed(numbers[:, [columns.index(c) for c in ("step", "t", *quantities)]])
     rows, masks = reducer.finish()
     return Reduced("steps", quantities, rows, masks)
+
+
+#: The columns of energy.csv (dynamics runs) after step, t.
+ENERGY_COLUMNS = ("kinetic", "strain", "gravity", "work_loads", "work_drives", "dissipated", "balance",
+                  "px", "py", "angular")
+
+
+def read_energy(path: Path, buckets: int = MAX_BUCKETS, slow: bool = False) -> Reduced | None:
+    """energy.csv of a dynamics run decimated, or None when absent or empty."""
+    if not path.is_file():
+        return None
+    header = _header(path)
+    missing = [c for c in ("step", "t", *ENERGY_COLUMNS) if c not in header]
+    if missing:
+        raise UsageError(f"{path}: missing column(s) {', '.join(missing)}")
+    try:
+        first, last = step_range(path)
+    except UsageError:
+        return None
+    reducer = Reducer(first, last, len(ENERGY_COLUMNS), buckets)
+    for _, numbers, columns in _blocks(path, None, slow):
+        reducer.feed(numbers[:, [columns.index(c) for c in ("step", "t", *ENERGY_COLUMNS)]])
+    rows, masks = reducer.finish()
+    return Reduced("energy", ENERGY_COLUMNS, rows, masks)

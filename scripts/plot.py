@@ -11,6 +11,9 @@ draws into OUTDIR:
 - history_<P>.png  time histories of x, y (vx, vy, ax, ay when computed) of each tracked point P;
 - angles.png       time histories of the link angles (omega, alpha when computed);
 - iterations.png   Newton iterations (and the final residual) per step;
+- energy.png       dynamics runs (energy.csv): kinetic, strain and gravity energy, the work of
+                   loads and drives and the damping's dissipation, their balance (the integrator's
+                   numerical dissipation), linear and angular momentum;
 - motion.mp4       with --animate: the mechanism moving, with the time, the drive's value and
                    the tracked points' trails (motion.gif where ffmpeg is missing, or asked for).
 
@@ -19,7 +22,7 @@ SI by default). Runs of any length are read in streaming fashion and each curve 
 a few thousand points keeping every extremum (fekap_stream.py). A quantity constant to
 round-off is drawn as a flat line and labelled so, instead of autoscaled noise.
 
-Kinds for --only: paths, history, velocity, acceleration, angles, iterations. ``velocity`` and
+Kinds for --only: paths, history, velocity, acceleration, angles, iterations, energy. ``velocity`` and
 ``acceleration`` draw the history figures with only those panels. Bad arguments give a one-line
 message on stderr and exit status 2.
 """
@@ -41,7 +44,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 PROG = "plot.py"
-KINDS = ("paths", "history", "velocity", "acceleration", "angles", "iterations")
+KINDS = ("paths", "history", "velocity", "acceleration", "angles", "iterations", "energy")
 #: How to ask the deck for the missing quantities (the hint in the error message).
 MISSING_HINT = {
     "velocity": "this run computed no velocities; ask for them in the deck's ANALysis block "
@@ -417,6 +420,40 @@ def plot_iterations(run: Run, steps: fs.Reduced) -> Figure:
     return fig
 
 
+def plot_energy(run: Run, energy: fs.Reduced) -> Figure:
+    """Energies and work (top), their balance (middle), momenta (bottom) of a dynamics run."""
+    plt = pyplot()
+    fig, axes = plt.subplots(3, 1, figsize=(9, 9.5), sharex=True)
+    ax = axes[0]
+    labels = {"kinetic": "kinetic", "strain": "strain", "gravity": "gravity potential",
+              "work_loads": "work of the loads", "work_drives": "work of the drives",
+              "dissipated": "dissipated by damping"}
+    for index, (quantity, label) in enumerate(labels.items()):
+        _, t, value = energy.curve(quantity)
+        if np.any(value != 0):
+            ax.plot(t, value, "-", color=f"C{index}", lw=1.2, label=label)
+    ax.set_ylabel("energy (J)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    ax = axes[1]
+    _, t, balance = energy.curve("balance")
+    ax.plot(t, balance, "-", color="C3", lw=1.0)
+    ax.set_ylabel("balance (J)")
+    ax.set_title("kinetic + strain + gravity - work + dissipated, less its start value", color="0.3",
+                 fontsize="small")
+    ax = axes[2]
+    for index, (quantity, label) in enumerate((("px", "p_x (N s)"), ("py", "p_y (N s)"),
+                                               ("angular", "angular about the origin (N m s)"))):
+        _, t, value = energy.curve(quantity)
+        ax.plot(t, value, "-", color=f"C{index}", lw=1.2, label=label)
+    ax.set_ylabel("momentum")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    axes[-1].set_xlabel(run.label("t"))
+    time_axis(axes[-1])
+    fig.suptitle(f"{run.title}\nenergy and momentum")
+    fig.tight_layout()
+    return fig
+
+
 # --------------------------------------------------------------------------- animation
 
 def drive_values(run: Run, frames: list[tuple[int, float, dict]]) -> tuple[str, np.ndarray] | None:
@@ -563,6 +600,9 @@ def main(argv: list[str] | None = None) -> int:
     steps = fs.read_steps(run.path / "steps.csv") if wanted("iterations") else None
     if explicit("iterations") and (steps is None or not len(steps.rows)):
         raise fc.UsageError(f"{run.path}: no steps.csv (or it is empty): no iterations to plot")
+    energy = fs.read_energy(run.path / "energy.csv") if wanted("energy") else None
+    if explicit("energy") and energy is None:
+        raise fc.UsageError(f"{run.path}: no energy.csv (or it is empty): energy is written by dynamics runs")
     groups = history_groups(run, kinds) if kinds is None or kinds & {
         "history", "velocity", "acceleration"} else []
 
@@ -576,6 +616,8 @@ def main(argv: list[str] | None = None) -> int:
         save(plot_angles(run), run.path / "angles.png", written)
     if wanted("iterations") and steps is not None and len(steps.rows):
         save(plot_iterations(run, steps), run.path / "iterations.png", written)
+    if energy is not None:
+        save(plot_energy(run, energy), run.path / "energy.png", written)
     if args.animate:
         if not run.mech.links:
             print(f"{PROG}: no mesh.csv in {run.path}: no animation written", file=sys.stderr)

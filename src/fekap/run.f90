@@ -16,7 +16,7 @@ module fekap_run
    use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
       & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix, write_nodes_header, write_nodes_row, &
-      & write_reactions_header, write_reactions_rows
+      & write_reactions_header, write_reactions_rows, write_energy_header, write_energy_row
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop, write_listing_note
    use fekap_output_vtk, only: write_vtu
@@ -56,8 +56,11 @@ module fekap_run
       !> nodes.csv: every node's position at the written steps.
       integer :: nodes = no_unit
       integer :: listing = no_unit
-      !> reactions.csv, written by kinetostatics runs only.
+      !> reactions.csv, written by kinetostatics and dynamics runs only.
       integer :: reactions = no_unit
+      !> energy.csv, written by dynamics runs only, with its columns after step,t.
+      integer :: energy = no_unit
+      character(:), allocatable :: energy_names
       logical :: vtk = .false.
       !> The output directory and the deck's stem, for the VTK file names.
       character(:), allocatable :: outdir, stem
@@ -77,7 +80,7 @@ module fekap_run
 
    !> The text of the files written step by step, held between flushes.
    type :: run_buffers_type
-      type(text_buffer_type) :: points, links, steps, nodes, listing, reactions
+      type(text_buffer_type) :: points, links, steps, nodes, listing, reactions, energy
    end type run_buffers_type
 
 contains
@@ -139,6 +142,7 @@ contains
       if (units%steps /= no_unit) call write_steps_header(out%steps)
       if (units%nodes /= no_unit) call write_nodes_header(out%nodes, model)
       if (units%reactions /= no_unit) call write_reactions_header(out%reactions)
+      if (units%energy /= no_unit) call write_energy_header(out%energy, units%energy_names)
       if (units%listing /= no_unit) call write_listing_step_header(units%listing)
       if (units%vtk) then
          allocate (vtk%links_nodes(2, size(model%links)))
@@ -181,7 +185,7 @@ contains
          end if
          if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
             if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit .or. &
-               & units%nodes /= no_unit .or. units%reactions /= no_unit) then
+               & units%nodes /= no_unit .or. units%reactions /= no_unit .or. units%energy /= no_unit) then
                call new_row_prefix(prefix, result)
             end if
             if (units%points /= no_unit) then
@@ -200,6 +204,10 @@ contains
             if (units%reactions /= no_unit) then
                call write_reactions_rows(out%reactions, model, result, prefix)
                rows = rows + size(result%reactions, 2)
+            end if
+            if (units%energy /= no_unit) then
+               call write_energy_row(out%energy, result, prefix)
+               rows = rows + 1
             end if
             if (units%listing /= no_unit) call write_listing_step(out%listing, result)
             if (units%vtk) then
@@ -377,6 +385,7 @@ contains
       if (units%steps /= no_unit) call new_text_buffer(out%steps, units%steps, formatted=.false.)
       if (units%nodes /= no_unit) call new_text_buffer(out%nodes, units%nodes, formatted=.false.)
       if (units%reactions /= no_unit) call new_text_buffer(out%reactions, units%reactions, formatted=.false.)
+      if (units%energy /= no_unit) call new_text_buffer(out%energy, units%energy, formatted=.false.)
       if (units%listing /= no_unit) call new_text_buffer(out%listing, units%listing, formatted=.true.)
    end subroutine new_run_buffers
 
@@ -394,6 +403,7 @@ contains
       if (units%steps /= no_unit) call flush_one(out%steps)
       if (units%nodes /= no_unit) call flush_one(out%nodes)
       if (units%reactions /= no_unit) call flush_one(out%reactions)
+      if (units%energy /= no_unit) call flush_one(out%energy)
       if (units%listing /= no_unit) call flush_one(out%listing)
    contains
       subroutine flush_one(buffer)

@@ -6,7 +6,8 @@ module fekap_deck
    use fekap_model, only: model_type
    use fekap_deck_card, only: card_none, card_title, card_sections, card_nodes, card_links, card_welds, &
       & card_supports, card_drives, card_loads, card_slidelines, card_analysis, card_output, card_include, &
-      & card_end, card_parameters, ncards, card_name, card_list, card_of, card_masses, card_gravity
+      & card_end, card_parameters, ncards, card_name, card_list, card_of, card_masses, card_gravity, &
+      & card_velocities
    use fekap_deck_context, only: context_type
    use fekap_deck_diagnostic, only: mark_type
    use fekap_deck_source, only: load_file, load_string
@@ -15,6 +16,8 @@ module fekap_deck
    use fekap_deck_settings, only: read_title, read_analysis, read_output
    use fekap_deck_inertia, only: read_masses, read_gravity, check_effects
    use fekap_deck_parameters, only: override_type, read_parameters
+   use fekap_model_effects, only: has_masses
+   use fekap_deck_velocities, only: read_velocities
    implicit none
    private
 
@@ -145,6 +148,7 @@ contains
       call read_loads(ctx, model, lines_of(card_loads))
       call read_masses(ctx, model, lines_of(card_masses))
       call read_gravity(ctx, model, lines_of(card_gravity))
+      call read_velocities(ctx, model, lines_of(card_velocities))
       call read_output(ctx, model, lines_of(card_output))
       call check_effects(ctx, model, lines_of(card_analysis))
 
@@ -160,7 +164,8 @@ contains
       call require(card_nodes, 'NODEs', 'name x y')
       call require(card_sections, 'SECTions', 'name E=... G=... A=... I=... k=...')
       call require(card_links, 'LINKs', 'name first-node second-node section')
-      if (count(block == card_drives) + count(block == card_loads) == 0) then
+      ! Masses move a mechanism by themselves (dynamics, under gravity).
+      if (count(block == card_drives) + count(block == card_loads) == 0 .and. .not. has_masses(model)) then
          call ctx%error(last, 1, 'missing required block DRIVes or LOADs: nothing moves the mechanism', &
             & label='add DRIVes (e.g. rotation LINK rate 2*pi) or LOADs')
       end if

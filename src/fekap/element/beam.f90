@@ -16,6 +16,7 @@ module fekap_element_beam
    private
 
    public :: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain, beam_resultants
+   public :: beam_strain_energy
 
    !> Most Gauss points of an element (see beam_type%ngauss).
    integer, parameter, public :: max_gauss = 2
@@ -307,5 +308,22 @@ contains
          sig = sig + [self%ea*g1, self%kga*g2, self%ei*((xe(6) - xe(3))*rl)]/self%ngauss
       end do
    end function beam_resultants
+
+   !> Strain energy of the element, 1/2 (EA Gamma1^2 + kGA Gamma2^2 + EI kappa^2)
+   !> integrated with the element's own rule: beam_residual's p is its gradient.
+   pure real(dp) function beam_strain_energy(self, xe) result(energy)
+      type(beam_type), intent(in) :: self
+      real(dp), intent(in) :: xe(6)
+      real(dp) :: xi, w, rl, c, s, g1, g2, kap
+      integer :: ig
+      rl = 1/self%length
+      kap = (xe(6) - xe(3))*rl
+      energy = 0
+      do ig = 1, self%ngauss
+         call gauss_point(self%ngauss, ig, xi, w)
+         call point_strain(self, xe, (1 - xi)/2, (1 + xi)/2, rl, c, s, g1, g2)
+         energy = energy + w*self%length/4*(self%ea*g1**2 + self%kga*g2**2 + self%ei*kap**2)
+      end do
+   end function beam_strain_energy
 
 end module fekap_element_beam

@@ -29,7 +29,7 @@ module fekap_model_effects
 
    !> Whether the dynamics stepper exists: until it does, a plan for dynamics
    !> is refused with "not available yet" (the dynamics engineer sets this).
-   logical, parameter, public :: dynamics_available = .false.
+   logical, parameter, public :: dynamics_available = .true.
 
    !> The plan: the effects, why they were chosen, what is left out, and why
    !> an explicit request cannot be met ('' if it can).

@@ -10,7 +10,7 @@ module fekap_model
    private
 
    public :: model_type, node_type, section_type, link_type, weld_type
-   public :: support_type, drive_type, load_type, slideline_type, mass_type
+   public :: support_type, drive_type, load_type, slideline_type, mass_type, start_velocity_type
    public :: analysis_type, output_type, source_loc_type, parameter_type
    public :: find_node, find_link, model_size
 
@@ -148,6 +148,15 @@ module fekap_model
       type(source_loc_type) :: loc
    end type mass_type
 
+   !> A link's rigid velocity at the start of dynamics (VELOcities): its first
+   !> node's velocity and its angular velocity.
+   type :: start_velocity_type
+      integer :: link = 0
+      real(dp) :: v(2) = 0
+      real(dp) :: omega = 0
+      type(source_loc_type) :: loc
+   end type start_velocity_type
+
    !> A sliding joint: a slave node kept on a master line by a penalty spring.
    type :: slideline_type
       character(:), allocatable :: name
@@ -237,6 +246,8 @@ module fekap_model
       type(load_type), allocatable :: loads(:)
       type(slideline_type), allocatable :: slidelines(:)
       type(mass_type), allocatable :: masses(:)
+      !> Dynamics: links' velocities at the start (VELOcities; the others at rest).
+      type(start_velocity_type), allocatable :: start_velocities(:)
       !> Gravity acceleration (GRAVity card), and where it was given.
       real(dp) :: gravity(2) = 0
       type(source_loc_type) :: gravity_loc

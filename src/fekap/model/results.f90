@@ -45,6 +45,10 @@ module fekap_model_results
       !> known at this step (not at a singular configuration).
       logical :: has_reactions = .false.
       real(dp), allocatable :: reactions(:, :)
+      !> Dynamics (filled only when the run simulates it): energies, work and
+      !> momenta (see fekap_effects_dynamic_stepper's energy_names).
+      logical :: has_energy = .false.
+      real(dp), allocatable :: energy(:)
    end type step_result_type
 
 contains

@@ -19,6 +19,7 @@ module fekap_output_csv
    public :: write_points_header, write_points_rows, write_links_header, write_links_rows
    public :: write_steps_header, write_steps_row, write_mesh_csv, new_row_prefix
    public :: write_nodes_header, write_nodes_row, write_mechanism_csv, write_reactions_header, write_reactions_rows
+   public :: write_energy_header, write_energy_row
 
    !> Longest text of a real (es25.16e3 without its leading blank) and of an
    !> integer, and of the prefix `step,t,` of a row.
@@ -366,6 +367,26 @@ contains
       end subroutine append_reaction
 
    end subroutine write_reactions_rows
+
+   !> `step,t,` and the columns `names` of energy.csv (dynamics).
+   subroutine write_energy_header(out, names)
+      type(text_buffer_type), intent(inout) :: out
+      character(*), intent(in) :: names
+      call reserve_text(out, len(names) + 8)
+      call append_text(out%text, out%n, 'step,t,'//names//new_line('a'))
+   end subroutine write_energy_header
+
+   !> One row of energy.csv: the step's energies, work and momenta.
+   subroutine write_energy_row(out, result, prefix)
+      type(text_buffer_type), intent(inout) :: out
+      type(step_result_type), intent(in) :: result
+      type(row_prefix_type), intent(in) :: prefix
+      if (.not. result%has_energy) return
+      call reserve_text(out, row_length(0, size(result%energy)))
+      call append_text(out%text, out%n, prefix%text(1:prefix%n - 1))
+      call append_values(out%text, out%n, result%energy)
+      call append_char(out%text, out%n, new_line('a'))
+   end subroutine write_energy_row
 
    !> `link,node1,node2`: the end points of every link, for drawing the
    !> mechanism; to a unit open for unformatted stream access.

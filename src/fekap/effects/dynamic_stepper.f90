@@ -1,0 +1,581 @@
+!> Flexible dynamics on the FEM's mesh: the equations of motion
+!> (fekap_effects_dynamic_system) integrated by generalized-alpha
+!> (fekap_effects_generalized_alpha), each step solved by Newton on the band
+!> iteration matrix K + c1 C + c2 M, cut in halves when it fails and grown
+!> back (fekap_solver_step_control). Drives prescribe their dofs' motion
+!> (value, rate and second rate of their laws); what the drives and supports
+!> apply is the residual on their dofs (reactions.csv, as kinetostatics'
+!> rows). The start: the drives' kinematic velocities when they move the
+!> whole mechanism (else rest), and the consistent accelerations of
+!> M a0 = g(0) - P(q0) - C v0. Each step also gives the energies, the work of
+!> loads and drives and the momenta (energy.csv).
+module fekap_effects_dynamic_stepper
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, analysis_error
+   use fekap_model, only: model_type, model_size, dof_rot
+   use fekap_model_results, only: step_result_type
+   use fekap_assembly_mesh, only: mesh_type, new_mesh, dof_driven, dof_fixed
+   use fekap_assembly_tracking, only: initial_segments, relocate
+   use fekap_solver_stepper, only: stepper_type, clock_seconds, phase_timed
+   use fekap_solver_linear_system, only: linear_system_type, new_linear_system, assemble_system, factor_system, &
+      & system_pivot, residual_norm, newton_correction, solve_system
+   use fekap_solver_step_control, only: step_cuts_type
+   use fekap_solver_fields, only: fill_nodes_links, fill_fields
+   use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
+      & alpha_update
+   use fekap_effects_dynamic_system, only: dynamic_system_type, new_dynamic_system, external_forces, &
+      & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6
+   use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
+   use fekap_model_reactions, only: reaction_count
+   use fekap_output_format, only: es_text
+   use fekap_deck_velocities, only: link_point_velocity
+   implicit none
+   private
+
+   public :: dynamic_stepper_type, new_dynamic_stepper, dynamic_state_type, energy_names
+
+   !> The columns of energy.csv after step,t (see dynamic_stepper_type's energy).
+   character(*), parameter :: energy_names = 'kinetic,strain,gravity,work_loads,work_drives,dissipated,'// &
+      & 'balance,px,py,angular'
+   integer, parameter, public :: energy_count = 10
+   !> A step that creates more energy than this fraction of the kinetic and
+   !> strain energy (or of the step's work) is rejected and cut.
+   real(dp), parameter :: max_created = 0.05_dp
+
+   !> The accepted state: time, configuration, velocity, acceleration, the
+   !> integrator's acceleration variable a, the external forces, the residual
+   !> (the constrained dofs' reactions), and the accumulated work.
+   type :: dynamic_state_type
+      real(dp) :: t = 0
+      real(dp), allocatable :: q(:), v(:), acc(:), a(:), g(:), r(:)
+      integer, allocatable :: seg(:)
+      !> Work of the loads, of the drives, and the energy the damping dissipated.
+      real(dp) :: work_loads = 0, work_drives = 0, dissipated = 0
+      !> Kinetic and strain energy, and their sum with the gravity potential.
+      real(dp) :: kinetic = 0, strain = 0, energy = 0
+   end type dynamic_state_type
+
+   type, extends(stepper_type) :: dynamic_stepper_type
+      type(model_type) :: model
+      type(mesh_type) :: mesh
+      type(linear_system_type) :: system
+      type(dynamic_system_type) :: dynamics
+      type(kinetostatics_type) :: rows
+      type(dynamic_state_type) :: state
+      !> The iterate of a step.
+      real(dp), allocatable :: qt(:), vt(:), acct(:), at(:), gt(:)
+      !> Drive laws at the start, and their value, rate and second rate.
+      real(dp), allocatable :: law0(:), law_value(:), law_rate(:), law_rate2(:)
+      !> Length weight of each dof in the correction test (rotations: model size).
+      real(dp), allocatable :: dof_length(:)
+      real(dp) :: model_length = 1
+      !> Residual below which Newton has converged at round-off (as the FEM's).
+      real(dp) :: residual_floor = 0
+      !> Energy of the start (kinetic + strain + gravity), for the balance.
+      real(dp) :: energy0 = 0
+      !> Velocities at the start over all dofs, if given (tests, benchmarks);
+      !> else the drives' kinematic velocities.
+      real(dp), allocatable :: v_start(:)
+      !> Whether some element is damped (has_damping).
+      logical :: damped = .false.
+      !> Steps and Newton iterations so far.
+      integer :: steps = 0, newton_iterations = 0
+      !> How the start's velocities were found, for the plan.
+      character(len=120) :: start_velocity = ''
+      integer :: advances = 0
+   contains
+      procedure :: start => dynamic_start
+      procedure :: advance => dynamic_advance
+      procedure :: plan_text => dynamic_plan_text
+   end type dynamic_stepper_type
+
+contains
+
+   !> The mesh and storage for a validated model with masses.
+   subroutine new_dynamic_stepper(self, model)
+      type(dynamic_stepper_type), intent(out) :: self
+      type(model_type), intent(in) :: model
+      integer :: e, n, nd
+      real(dp) :: force_scale, shortest
+      self%model = model
+      call new_mesh(self%mesh, model)
+      call new_linear_system(self%system, self%mesh, dense=.false.)
+      call new_dynamic_system(self%dynamics, model, self%mesh)
+      call new_kinetostatics(self%rows, model, self%mesh)
+      self%damped = has_damping(self%dynamics)
+      n = self%mesh%ndof
+      nd = self%mesh%ndriven
+      allocate (self%state%q(n), self%state%v(n), self%state%acc(n), self%state%a(n), self%state%g(n), &
+         & self%state%r(n), source=0.0_dp)
+      allocate (self%qt(n), self%vt(n), self%acct(n), self%at(n), self%gt(n), source=0.0_dp)
+      allocate (self%law0(nd), self%law_value(nd), self%law_rate(nd), self%law_rate2(nd), source=0.0_dp)
+      allocate (self%state%seg(size(self%mesh%slides)), source=1)
+      self%model_length = model_size(model)
+      self%dof_length = merge(self%model_length, 1.0_dp, self%mesh%dof_kind == dof_rot)
+      force_scale = 0
+      shortest = huge(1.0_dp)
+      do e = 1, size(self%mesh%elements)
+         associate (el => self%mesh%elements(e))
+            force_scale = max(force_scale, el%ea, el%kga, el%ei/el%length**2)
+            shortest = min(shortest, el%length)
+         end associate
+      end do
+      self%residual_floor = max(1.0e-13_dp, epsilon(1.0_dp)*self%model_length/shortest)*force_scale* &
+         & sqrt(real(max(1, self%mesh%nfree), dp))
+   end subroutine new_dynamic_stepper
+
+   !> The mesh and the integrator for the listing's plan.
+   function dynamic_plan_text(self) result(text)
+      class(dynamic_stepper_type), intent(in) :: self
+      character(:), allocatable :: text
+      character(len=200) :: line
+      type(alpha_coefficients_type) :: c
+      c = new_alpha_coefficients(self%model%analysis%rho_inf, self%model%analysis%dt)
+      write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0)') 'mesh: ', size(self%mesh%elements), ' elements, ', &
+         & self%mesh%ndof, ' dofs, ', self%mesh%nfree, ' equations, ', self%mesh%ndriven, &
+         & ' driven; half-bandwidth ', self%mesh%kd
+      text = trim(line)
+      write (line, '(a,f6.4,a,f7.4,a,f7.4,a,f7.4,a,f7.4,a)') 'integrator: generalized-alpha (Chung-Hulbert), rho_inf ', &
+         & c%rho_inf, ' (alpha_m ', c%am, ', alpha_f ', c%af, ', beta ', c%beta, ', gamma ', c%gamma, ')'
+      text = text//new_line('a')//'  '//trim(line)
+      if (len_trim(self%start_velocity) > 0) text = text//new_line('a')//'  start: '//trim(self%start_velocity)
+   end function dynamic_plan_text
+
+   !> The start: velocities, consistent accelerations, energies.
+   subroutine dynamic_start(self, result, error)
+      class(dynamic_stepper_type), intent(inout) :: self
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i, info
+      real(dp) :: f, df, ddf
+      associate (state => self%state, mesh => self%mesh, model => self%model)
+         state%t = model%analysis%t_start
+         state%q = mesh%q0
+         call initial_segments(mesh, model, state%q, self%model_length, state%seg, error)
+         if (allocated(error)) return
+         do i = 1, mesh%ndriven
+            call model%drives(i)%law%eval(state%t, f, df, ddf)
+            self%law0(i) = f
+         end do
+         call drive_motion(self, state%t, state%q, state%v, state%acc)
+         call start_velocities(self, info)
+         if (has_damping(self%dynamics)) call update_damping(self%dynamics, mesh, state%q)
+         call start_accelerations(self, error)
+         if (allocated(error)) return
+         state%a = state%acc
+         state%work_loads = 0
+         state%work_drives = 0
+         state%dissipated = 0
+         state%kinetic = kinetic_energy(self%dynamics, mesh, state%v)
+         state%strain = strain_energy(mesh, state%q)
+         state%energy = state%kinetic + state%strain - dot_product(self%dynamics%weight, state%q)
+         self%energy0 = state%energy
+         result%iterations = 0
+         result%residual = 0
+         call fill_result(self, result)
+      end associate
+   end subroutine dynamic_start
+
+   !> Velocities at the start: given (v_start), or those the drives' rates
+   !> give a mechanism they move whole (K_ff v_f = -K_fd v_d with the material
+   !> tangent at the unstrained start, as the kinematics' (47)), else the
+   !> drives' own rates with the rest at rest.
+   subroutine start_velocities(self, info)
+      type(dynamic_stepper_type), intent(inout) :: self
+      integer, intent(out) :: info
+      integer :: k, j
+      real(dp) :: ratio
+      info = 0
+      associate (state => self%state, mesh => self%mesh, system => self%system)
+         if (.not. allocated(self%v_start) .and. allocated(self%model%start_velocities)) then
+            if (size(self%model%start_velocities) > 0) call deck_velocities(self)
+         end if
+         if (allocated(self%v_start)) then
+            state%v = self%v_start
+            call drive_motion(self, state%t, self%qt, state%v, self%acct)
+            self%start_velocity = 'velocities given (VELOcities), the other links at rest'
+            return
+         end if
+         self%start_velocity = 'at rest'
+         if (mesh%ndriven == 0 .or. all(self%law_rate == 0)) return
+         call assemble_system(system, mesh, state%q, state%t, state%seg, huge(1.0_dp), self%counts)
+         call factor_system(system, info, self%counts)
+         ratio = 0
+         if (info == 0) call system_pivot(system, ratio)
+         if (info /= 0 .or. ratio < 1.0e-12_dp) then
+            self%start_velocity = 'the drives'' rates, the rest at rest (the drives do not move the whole mechanism)'
+            return
+         end if
+         system%rhs(:, 1) = 0
+         do j = 1, mesh%ndriven
+            system%rhs(:, 1) = system%rhs(:, 1) - self%law_rate(j)*system%kfd(:, j)
+         end do
+         call solve_system(system, self%counts)
+         do k = 1, mesh%nfree
+            state%v(mesh%eq_dof(k)) = system%rhs(k, 1)
+         end do
+         self%start_velocity = 'the drives'' kinematic velocities'
+      end associate
+   end subroutine start_velocities
+
+   !> v_start from the deck's VELOcities: each listed link's rigid motion on
+   !> its elements' dofs; the dofs of links not listed at rest, but for their
+   !> ends at nodes of listed links.
+   subroutine deck_velocities(self)
+      type(dynamic_stepper_type), intent(inout) :: self
+      integer :: i, e, a, l
+      real(dp) :: x1(2)
+      allocate (self%v_start(self%mesh%ndof), source=0.0_dp)
+      associate (mesh => self%mesh, model => self%model)
+         do i = 1, size(model%start_velocities)
+            associate (sv => model%start_velocities(i))
+               l = sv%link
+               x1 = model%nodes(model%links(l)%node(1))%x
+               do e = 1, size(mesh%elements)
+                  if (mesh%elink(e) /= l) cycle
+                  do a = 0, 1
+                     self%v_start(mesh%edof(3*a + 1:3*a + 2, e)) = link_point_velocity(sv, x1, &
+                        & mesh%q0(mesh%edof(3*a + 1:3*a + 2, e)))
+                     self%v_start(mesh%edof(3*a + 3, e)) = sv%omega
+                  end do
+               end do
+            end associate
+         end do
+      end associate
+   end subroutine deck_velocities
+
+   !> The consistent accelerations at the start: M_ff a_f = -R_f with R at
+   !> a_f = 0 (the drives' second rates on theirs). A free dof without mass
+   !> (its row of M is zero) keeps a = 0: its equation is static.
+   subroutine start_accelerations(self, error)
+      type(dynamic_stepper_type), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      integer :: k, e, m, info
+      real(dp) :: me(36), mdiag
+      associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
+         call external_forces(dyn, mesh, state%t, state%g)
+         do k = 1, mesh%nfree
+            state%acc(mesh%eq_dof(k)) = 0
+         end do
+         call assemble_dynamics(dyn, system, mesh, state%q, state%v, state%acc, state%t, state%seg, self%counts)
+         state%r = system%r
+         call system%kff%zero()
+         do e = 1, size(mesh%elements)
+            me = reshape(dyn%me(:, :, e), [36])
+            do m = 1, mesh%scatter_count(1, e)
+               call add_at(system%kff%a, size(system%kff%a), mesh%scatter_map(2, m, e), me(mesh%scatter_map(1, m, e)))
+            end do
+         end do
+         do k = 1, mesh%nfree
+            mdiag = system%kff%a(mesh%kd + 1, k) + dyn%point_mass(mesh%eq_dof(k))
+            system%kff%a(mesh%kd + 1, k) = mdiag
+            system%rhs(k, 1) = -state%r(mesh%eq_dof(k))
+            if (mdiag == 0) then
+               system%kff%a(mesh%kd + 1, k) = 1
+               system%rhs(k, 1) = 0
+            end if
+         end do
+         call factor_system(system, info, self%counts)
+         if (info /= 0) then
+            call analysis_error(error, 'the mass matrix is singular at the start: consistent accelerations '// &
+               & 'cannot be found (give every moving dof a mass)')
+            return
+         end if
+         call solve_system(system, self%counts)
+         do k = 1, mesh%nfree
+            state%acc(mesh%eq_dof(k)) = system%rhs(k, 1)
+         end do
+         ! The start's residual with its accelerations: the reactions there.
+         call assemble_dynamics(dyn, system, mesh, state%q, state%v, state%acc, state%t, state%seg, self%counts)
+         state%r = system%r
+      end associate
+   end subroutine start_accelerations
+
+   pure subroutine add_at(a, n, position, value)
+      integer, intent(in) :: n, position
+      real(dp), intent(inout) :: a(n)
+      real(dp), intent(in) :: value
+      a(position) = a(position) + value
+   end subroutine add_at
+
+   !> The drives' dofs at time t: value, rate, second rate of their laws.
+   subroutine drive_motion(self, t, q, v, acc)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), intent(inout) :: q(:), v(:), acc(:)
+      integer :: i, dof
+      if (self%mesh%ndriven == 0) return
+      call self%model%drives%law%eval(t, self%law_value, self%law_rate, self%law_rate2)
+      do i = 1, self%mesh%ndriven
+         dof = self%mesh%driven_dof(i)
+         q(dof) = self%mesh%q0(dof) + (self%law_value(i) - self%law0(i))
+         v(dof) = self%law_rate(i)
+         acc(dof) = self%law_rate2(i)
+      end do
+   end subroutine drive_motion
+
+   !> Advance to time t under step control.
+   subroutine dynamic_advance(self, t, result, error)
+      class(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: step_error
+      type(step_cuts_type) :: cuts
+      real(dp) :: t_try, residual, clock
+      integer :: it
+      self%advances = self%advances + 1
+      self%system%timing = phase_timed(self%advances)
+      clock = 0
+      if (self%system%timing) clock = clock_seconds()
+      call cuts%begin(self%state%t, t)
+      result%iterations = 0
+      residual = 0
+      do while (self%state%t < t)
+         t_try = cuts%next(self%state%t)
+         call solve_step(self, t_try, it, residual, step_error)
+         result%iterations = result%iterations + it
+         if (allocated(step_error)) then
+            call cuts%reject(step_error, error)
+            if (allocated(error)) return
+            deallocate (step_error)
+            cycle
+         end if
+         if (self%state%t < t) call cuts%grow()
+      end do
+      result%residual = residual
+      result%cuts = cuts%cuts
+      call fill_result(self, result)
+      if (allocated(cuts%first)) result%note = cuts%note()
+      if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
+   end subroutine dynamic_advance
+
+   !> One step of generalized-alpha from the accepted state to t_new; the
+   !> state is left untouched on failure.
+   subroutine solve_step(self, t_new, iterations, residual, error)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t_new
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: residual
+      type(error_type), allocatable, intent(out) :: error
+      type(alpha_coefficients_type) :: c
+      real(dp) :: correction, r0, work_loads, work_drives, dissipated, kinetic, strain, energy, created
+      integer :: info, k, d
+      integer :: seg(size(self%state%seg))
+      logical :: moved
+      character(len=300) :: msg
+      associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
+         c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
+         if (self%damped) call update_damping(dyn, mesh, state%q)
+         call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
+         do d = 1, mesh%ndof
+            if (mesh%status(d) == dof_fixed) then
+               self%qt(d) = state%q(d)
+               self%vt(d) = 0
+               self%acct(d) = 0
+            end if
+         end do
+         call drive_motion(self, t_new, self%qt, self%vt, self%acct)
+         call external_forces(dyn, mesh, t_new, self%gt)
+         iterations = 0
+         r0 = 0
+         residual = huge(1.0_dp)
+         do
+            call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts, &
+               & c%c1, c%c2)
+            residual = residual_norm(system, mesh)
+            if (.not. residual <= huge(1.0_dp)) then
+               call analysis_error(error, 'the residual of the equations of motion is not finite (the step is '// &
+                  & 'too long for the motion, or the mechanism has a dof without mass and stiffness)')
+               return
+            end if
+            if (iterations == 0) r0 = residual
+            if (residual <= self%residual_floor .and. iterations > 0) exit
+            if (iterations >= self%model%analysis%max_iter) then
+               write (msg, '(a,i0,a,a,a,a)') 'Newton did not converge in ', iterations, ' iterations (residual ', &
+                  & es_text(residual, 12, 5), ', first ', es_text(r0, 12, 5)//')'
+               call analysis_error(error, trim(msg))
+               return
+            end if
+            call factor_system(system, info, self%counts)
+            if (info /= 0) then
+               write (msg, '(a,i0,a)') 'the iteration matrix K + c1 C + c2 M is singular at equation ', info, &
+                  & ' (a free dof with neither mass nor stiffness)'
+               call analysis_error(error, trim(msg))
+               return
+            end if
+            call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+            do k = 1, mesh%nfree
+               d = mesh%eq_dof(k)
+               call alpha_update(c, system%rhs(k, 1), self%qt(d), self%vt(d), self%acct(d), self%at(d))
+            end do
+            iterations = iterations + 1
+            self%counts%iterations = self%counts%iterations + 1
+            if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
+               ! The residual at the converged iterate: the reactions.
+               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
+               residual = residual_norm(system, mesh)
+               exit
+            end if
+         end do
+         if (.not. all(abs(self%qt) <= huge(1.0_dp))) then
+            call analysis_error(error, 'the configuration is not finite')
+            return
+         end if
+         ! Work over the step: the trapezoidal rule of the forces on the
+         ! displacement (exact for the trapezoidal integrator of a linear system).
+         work_loads = 0
+         work_drives = 0
+         do d = 1, mesh%ndof
+            associate (dq => self%qt(d) - state%q(d))
+               work_loads = work_loads + 0.5_dp*(state%g(d) + self%gt(d) - 2*dyn%weight(d))*dq
+               if (mesh%status(d) == dof_driven) work_drives = work_drives + 0.5_dp*(state%r(d) + system%r(d))*dq
+            end associate
+         end do
+         dissipated = 0
+         if (self%damped) call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
+         kinetic = kinetic_energy(dyn, mesh, self%vt)
+         strain = strain_energy(mesh, self%qt)
+         energy = kinetic + strain - dot_product(dyn%weight, self%qt)
+         ! The integrator dissipates (rho_inf < 1) or keeps (1) energy: a step
+         ! that creates much of it has jumped to another solution of its
+         ! nonlinear equations (stiff modes of a large motion); a shorter one does not.
+         created = energy - state%energy - work_loads - work_drives + dissipated
+         if (created > max_created*max(kinetic + strain, state%kinetic + state%strain, abs(work_loads + work_drives))) &
+            & then
+            write (msg, '(a,a,a,a,a)') 'the step creates energy (', es_text(created, 12, 4), ' against ', &
+               & es_text(kinetic + strain, 12, 4), ' kinetic and strain): a jump to another solution of its equations'
+            call analysis_error(error, trim(msg))
+            return
+         end if
+         seg = state%seg
+         call relocate(mesh, self%model, t_new, self%qt, seg, moved, error)
+         if (allocated(error)) return
+         state%seg = seg
+         state%work_loads = state%work_loads + work_loads
+         state%work_drives = state%work_drives + work_drives
+         state%dissipated = state%dissipated + dissipated
+         state%kinetic = kinetic
+         state%strain = strain
+         state%energy = energy
+         state%t = t_new
+         state%q = self%qt
+         state%v = self%vt
+         state%acc = self%acct
+         state%a = self%at
+         state%g = self%gt
+         state%r = system%r
+         self%steps = self%steps + 1
+         self%newton_iterations = self%newton_iterations + iterations
+         self%counts%steps = self%counts%steps + 1
+      end associate
+   end subroutine solve_step
+
+   !> The energy the damping dissipated over a step: the trapezoidal rule of
+   !> C v on the displacement dq (C of the step).
+   pure subroutine damping_work(dyn, mesh, v0, v1, dq, dissipated)
+      type(dynamic_system_type), intent(in) :: dyn
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: v0(:), v1(:), dq(:)
+      real(dp), intent(inout) :: dissipated
+      real(dp) :: ve(6), de(6)
+      integer :: e, i
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            ve(i) = v0(mesh%edof(i, e)) + v1(mesh%edof(i, e))
+            de(i) = dq(mesh%edof(i, e))
+         end do
+         dissipated = dissipated + 0.5_dp*dot_product(de, times6(dyn%ce, e, ve))
+      end do
+   end subroutine damping_work
+
+   !> The result of the accepted state: nodes and links, reactions, energy.
+   subroutine fill_result(self, result)
+      type(dynamic_stepper_type), intent(inout) :: self
+      type(step_result_type), intent(inout) :: result
+      real(dp) :: p(3)
+      associate (state => self%state, mesh => self%mesh, dyn => self%dynamics)
+         result%t = state%t
+         result%has_velocity = .true.
+         result%has_acceleration = .true.
+         call fill_nodes_links(mesh, self%model, state%q, state%v, state%acc, result)
+         if (self%model%output%vtk) call fill_fields(mesh, state%q, state%v, state%acc, result)
+         if (.not. allocated(result%reactions)) allocate (result%reactions(3, reaction_count(self%model)))
+         call fill_reactions(self, result%reactions)
+         result%has_reactions = all(abs(result%reactions) <= huge(1.0_dp))
+         p = momentum(dyn, mesh, state%q, state%v)
+         if (.not. allocated(result%energy)) allocate (result%energy(energy_count))
+         result%energy = [state%kinetic, state%strain, state%energy - state%kinetic - state%strain, state%work_loads, &
+            & state%work_drives, state%dissipated, &
+            & state%energy - state%work_loads - state%work_drives + state%dissipated - self%energy0, p(1), p(2), p(3)]
+         result%has_energy = .true.
+      end associate
+   end subroutine fill_result
+
+   !> The reactions in kinetostatics' rows: drives and supports the residual
+   !> on their dofs; joints the end forces of the link's element there,
+   !> P_e + M_e acc_e + C_e v_e - weight_e (each element in equilibrium
+   !> under its end forces and its own inertia, damping and weight).
+   subroutine fill_reactions(self, reactions)
+      type(dynamic_stepper_type), intent(in) :: self
+      real(dp), intent(out) :: reactions(:, :)
+      integer :: row, e, k, dof
+      real(dp) :: pe(6), ge(6)
+      reactions = 0
+      associate (state => self%state, mesh => self%mesh, dyn => self%dynamics, rows => self%rows)
+         do row = 1, size(reactions, 2)
+            e = rows%row_element(row)
+            if (e > 0) then
+               call end_forces(e, pe)
+               ge = pe
+               reactions(:, row) = ge(3*rows%row_end(row) - 2:3*rows%row_end(row))
+            else if (rows%row_slide(row) > 0) then
+               ! A sliding joint: the penalty force on the slave.
+               call slider_force(mesh, rows%row_slide(row), state%q, state%seg, reactions(:, row))
+            else
+               do k = 1, 3
+                  dof = rows%row_dof(k, row)
+                  if (dof > 0) reactions(k, row) = state%r(dof)
+               end do
+            end if
+         end do
+      end associate
+   contains
+      subroutine end_forces(e, fe)
+         integer, intent(in) :: e
+         real(dp), intent(out) :: fe(6)
+         real(dp) :: xe(6), ae(6), ve(6), weight(6)
+         integer :: i
+         do i = 1, 6
+            xe(i) = self%state%q(self%mesh%edof(i, e))
+            ae(i) = self%state%acc(self%mesh%edof(i, e))
+            ve(i) = self%state%v(self%mesh%edof(i, e))
+         end do
+         call element_force(self%mesh, e, xe, fe)
+         ! The element's own weight (point masses belong to the pins).
+         weight = element_weight(self%model, self%mesh, e)
+         fe = fe + times6(self%dynamics%me, e, ae) - weight
+         if (self%damped) fe = fe + times6(self%dynamics%ce, e, ve)
+      end subroutine end_forces
+   end subroutine fill_reactions
+
+   subroutine element_force(mesh, e, xe, pe)
+      use fekap_element_beam, only: beam_residual
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: e
+      real(dp), intent(in) :: xe(6)
+      real(dp), intent(out) :: pe(6)
+      call beam_residual(mesh%elements(e), xe, pe)
+   end subroutine element_force
+
+   pure function element_weight(model, mesh, e) result(w)
+      use fekap_element_inertia, only: beam_gravity_force
+      type(model_type), intent(in) :: model
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: e
+      real(dp) :: w(6)
+      w = beam_gravity_force(mesh%elements(e)%length, model%sections(model%links(mesh%elink(e))%section)%rho_a, &
+         & model%gravity)
+   end function element_weight
+
+end module fekap_effects_dynamic_stepper

@@ -1,0 +1,257 @@
+!> The equations of motion of the finite element mesh and their iteration
+!> matrix (docs/dynamics.md):
+!>   R(q, qd, qdd, t) = M qdd + C qd + P(q) - F^c(q) - g(t) = 0 on the free dofs,
+!> M the consistent mass (fekap_element_inertia) with the point masses, C the
+!> Rayleigh damping alpha M + beta K_m of each element's section (K_m the
+!> material tangent, taken at the configuration of the step's start so that
+!> C is constant over a step), P the beams' internal forces, F^c the
+!> slidelines' penalty forces, g the weights and the loads at time t. With
+!> qd and qdd functions of q through the integrator (qd' = c1, qdd' = c2),
+!> the iteration matrix is dR/dq = K + c1 C + c2 M, in the FEM's band storage.
+!> On the constrained dofs R is what the supports and drives apply.
+module fekap_effects_dynamic_system
+   use fekap_kinds, only: dp
+   use fekap_model, only: model_type, dof_rot
+   use fekap_model_work, only: work_counts_type
+   use fekap_assembly_mesh, only: mesh_type
+   use fekap_element_beam, only: beam_residual, beam_strain_energy
+   use fekap_element_inertia, only: beam_mass_matrix, beam_gravity_force
+   use fekap_solver_linear_system, only: linear_system_type, assemble_system, assemble_system_residual
+   implicit none
+   private
+
+   public :: dynamic_system_type, new_dynamic_system, external_forces, assemble_dynamics, update_damping
+   public :: kinetic_energy, strain_energy, momentum, has_damping, times6
+
+   type :: dynamic_system_type
+      !> (6, 6, nelem): each element's consistent mass and damping matrices.
+      real(dp), allocatable :: me(:, :, :), ce(:, :, :)
+      !> (nelem): Rayleigh coefficients of each element's section.
+      real(dp), allocatable :: alpha(:), beta(:)
+      !> (ndof): point masses on translations, rotary inertias on rotations.
+      real(dp), allocatable :: point_mass(:)
+      !> (ndof): the weights (consistent element weights and point masses' weights).
+      real(dp), allocatable :: weight(:)
+      !> (ndof) work.
+      real(dp), allocatable :: work(:)
+   end type dynamic_system_type
+
+contains
+
+   !> The masses, weights, damping and loads of `model` on its mesh.
+   subroutine new_dynamic_system(self, model, mesh)
+      type(dynamic_system_type), intent(out) :: self
+      type(model_type), intent(in) :: model
+      type(mesh_type), intent(in) :: mesh
+      integer :: e, i, dof, ne
+      ne = size(mesh%elements)
+      allocate (self%me(6, 6, ne), self%ce(6, 6, ne), source=0.0_dp)
+      allocate (self%alpha(ne), self%beta(ne), source=0.0_dp)
+      allocate (self%point_mass(mesh%ndof), self%weight(mesh%ndof), self%work(mesh%ndof), source=0.0_dp)
+      do e = 1, ne
+         associate (s => model%sections(model%links(mesh%elink(e))%section), el => mesh%elements(e))
+            self%me(:, :, e) = beam_mass_matrix(el%length, s%rho_a, s%rho_i)
+            self%alpha(e) = s%alpha
+            self%beta(e) = s%beta
+            self%weight(mesh%edof(:, e)) = self%weight(mesh%edof(:, e)) + &
+               & beam_gravity_force(el%length, s%rho_a, model%gravity)
+         end associate
+      end do
+      if (allocated(model%masses)) then
+         do i = 1, size(model%masses)
+            associate (m => model%masses(i))
+               self%point_mass(mesh%tdof(:, m%node)) = self%point_mass(mesh%tdof(:, m%node)) + m%mass
+               self%weight(mesh%tdof(:, m%node)) = self%weight(mesh%tdof(:, m%node)) + m%mass*model%gravity
+               if (m%link > 0) then
+                  dof = mesh%link_rot(merge(1, 2, model%links(m%link)%node(1) == m%node), m%link)
+                  self%point_mass(dof) = self%point_mass(dof) + m%inertia
+               end if
+            end associate
+         end do
+      end if
+   end subroutine new_dynamic_system
+
+   !> Whether some element is damped.
+   pure logical function has_damping(self)
+      type(dynamic_system_type), intent(in) :: self
+      has_damping = any(self%alpha /= 0 .or. self%beta /= 0)
+   end function has_damping
+
+   !> g(t): the weights and the loads at time t (the mesh's load set: the
+   !> loads with a law at its value, the others times the load factor t).
+   subroutine external_forces(self, mesh, t, g)
+      type(dynamic_system_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: g(:)
+      call mesh%loads%at(t, g)
+      g = g + self%weight
+   end subroutine external_forces
+
+   !> Each element's damping matrix alpha M + beta K_m at q (the material
+   !> tangent): C for the step that starts at q.
+   pure subroutine update_damping(self, mesh, q)
+      type(dynamic_system_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q(:)
+      real(dp) :: pe(6), ke(6, 6)
+      integer :: e
+      do e = 1, size(mesh%elements)
+         self%ce(:, :, e) = self%alpha(e)*self%me(:, :, e)
+         if (self%beta(e) /= 0) then
+            call beam_residual(mesh%elements(e), q(mesh%edof(:, e)), pe, ke, geometric_above=huge(1.0_dp))
+            self%ce(:, :, e) = self%ce(:, :, e) + self%beta(e)*ke
+         end if
+      end do
+   end subroutine update_damping
+
+   !> The residual R over all dofs at time t into system%r, and with `c1`, `c2` the iteration matrix K + c1 C + c2 M into the
+   !> system's band (and free-driven block).
+   subroutine assemble_dynamics(self, system, mesh, q, v, acc, t, seg, counts, c1, c2)
+      type(dynamic_system_type), intent(inout) :: self
+      type(linear_system_type), intent(inout) :: system
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: q(:), v(:), acc(:)
+      real(dp), intent(in) :: t
+      integer, intent(in) :: seg(:)
+      type(work_counts_type), intent(inout) :: counts
+      real(dp), intent(in), optional :: c1, c2
+      real(dp) :: me(36), k, ae(6), ve(6), fe(6)
+      integer :: e, m, i
+      logical :: damped
+      damped = has_damping(self)
+      if (present(c2)) then
+         ! Full geometric stiffness: the motion strains the links.
+         call assemble_system(system, mesh, q, t, seg, 0.0_dp, counts)
+      else
+         call assemble_system_residual(system, mesh, q, t, seg, counts)
+      end if
+      ! The assembly subtracted the loads at t; the weights are the masses'.
+      associate (r => system%r)
+         r = r - self%weight + self%point_mass*acc
+         do e = 1, size(mesh%elements)
+            do i = 1, 6
+               ae(i) = acc(mesh%edof(i, e))
+               ve(i) = v(mesh%edof(i, e))
+            end do
+            fe = times6(self%me, e, ae)
+            if (damped) fe = fe + times6(self%ce, e, ve)
+            do i = 1, 6
+               r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + fe(i)
+            end do
+         end do
+      end associate
+      if (.not. present(c2)) return
+      do e = 1, size(mesh%elements)
+         call combine(self%me(:, :, e), self%ce(:, :, e), c1, c2, me)
+         associate (map => mesh%scatter_map(:, :, e), nb => mesh%scatter_count(1, e), nd => mesh%scatter_count(2, e))
+            do m = 1, nb
+               call add_band(system%kff%a, size(system%kff%a), map(2, m), me(map(1, m)))
+            end do
+            do m = nb + 1, nb + nd
+               call add_band(system%kfd, size(system%kfd), map(2, m), me(map(1, m)))
+            end do
+         end associate
+      end do
+      do i = 1, mesh%nfree
+         k = self%point_mass(mesh%eq_dof(i))
+         if (k /= 0) call system%kff%add(i, i, c2*k)
+      end do
+   end subroutine assemble_dynamics
+
+   !> c2 m + c1 c, as 36 numbers in memory order.
+   pure subroutine combine(m, c, c1, c2, mc)
+      real(dp), intent(in) :: m(36), c(36), c1, c2
+      real(dp), intent(out) :: mc(36)
+      mc = c2*m + c1*c
+   end subroutine combine
+
+   !> y = m(:, :, e) x for element e's 6 x 6 matrix of m (6, 6, nelem),
+   !> without a copy of it.
+   pure function times6(m, e, x) result(y)
+      real(dp), intent(in) :: m(:, :, :), x(6)
+      integer, intent(in) :: e
+      real(dp) :: y(6)
+      integer :: j
+      y = m(:, 1, e)*x(1)
+      do j = 2, 6
+         y = y + m(:, j, e)*x(j)
+      end do
+   end function times6
+
+   !> a(position) += value, a seen as one block of n numbers.
+   pure subroutine add_band(a, n, position, value)
+      integer, intent(in) :: n, position
+      real(dp), intent(inout) :: a(n)
+      real(dp), intent(in) :: value
+      a(position) = a(position) + value
+   end subroutine add_band
+
+   !> Kinetic energy 1/2 v^T M v.
+   pure real(dp) function kinetic_energy(self, mesh, v) result(energy)
+      type(dynamic_system_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: v(:)
+      real(dp) :: ve(6)
+      integer :: e, i
+      energy = 0.5_dp*sum(self%point_mass*v**2)
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            ve(i) = v(mesh%edof(i, e))
+         end do
+         energy = energy + 0.5_dp*dot_product(ve, times6(self%me, e, ve))
+      end do
+   end function kinetic_energy
+
+   !> Strain energy of the beams at q.
+   pure real(dp) function strain_energy(mesh, q) result(energy)
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q(:)
+      real(dp) :: xe(6)
+      integer :: e, i
+      energy = 0
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+         end do
+         energy = energy + beam_strain_energy(mesh%elements(e), xe)
+      end do
+   end function strain_energy
+
+   !> Linear momentum (px, py) and angular momentum about the origin of the
+   !> motion (q, v): sum of M v over the translations, and the integral of
+   !> rhoA x cross v + rhoI omega (exact for the linear interpolation:
+   !> x cross v is quadratic along an element) with the point masses.
+   pure function momentum(self, mesh, q, v) result(p)
+      type(dynamic_system_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q(:), v(:)
+      real(dp) :: p(3)
+      real(dp) :: mv(6), xe(6), ve(6), c(2)
+      integer :: e, ip
+      p = 0
+      do ip = 1, mesh%npoint
+         associate (d => mesh%tdof(:, ip))
+            p(1:2) = p(1:2) + self%point_mass(d)*v(d)
+            p(3) = p(3) + self%point_mass(d(1))*(q(d(1))*v(d(2)) - q(d(2))*v(d(1)))
+         end associate
+      end do
+      do e = 1, size(mesh%elements)
+         do ip = 1, 6
+            xe(ip) = q(mesh%edof(ip, e))
+            ve(ip) = v(mesh%edof(ip, e))
+         end do
+         mv = times6(self%me, e, ve)
+         p(1:2) = p(1:2) + mv(1:2) + mv(4:5)
+         ! int rhoA x cross v with x, v linear: the mass matrix's weights.
+         c(1) = xe(1)*mv(2) - xe(2)*mv(1)
+         c(2) = xe(4)*mv(5) - xe(5)*mv(4)
+         p(3) = p(3) + c(1) + c(2) + mv(3) + mv(6)
+      end do
+      ! Rotary inertias at link ends.
+      do ip = 1, mesh%ndof
+         if (mesh%dof_kind(ip) == dof_rot) p(3) = p(3) + self%point_mass(ip)*v(ip)
+      end do
+   end function momentum
+
+end module fekap_effects_dynamic_system
