@@ -6,7 +6,7 @@ module fekap_assembly_lapack
    implicit none
    private
 
-   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgbcon, dgetrf, dgetrs, dgeqp3, dlacn2
+   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dgeqp3, dlacn2
    public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
    public :: band_lu_factor, band_lu_solve
 
@@ -53,22 +53,6 @@ module fekap_assembly_lapack
          real(dp), intent(inout) :: b(ldb, *)
          integer, intent(out) :: info
       end subroutine dgbtrs
-
-      !> Reciprocal condition number (1-norm) of a band matrix from its
-      !> dgbtrf factor and its norm anorm.
-      subroutine dgbcon(norm, n, kl, ku, ab, ldab, ipiv, anorm, rcond, work, iwork, info)
-         import :: dp
-         implicit none
-         character, intent(in) :: norm
-         integer, intent(in) :: n, kl, ku, ldab
-         real(dp), intent(in) :: ab(ldab, *)
-         integer, intent(in) :: ipiv(*)
-         real(dp), intent(in) :: anorm
-         real(dp), intent(out) :: rcond
-         real(dp), intent(out) :: work(*)
-         integer, intent(out) :: iwork(*)
-         integer, intent(out) :: info
-      end subroutine dgbcon
 
       !> LU factorisation with partial pivoting of a general (dense) matrix.
       pure subroutine dgetrf(m, n, a, lda, ipiv, info)

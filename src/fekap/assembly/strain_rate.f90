@@ -26,7 +26,7 @@ module fekap_assembly_strain_rate
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
-   use fekap_assembly_lapack, only: band_lu_factor, dgbcon
+   use fekap_assembly_lapack, only: band_lu_factor, dgbtrs, dlacn2
    implicit none
    private
 
@@ -65,7 +65,7 @@ module fekap_assembly_strain_rate
       !> a QR of B), so a configuration d away from a singular one has a
       !> ratio of order d**2 in both forms; 0 if B_f is singular.
       real(dp) :: pivot_ratio = 0
-      !> 1-norm of B_f at its last factorisation, and dgbcon's scratch
+      !> 1-norm of B_f at its last factorisation, and dlacn2's scratch
       !> (allocated on first use), for strain_rate_rcond.
       real(dp) :: norm1 = 0
       real(dp), allocatable :: rcond_work(:)
@@ -293,19 +293,35 @@ contains
       end do
    end subroutine factor_strain_rate
 
-   !> The condition estimate of the factor of B_f (LAPACK dgbcon, 1-norm),
-   !> squared to be on the tangent's scale like pivot_ratio (K = B^T W B);
-   !> 0 without a factor. Change points compare it with the run's best.
+   !> The condition estimate of the factor of B_f (1-norm, Higham's estimator
+   !> LAPACK dlacn2 with the factor's solves), squared to be on the tangent's
+   !> scale like pivot_ratio (K = B^T W B); 0 without a factor. Change points
+   !> compare it with the run's best. Not dgbcon: its careful triangular
+   !> solves (dlatbs) rescan the whole vector per column when B_f is
+   !> ill-conditioned, quadratic in the size (minutes for a link of 10^5
+   !> elements).
    subroutine strain_rate_rcond(self, rcond)
       type(strain_rate_type), intent(inout) :: self
       real(dp), intent(out) :: rcond
-      integer :: info
+      real(dp) :: est
+      integer :: kase, isave(3), info
       rcond = 0
-      if (.not. self%factored) return
-      if (.not. allocated(self%rcond_work)) allocate (self%rcond_work(3*self%n), self%rcond_iwork(self%n))
-      call dgbcon('1', self%n, self%kl, self%ku, self%ab, size(self%ab, 1), self%ipiv, self%norm1, rcond, &
-         & self%rcond_work, self%rcond_iwork, info)
-      rcond = rcond**2
+      if (.not. self%factored .or. .not. self%norm1 > 0) return
+      if (.not. allocated(self%rcond_work)) allocate (self%rcond_work(2*self%n), self%rcond_iwork(self%n))
+      est = 0
+      kase = 0
+      associate (x => self%rcond_work(1:self%n), v => self%rcond_work(self%n + 1:))
+         do
+            call dlacn2(self%n, v, x, self%rcond_iwork, est, kase, isave)
+            if (kase == 0) exit
+            if (kase == 1) then
+               call band_lu_solve_loops(self%ab, self%kl, self%ku, self%ipiv, x)
+            else
+               call dgbtrs('T', self%n, self%kl, self%ku, 1, self%ab, size(self%ab, 1), self%ipiv, x, self%n, info)
+            end if
+         end do
+      end associate
+      if (est > 0) rcond = ((1/self%norm1)/est)**2
    end subroutine strain_rate_rcond
 
    !> Solve B_f x = b with the factor (b by band rows in, x by equations out).
