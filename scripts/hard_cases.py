@@ -14,7 +14,7 @@ over the rows, the least of three runs). Cases:
   over (0.02) its collinear positions;
 * the near-toggle Grashof four-bar at large steps: `--predictor taylor` at 0.2
   and 0.3, the classical methods with `extrapolate` at 0.2, 0.3 and 0.5;
-* the scissor lifts of items 1-2, from scripts/scissor.py's hard_case_rows()
+* the scissor lifts of items 1-2 (N = 10, 100, 1000), by scripts/scissor.py's run_check()
   when it has one (the rows are that script's; the same columns).
 
 Usage:  python3 scripts/hard_cases.py [--fekap BIN] [--doc docs/hard-cases.md] [--print]
@@ -217,14 +217,21 @@ def grashof_rows(fekap: str, work: Path) -> list[dict]:
     return rows
 
 
-def scissor_rows(fekap: str, work: Path) -> tuple[list[dict], str]:
+def scissor_rows(fekap: str, work: Path, sizes: tuple[int, ...] = (10, 100, 1000)) -> tuple[list[dict], str]:
+    """The scissor lifts of items 1-2 (scripts/scissor.py's run_check: the issue's
+    layout, errors relative to the closed form's largest value of each kind)."""
     try:
         import scissor  # noqa: E402
     except ImportError as e:
         return [], f"scripts/scissor.py could not be imported ({e})"
-    if not hasattr(scissor, "hard_case_rows"):
-        return [], "scripts/scissor.py has no hard_case_rows() yet: the scissor rows (#16 items 1-2) are not in this table"
-    return scissor.hard_case_rows(fekap, work), ""
+    rows = []
+    for cells in sizes:
+        r = scissor.run_check(cells, 0.01, Path(fekap), work)
+        rows.append({"case": f"scissor lift N = {cells}", "options": "dt 0.01", "exit": r["exit"],
+                     "rows": r["steps"] + 1, "pos": r["pos"], "vel": r["vel"], "acc": r["acc"],
+                     "its/config": r["its"], "us/config": r["us"] * r["equations"]})
+    return rows, ("scissor rows: errors relative to the closed form's largest value; N = 10,000 with "
+                  "`python3 scripts/scissor.py --check 10000` (section 7)")
 
 
 def cell(row: dict, key: str) -> str:
