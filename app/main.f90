@@ -8,8 +8,7 @@ program fekap_main
       & effects_dynamics
    use fekap_deck, only: read_deck
    use fekap_model_effects, only: check_effects_request, planned_effects
-   use fekap_effects_kinetostatic_stepper, only: kinetostatic_stepper_type, new_kinetostatic_stepper
-   use fekap_effects_statics, only: statics_stepper_type, new_statics_stepper
+   use fekap_effects_reaction_stepper, only: reaction_stepper_type, new_reaction_stepper
    use fekap_effects_free_motion, only: check_free_motion
    use fekap_effects_dynamic_stepper, only: dynamic_stepper_type, new_dynamic_stepper, energy_names
    use fekap_solver_stepper, only: stepper_type
@@ -111,23 +110,18 @@ contains
       class(stepper_type), allocatable, intent(out) :: stepper
       type(error_type), allocatable, intent(out) :: error
       type(fem_stepper_type), allocatable :: fem
-      type(kinetostatic_stepper_type), allocatable :: kinetostatic
+      type(reaction_stepper_type), allocatable :: reactions
       type(dynamic_stepper_type), allocatable :: dynamic
-      type(statics_stepper_type), allocatable :: statics
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
       select case (model%analysis%method)
       case (method_fem)
          allocate (fem)
          call new_fem_stepper(fem, model)
-         if (planned_effects(model) == effects_kinetostatics) then
-            allocate (kinetostatic)
-            call new_kinetostatic_stepper(kinetostatic, fem)
-            call move_alloc(kinetostatic, stepper)
-         else if (planned_effects(model) == effects_statics) then
-            allocate (statics)
-            call new_statics_stepper(statics, fem)
-            call move_alloc(statics, stepper)
+         if (any(planned_effects(model) == [effects_kinetostatics, effects_statics])) then
+            allocate (reactions)
+            call new_reaction_stepper(reactions, fem, planned_effects(model))
+            call move_alloc(reactions, stepper)
          else if (planned_effects(model) == effects_dynamics) then
             ! Bad input first: a free motion with neither mass nor stiffness.
             call check_free_motion(fem%mesh, model, fem%mesh%q0, model%analysis%t_start, fem%seg, error)
