@@ -17,6 +17,7 @@ module fekap_assembly_assemble
    private
 
    public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain
+   public :: gather
 
 contains
 
@@ -224,7 +225,8 @@ contains
       end do
    end subroutine assemble_second_derivative
 
-   !> v(dofs), with 0 for absent dofs (a fixed guide does not move).
+   !> v(dofs), with 0 for absent dofs (a fixed guide does not move); the
+   !> square-root form's strain rates use it too.
    pure function gather(v, dofs) result(ve)
       real(dp), intent(in) :: v(:)
       integer, intent(in) :: dofs(:)

@@ -26,6 +26,7 @@ module fekap_assembly_strain_rate
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
+   use fekap_assembly_assemble, only: gather
    use fekap_assembly_lapack, only: band_lu_factor, dgbtrs, dlacn2
    implicit none
    private
@@ -418,18 +419,6 @@ contains
          r(self%slide_row(i)) = r(self%slide_row(i)) - 2*dot_product(self%slide_ts(:, i), vs)*vm/self%slide_nm(3, i)
       end do
    end subroutine strain_accelerations
-
-   !> v(dofs), with 0 for absent dofs (a ground guide does not move).
-   pure function gather(v, dofs) result(ve)
-      real(dp), intent(in) :: v(:)
-      integer, intent(in) :: dofs(:)
-      real(dp) :: ve(size(dofs))
-      integer :: i
-      ve = 0
-      do i = 1, size(dofs)
-         if (dofs(i) > 0) ve(i) = v(dofs(i))
-      end do
-   end function gather
 
    !> The number of rows of B for a mesh (3 per element, 1 per slideline):
    !> B_f is square when it equals the number of free dofs.

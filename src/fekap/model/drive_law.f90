@@ -110,7 +110,7 @@ contains
       class(law_type), intent(in) :: self
       real(dp), intent(in) :: t
       real(dp), intent(out) :: f, df, ddf
-      integer :: k, i, lo, hi
+      integer :: k, lo, hi
       real(dp) :: arg, h, a, b
       select case (self%kind)
       case (law_rate)
@@ -133,16 +133,8 @@ contains
          end do
       case (law_table)
          ! Locate the interval by bisection; outside the table the end cubic is extended.
-         lo = 1
-         hi = size(self%tt)
-         do while (hi - lo > 1)
-            i = (lo + hi)/2
-            if (t >= self%tt(i)) then
-               lo = i
-            else
-               hi = i
-            end if
-         end do
+         lo = knot_interval(self%tt, t)
+         hi = lo + 1
          h = self%tt(hi) - self%tt(lo)
          a = (self%tt(hi) - t)/h
          b = (t - self%tt(lo))/h
@@ -163,16 +155,8 @@ contains
             f = self%tv(size(self%tv))
             df = 0
          else
-            lo = 1
-            hi = size(self%tt)
-            do while (hi - lo > 1)
-               i = (lo + hi)/2
-               if (t >= self%tt(i)) then
-                  lo = i
-               else
-                  hi = i
-               end if
-            end do
+            lo = knot_interval(self%tt, t)
+            hi = lo + 1
             h = self%tt(hi) - self%tt(lo)
             b = (t - self%tt(lo))/h
             f = (1 - b)*self%tv(lo) + b*self%tv(hi)
@@ -184,5 +168,23 @@ contains
          ddf = 0
       end select
    end subroutine law_eval
+
+   !> The interval [tt(lo), tt(lo + 1)) of the increasing knots tt that t is
+   !> in, by bisection: 1 before the second knot, size(tt) - 1 from the last
+   !> but one on.
+   pure integer function knot_interval(tt, t) result(lo)
+      real(dp), intent(in) :: tt(:), t
+      integer :: hi, i
+      lo = 1
+      hi = size(tt)
+      do while (hi - lo > 1)
+         i = (lo + hi)/2
+         if (t >= tt(i)) then
+            lo = i
+         else
+            hi = i
+         end if
+      end do
+   end function knot_interval
 
 end module fekap_model_drive_law
