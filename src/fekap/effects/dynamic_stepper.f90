@@ -19,6 +19,7 @@ module fekap_effects_dynamic_stepper
    use fekap_solver_stepper, only: stepper_type, clock_seconds, phase_timed
    use fekap_solver_linear_system, only: linear_system_type, new_linear_system, assemble_system, factor_system, &
       & system_pivot, residual_norm, newton_correction, solve_system
+   use fekap_solver_convergence, only: residual_floor
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
@@ -95,8 +96,7 @@ contains
    subroutine new_dynamic_stepper(self, model)
       type(dynamic_stepper_type), intent(out) :: self
       type(model_type), intent(in) :: model
-      integer :: e, n, nd
-      real(dp) :: force_scale, shortest
+      integer :: n, nd
       self%model = model
       call new_mesh(self%mesh, model)
       call new_linear_system(self%system, self%mesh, dense=.false.)
@@ -112,16 +112,7 @@ contains
       allocate (self%state%seg(size(self%mesh%slides)), source=1)
       self%model_length = model_size(model)
       self%dof_length = merge(self%model_length, 1.0_dp, self%mesh%dof_kind == dof_rot)
-      force_scale = 0
-      shortest = huge(1.0_dp)
-      do e = 1, size(self%mesh%elements)
-         associate (el => self%mesh%elements(e))
-            force_scale = max(force_scale, el%ea, el%kga, el%ei/el%length**2)
-            shortest = min(shortest, el%length)
-         end associate
-      end do
-      self%residual_floor = max(1.0e-13_dp, epsilon(1.0_dp)*self%model_length/shortest)*force_scale* &
-         & sqrt(real(max(1, self%mesh%nfree), dp))
+      self%residual_floor = residual_floor(self%mesh, self%model_length)
    end subroutine new_dynamic_stepper
 
    !> The mesh and the integrator for the listing's plan.

@@ -22,6 +22,7 @@ module fekap_effects_kinetostatics
       & reaction_support, reaction_slider
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
+   use fekap_assembly_assemble, only: gather
    use fekap_contact_slideline, only: slide_force, slide_tie_force
    use fekap_element_beam, only: beam_residual
    use fekap_element_inertia, only: beam_inertia_force, beam_gravity_force
@@ -191,27 +192,19 @@ contains
       !> ku -= K^c u over the slideline's dofs.
       subroutine add_slider(islide)
          integer, intent(in) :: islide
-         real(dp) :: xs(2), x1(2), x2(2), fc(6), kc(6, 6), ft(5), kt(5, 5), ud(6), ut(5)
+         real(dp) :: xs(2), x1(2), x2(2), fc(6), kc(6, 6), ft(5), kt(5, 5)
          integer :: dofs(6), tdofs(5), j
          associate (sl => mesh%slides(islide))
             call slide_position(mesh, sl, seg(islide), q, xs, x1, x2, dofs)
             call slide_force(xs, x1, x2, sl%kp, fc, kc)
-            ud = 0
-            do j = 1, 6
-               if (dofs(j) > 0) ud(j) = u(dofs(j))
-            end do
-            fc = matmul(kc, ud)
+            fc = matmul(kc, gather(u, dofs))
             do j = 1, 6
                if (dofs(j) > 0) self%ku(dofs(j)) = self%ku(dofs(j)) - fc(j)
             end do
             if (sl%kind == joint_prismatic) then
                tdofs = [sl%slave_rot, dofs(3:6)]
                call slide_tie_force(q(sl%slave_rot), x1, x2, sl%c0(seg(islide)), sl%kr, ft, kt)
-               ut = 0
-               do j = 1, 5
-                  if (tdofs(j) > 0) ut(j) = u(tdofs(j))
-               end do
-               ft = matmul(kt, ut)
+               ft = matmul(kt, gather(u, tdofs))
                do j = 1, 5
                   if (tdofs(j) > 0) self%ku(tdofs(j)) = self%ku(tdofs(j)) - ft(j)
                end do
@@ -231,29 +224,21 @@ contains
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: force(3)
       real(dp), intent(in), optional :: u(:)
-      real(dp) :: xs(2), x1(2), x2(2), fc(6), kc(6, 6), ft(5), kt(5, 5), ud(6), ut(5)
-      integer :: dofs(6), tdofs(5), j
+      real(dp) :: xs(2), x1(2), x2(2), fc(6), kc(6, 6), ft(5), kt(5, 5)
+      integer :: dofs(6), tdofs(5)
       force = 0
       associate (sl => mesh%slides(islide))
          call slide_position(mesh, sl, seg(islide), q, xs, x1, x2, dofs)
          call slide_force(xs, x1, x2, sl%kp, fc, kc)
          if (present(u)) then
-            ud = 0
-            do j = 1, 6
-               if (dofs(j) > 0) ud(j) = u(dofs(j))
-            end do
-            fc = fc + matmul(kc, ud)
+            fc = fc + matmul(kc, gather(u, dofs))
          end if
          force(1:2) = fc(1:2)
          if (sl%kind == joint_prismatic) then
             tdofs = [sl%slave_rot, dofs(3:6)]
             call slide_tie_force(q(sl%slave_rot), x1, x2, sl%c0(seg(islide)), sl%kr, ft, kt)
             if (present(u)) then
-               ut = 0
-               do j = 1, 5
-                  if (tdofs(j) > 0) ut(j) = u(tdofs(j))
-               end do
-               ft = ft + matmul(kt, ut)
+               ft = ft + matmul(kt, gather(u, tdofs))
             end if
             force(3) = ft(1)
          end if

@@ -4,10 +4,11 @@
 module fekap_solver_convergence
    use fekap_kinds, only: dp
    use fekap_model, only: convergence_paper, convergence_default
+   use fekap_assembly_mesh, only: mesh_type
    implicit none
    private
 
-   public :: convergence_type, is_converged, converged_by_estimate
+   public :: convergence_type, is_converged, converged_by_estimate, residual_floor
 
    !> A Newton correction longer than this many model sizes is divergence (every method).
    real(dp), parameter, public :: divergence_length = 1.0e3_dp
@@ -34,6 +35,27 @@ module fekap_solver_convergence
    end type convergence_type
 
 contains
+
+   !> The least residual norm Newton can be asked for on a mesh (model size
+   !> model_length): a strain of 1e-13 in the stiffest element, or the
+   !> round-off of a strain computed from coordinates of the model's size
+   !> (eps size / L) if larger. The Euclidean norm of round-off grows like the
+   !> square root of the number of unknowns.
+   pure real(dp) function residual_floor(mesh, model_length) result(floor)
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: model_length
+      real(dp) :: force_scale, shortest
+      integer :: e
+      force_scale = 0
+      shortest = huge(1.0_dp)
+      do e = 1, size(mesh%elements)
+         associate (el => mesh%elements(e))
+            force_scale = max(force_scale, el%ea, el%kga, el%ei/el%length**2)
+            shortest = min(shortest, el%length)
+         end associate
+      end do
+      floor = max(1.0e-13_dp, epsilon(1.0_dp)*model_length/shortest)*force_scale*sqrt(real(max(1, mesh%nfree), dp))
+   end function residual_floor
 
    !> The convergence test after a Newton solve.
    !>   paper:   ||P(i)|| / ||P(0)|| < tol (r0 is the residual at the predictor).

@@ -43,6 +43,7 @@ module fekap_solver_fem
    use fekap_assembly_tracking, only: initial_segments, relocate, check_gaps
    use fekap_solver_stepper, only: stepper_type, clock_seconds, phase_timed
    use fekap_solver_convergence, only: convergence_type, is_converged, converged_by_estimate, estimate_margin, &
+      & residual_floor, &
       & divergence_length
    use fekap_solver_linear_system, only: linear_system_type, new_linear_system, assemble_system, &
       & assemble_system_residual, factor_system, system_pivot, residual_norm, newton_correction, &
@@ -213,8 +214,8 @@ contains
    subroutine new_fem_stepper(self, model)
       type(fem_stepper_type), intent(out) :: self
       type(model_type), intent(in) :: model
-      integer :: i, e
-      real(dp) :: f, df, ddf, force_scale, shortest
+      integer :: i
+      real(dp) :: f, df, ddf
       self%model = model
       call new_mesh(self%mesh, model)
       call new_linear_system(self%system, self%mesh, dense=model%analysis%solver == solver_dense)
@@ -246,20 +247,7 @@ contains
       self%conv%length = model%analysis%length_tol*self%model_length
       self%admissible_strain = min(max_admissible_strain, max(min_admissible_strain, 100*model%analysis%tol))
       call new_branch_check(self%branch, model, self%mesh)
-      ! Residual floor: a strain of 1e-13 in the stiffest element, or the
-      ! round-off of a strain computed from coordinates of the model's size
-      ! (eps size / L) if larger. The Euclidean norm of round-off grows like
-      ! the square root of the number of unknowns.
-      force_scale = 0
-      shortest = huge(1.0_dp)
-      do e = 1, size(self%mesh%elements)
-         associate (el => self%mesh%elements(e))
-            force_scale = max(force_scale, el%ea, el%kga, el%ei/el%length**2)
-            shortest = min(shortest, el%length)
-         end associate
-      end do
-      self%conv%residual_floor = max(1.0e-13_dp, epsilon(1.0_dp)*self%model_length/shortest)*force_scale* &
-         & sqrt(real(max(1, self%mesh%nfree), dp))
+      self%conv%residual_floor = residual_floor(self%mesh, self%model_length)
    end subroutine new_fem_stepper
 
    !> The mesh for the listing's plan: its size, band and slideline penalties.

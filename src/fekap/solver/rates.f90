@@ -128,18 +128,14 @@ contains
       real(dp), contiguous, intent(in) :: vd(:)
       real(dp), contiguous, intent(out) :: v(:)
       real(dp), contiguous, intent(inout) :: work(:)
-      integer :: i, k, pass
+      integer :: i, pass
       v = 0
       do i = 1, mesh%ndriven
          v(mesh%driven_dof(i)) = vd(i)
       end do
       do pass = 1, root_passes
          call strain_rates(root, mesh, v, work)
-         work = -work
-         call solve_strain_rate(root, work)
-         do k = 1, mesh%nfree
-            v(mesh%eq_dof(k)) = v(mesh%eq_dof(k)) + work(k)
-         end do
+         call add_root_correction(root, mesh, work, v)
       end do
    end subroutine root_velocities
 
@@ -155,18 +151,14 @@ contains
       real(dp), contiguous, intent(in) :: ad(:)
       real(dp), contiguous, intent(out) :: a(:)
       real(dp), contiguous, intent(inout) :: work(:)
-      integer :: i, k, pass
+      integer :: i, pass
       a = 0
       do i = 1, mesh%ndriven
          a(mesh%driven_dof(i)) = ad(i)
       end do
       do pass = 1, root_passes
          call strain_accelerations(root, mesh, v, a, work)
-         work = -work
-         call solve_strain_rate(root, work)
-         do k = 1, mesh%nfree
-            a(mesh%eq_dof(k)) = a(mesh%eq_dof(k)) + work(k)
-         end do
+         call add_root_correction(root, mesh, work, a)
       end do
    end subroutine root_accelerations
 
@@ -188,5 +180,19 @@ contains
          resp(mesh%driven_dof(j), j) = 1
       end do
    end subroutine root_drive_response
+
+   !> x_f += -B_f^-1 r: the correction of the free dofs of x for the residual
+   !> r (over B_f's rows, overwritten), with the factor in root.
+   subroutine add_root_correction(root, mesh, r, x)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(inout) :: r(:), x(:)
+      integer :: k
+      r = -r
+      call solve_strain_rate(root, r)
+      do k = 1, mesh%nfree
+         x(mesh%eq_dof(k)) = x(mesh%eq_dof(k)) + r(k)
+      end do
+   end subroutine add_root_correction
 
 end module fekap_solver_rates
