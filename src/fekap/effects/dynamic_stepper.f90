@@ -12,7 +12,7 @@
 module fekap_effects_dynamic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
-   use fekap_model, only: model_type, model_size, dof_rot
+   use fekap_model, only: model_type, model_size, dof_rot, integrator_energy_momentum
    use fekap_model_results, only: step_result_type
    use fekap_assembly_mesh, only: mesh_type, new_mesh, dof_driven, dof_fixed
    use fekap_assembly_tracking, only: initial_segments, relocate
@@ -26,6 +26,8 @@ module fekap_effects_dynamic_stepper
       & alpha_update
    use fekap_effects_dynamic_system, only: dynamic_system_type, new_dynamic_system, external_forces, &
       & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6
+   use fekap_effects_energy_momentum, only: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, &
+      & solve_em
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
    use fekap_output_format, only: es_text
@@ -63,6 +65,8 @@ module fekap_effects_dynamic_stepper
       type(dynamic_system_type) :: dynamics
       type(kinetostatics_type) :: rows
       type(dynamic_state_type) :: state
+      !> The energy-momentum integrator's band LU storage (if it integrates).
+      type(em_system_type) :: em
       !> The iterate of a step.
       real(dp), allocatable :: qt(:), vt(:), acct(:), at(:), gt(:)
       !> Drive laws at the start, and their value, rate and second rate.
@@ -103,6 +107,7 @@ contains
       call new_dynamic_system(self%dynamics, model, self%mesh)
       call new_kinetostatics(self%rows, model, self%mesh)
       self%damped = has_damping(self%dynamics)
+      if (model%analysis%integrator == integrator_energy_momentum) call new_em_system(self%em, self%mesh)
       n = self%mesh%ndof
       nd = self%mesh%ndriven
       allocate (self%state%q(n), self%state%v(n), self%state%acc(n), self%state%a(n), self%state%g(n), &
@@ -126,8 +131,13 @@ contains
          & self%mesh%ndof, ' dofs, ', self%mesh%nfree, ' equations, ', self%mesh%ndriven, &
          & ' driven; half-bandwidth ', self%mesh%kd
       text = trim(line)
-      write (line, '(a,f6.4,a,f7.4,a,f7.4,a,f7.4,a,f7.4,a)') 'integrator: generalized-alpha (Chung-Hulbert), rho_inf ', &
-         & c%rho_inf, ' (alpha_m ', c%am, ', alpha_f ', c%af, ', beta ', c%beta, ', gamma ', c%gamma, ')'
+      if (self%model%analysis%integrator == integrator_energy_momentum) then
+         write (line, '(a,f6.4,a,f7.4,a)') 'integrator: energy-momentum (midpoint rule, discrete gradient), rho_inf ', &
+            & c%rho_inf, ' (strain dissipation chi ', em_dissipation(c%rho_inf), ')'
+      else
+         write (line, '(a,f6.4,a,f7.4,a,f7.4,a,f7.4,a,f7.4,a)') 'integrator: generalized-alpha (Chung-Hulbert), rho_inf ', &
+            & c%rho_inf, ' (alpha_m ', c%am, ', alpha_f ', c%af, ', beta ', c%beta, ', gamma ', c%gamma, ')'
+      end if
       text = text//new_line('a')//'  '//trim(line)
       if (len_trim(self%start_velocity) > 0) text = text//new_line('a')//'  start: '//trim(self%start_velocity)
    end function dynamic_plan_text
@@ -341,74 +351,28 @@ contains
       if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
    end subroutine dynamic_advance
 
-   !> One step of generalized-alpha from the accepted state to t_new; the
-   !> state is left untouched on failure.
+   !> One step from the accepted state to t_new (generalized-alpha or the
+   !> energy-momentum integrator); the state is left untouched on failure.
    subroutine solve_step(self, t_new, iterations, residual, error)
       type(dynamic_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t_new
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
-      type(alpha_coefficients_type) :: c
-      real(dp) :: correction, r0, work_loads, work_drives, dissipated, kinetic, strain, energy, created
-      integer :: info, k, d
+      real(dp) :: work_loads, work_drives, dissipated, kinetic, strain, energy, created
+      integer :: d
       integer :: seg(size(self%state%seg))
-      logical :: moved
+      logical :: moved, em
       character(len=300) :: msg
+      em = self%model%analysis%integrator == integrator_energy_momentum
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
-         c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
          if (self%damped) call update_damping(dyn, mesh, state%q)
-         call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
-         do d = 1, mesh%ndof
-            if (mesh%status(d) == dof_fixed) then
-               self%qt(d) = state%q(d)
-               self%vt(d) = 0
-               self%acct(d) = 0
-            end if
-         end do
-         call drive_motion(self, t_new, self%qt, self%vt, self%acct)
-         call external_forces(dyn, mesh, t_new, self%gt)
-         iterations = 0
-         r0 = 0
-         residual = huge(1.0_dp)
-         do
-            call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts, &
-               & c%c1, c%c2)
-            residual = residual_norm(system, mesh)
-            if (.not. residual <= huge(1.0_dp)) then
-               call analysis_error(error, 'the residual of the equations of motion is not finite (the step is '// &
-                  & 'too long for the motion, or the mechanism has a dof without mass and stiffness)')
-               return
-            end if
-            if (iterations == 0) r0 = residual
-            if (residual <= self%residual_floor .and. iterations > 0) exit
-            if (iterations >= self%model%analysis%max_iter) then
-               write (msg, '(a,i0,a,a,a,a)') 'Newton did not converge in ', iterations, ' iterations (residual ', &
-                  & es_text(residual, 12, 5), ', first ', es_text(r0, 12, 5)//')'
-               call analysis_error(error, trim(msg))
-               return
-            end if
-            call factor_system(system, info, self%counts)
-            if (info /= 0) then
-               write (msg, '(a,i0,a)') 'the iteration matrix K + c1 C + c2 M is singular at equation ', info, &
-                  & ' (a free dof with neither mass nor stiffness)'
-               call analysis_error(error, trim(msg))
-               return
-            end if
-            call newton_correction(system, mesh, self%dof_length, correction, self%counts)
-            do k = 1, mesh%nfree
-               d = mesh%eq_dof(k)
-               call alpha_update(c, system%rhs(k, 1), self%qt(d), self%vt(d), self%acct(d), self%at(d))
-            end do
-            iterations = iterations + 1
-            self%counts%iterations = self%counts%iterations + 1
-            if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
-               ! The residual at the converged iterate: the reactions.
-               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
-               residual = residual_norm(system, mesh)
-               exit
-            end if
-         end do
+         if (em) then
+            call em_newton(self, t_new, iterations, residual, error)
+         else
+            call alpha_newton(self, t_new, iterations, residual, error)
+         end if
+         if (allocated(error)) return
          if (.not. all(abs(self%qt) <= huge(1.0_dp))) then
             call analysis_error(error, 'the configuration is not finite')
             return
@@ -420,7 +384,12 @@ contains
          do d = 1, mesh%ndof
             associate (dq => self%qt(d) - state%q(d))
                work_loads = work_loads + 0.5_dp*(state%g(d) + self%gt(d) - 2*dyn%weight(d))*dq
-               if (mesh%status(d) == dof_driven) work_drives = work_drives + 0.5_dp*(state%r(d) + system%r(d))*dq
+               ! Energy-momentum: the residual is the step's reaction.
+               if (mesh%status(d) == dof_driven .and. em) then
+                  work_drives = work_drives + system%r(d)*dq
+               else if (mesh%status(d) == dof_driven) then
+                  work_drives = work_drives + 0.5_dp*(state%r(d) + system%r(d))*dq
+               end if
             end associate
          end do
          dissipated = 0
@@ -461,6 +430,167 @@ contains
          self%counts%steps = self%counts%steps + 1
       end associate
    end subroutine solve_step
+
+   !> Newton on a step of generalized-alpha from the accepted state to
+   !> t_new: the iterate into qt, vt, acct, at and the residual (the
+   !> reactions) into system%r.
+   subroutine alpha_newton(self, t_new, iterations, residual, error)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t_new
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: residual
+      type(error_type), allocatable, intent(out) :: error
+      type(alpha_coefficients_type) :: c
+      real(dp) :: correction, r0
+      integer :: info, k, d
+      character(len=300) :: msg
+      associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
+         c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
+         call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
+         call hold_fixed(self)
+         call drive_motion(self, t_new, self%qt, self%vt, self%acct)
+         call external_forces(dyn, mesh, t_new, self%gt)
+         iterations = 0
+         r0 = 0
+         residual = huge(1.0_dp)
+         do
+            call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts, &
+               & c%c1, c%c2)
+            residual = residual_norm(system, mesh)
+            if (.not. residual <= huge(1.0_dp)) then
+               call not_finite(error)
+               return
+            end if
+            if (iterations == 0) r0 = residual
+            if (residual <= self%residual_floor .and. iterations > 0) exit
+            if (iterations >= self%model%analysis%max_iter) then
+               call no_convergence(error, iterations, residual, r0)
+               return
+            end if
+            call factor_system(system, info, self%counts)
+            if (info /= 0) then
+               write (msg, '(a,i0,a)') 'the iteration matrix K + c1 C + c2 M is singular at equation ', info, &
+                  & ' (a free dof with neither mass nor stiffness)'
+               call analysis_error(error, trim(msg))
+               return
+            end if
+            call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+            do k = 1, mesh%nfree
+               d = mesh%eq_dof(k)
+               call alpha_update(c, system%rhs(k, 1), self%qt(d), self%vt(d), self%acct(d), self%at(d))
+            end do
+            iterations = iterations + 1
+            self%counts%iterations = self%counts%iterations + 1
+            if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
+               ! The residual at the converged iterate: the reactions.
+               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
+               residual = residual_norm(system, mesh)
+               exit
+            end if
+         end do
+      end associate
+   end subroutine alpha_newton
+
+   !> Newton on a step of the energy-momentum integrator
+   !> (fekap_effects_energy_momentum) from the accepted state to t_new: the
+   !> iterate into qt, vt (v1 = 2 (q1 - q0)/h - v0 on the free dofs) and acct
+   !> (the step's mean acceleration (v1 - v0)/h; the drives' second rate on
+   !> theirs), the residual (the step's reactions) into system%r. The
+   !> predictor is q0 + h v0 + h^2/2 acc0.
+   subroutine em_newton(self, t_new, iterations, residual, error)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t_new
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: residual
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: h, chi, correction, r0
+      integer :: info, k, d
+      character(len=300) :: msg
+      associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
+         h = t_new - state%t
+         chi = em_dissipation(self%model%analysis%rho_inf)
+         self%qt = state%q + h*state%v + 0.5_dp*h**2*state%acc
+         self%vt = 2*(self%qt - state%q)/h - state%v
+         call hold_fixed(self)
+         call drive_motion(self, t_new, self%qt, self%vt, self%acct)
+         call external_forces(dyn, mesh, t_new, self%gt)
+         iterations = 0
+         r0 = 0
+         residual = huge(1.0_dp)
+         do
+            call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
+               & self%damped, system%r, tangent=.true.)
+            self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+            residual = residual_norm(system, mesh)
+            if (.not. residual <= huge(1.0_dp)) then
+               call not_finite(error)
+               return
+            end if
+            if (iterations == 0) r0 = residual
+            if (residual <= self%residual_floor .and. iterations > 0) exit
+            if (iterations >= self%model%analysis%max_iter) then
+               call no_convergence(error, iterations, residual, r0)
+               return
+            end if
+            call factor_em(self%em, info)
+            if (info == 0) call solve_em(self%em, system%rhs(:, 1), info)
+            if (info /= 0) then
+               write (msg, '(a,i0,a)') 'the iteration matrix dp/dq + C/h + 2 M/h^2 is singular at equation ', info, &
+                  & ' (a free dof with neither mass nor stiffness)'
+               call analysis_error(error, trim(msg))
+               return
+            end if
+            correction = 0
+            do k = 1, mesh%nfree
+               d = mesh%eq_dof(k)
+               correction = max(correction, abs(system%rhs(k, 1))*self%dof_length(d))
+               self%qt(d) = self%qt(d) + system%rhs(k, 1)
+               self%vt(d) = 2*(self%qt(d) - state%q(d))/h - state%v(d)
+            end do
+            iterations = iterations + 1
+            self%counts%iterations = self%counts%iterations + 1
+            if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
+               ! The residual at the converged iterate: the step's reactions.
+               call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
+                  & self%damped, system%r, tangent=.false.)
+               self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+               residual = residual_norm(system, mesh)
+               exit
+            end if
+         end do
+         self%acct = (self%vt - state%v)/h
+         call drive_motion(self, t_new, self%qt, self%vt, self%acct)
+      end associate
+   end subroutine em_newton
+
+   !> Supported dofs stay put in the iterate.
+   subroutine hold_fixed(self)
+      type(dynamic_stepper_type), intent(inout) :: self
+      integer :: d
+      do d = 1, self%mesh%ndof
+         if (self%mesh%status(d) == dof_fixed) then
+            self%qt(d) = self%state%q(d)
+            self%vt(d) = 0
+            self%acct(d) = 0
+         end if
+      end do
+   end subroutine hold_fixed
+
+   subroutine not_finite(error)
+      type(error_type), allocatable, intent(out) :: error
+      call analysis_error(error, 'the residual of the equations of motion is not finite (the step is '// &
+         & 'too long for the motion, or the mechanism has a dof without mass and stiffness)')
+   end subroutine not_finite
+
+   subroutine no_convergence(error, iterations, residual, r0)
+      type(error_type), allocatable, intent(out) :: error
+      integer, intent(in) :: iterations
+      real(dp), intent(in) :: residual, r0
+      character(len=300) :: msg
+      write (msg, '(a,i0,a,a,a,a)') 'Newton did not converge in ', iterations, ' iterations (residual ', &
+         & es_text(residual, 12, 5), ', first ', es_text(r0, 12, 5)//')'
+      call analysis_error(error, trim(msg))
+   end subroutine no_convergence
 
    !> The energy the damping dissipated over a step: the trapezoidal rule of
    !> C v on the displacement dq (C of the step).
