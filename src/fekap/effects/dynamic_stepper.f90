@@ -83,6 +83,10 @@ module fekap_effects_dynamic_stepper
       real(dp), allocatable :: v_start(:)
       !> Whether some element is damped (has_damping).
       logical :: damped = .false.
+      !> Energy-momentum: the dofs without mass (their velocities are the
+      !> rates of the mean rates, see em_velocities), and the last step's length.
+      logical, allocatable :: massless(:)
+      real(dp) :: h_prev = 0
       !> Steps and Newton iterations so far.
       integer :: steps = 0, newton_iterations = 0
       !> How the start's velocities were found, for the plan.
@@ -107,7 +111,10 @@ contains
       call new_dynamic_system(self%dynamics, model, self%mesh)
       call new_kinetostatics(self%rows, model, self%mesh)
       self%damped = has_damping(self%dynamics)
-      if (model%analysis%integrator == integrator_energy_momentum) call new_em_system(self%em, self%mesh)
+      if (model%analysis%integrator == integrator_energy_momentum) then
+         call new_em_system(self%em, self%mesh)
+         self%massless = massless_dofs(self%dynamics, self%mesh)
+      end if
       n = self%mesh%ndof
       nd = self%mesh%ndriven
       allocate (self%state%q(n), self%state%v(n), self%state%acc(n), self%state%a(n), self%state%g(n), &
@@ -393,7 +400,13 @@ contains
             end associate
          end do
          dissipated = 0
-         if (self%damped) call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
+         if (self%damped .and. em) then
+            ! Energy-momentum: the damping acts on the step's mean rate.
+            call damping_work(dyn, mesh, (self%qt - state%q)/(t_new - state%t), (self%qt - state%q)/(t_new - state%t), &
+               & self%qt - state%q, dissipated)
+         else if (self%damped) then
+            call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
+         end if
          kinetic = kinetic_energy(dyn, mesh, self%vt)
          strain = strain_energy(mesh, self%qt)
          energy = kinetic + strain - dot_product(dyn%weight, self%qt)
@@ -412,6 +425,7 @@ contains
          call relocate(mesh, self%model, t_new, self%qt, seg, moved, error)
          if (allocated(error)) return
          state%seg = seg
+         if (em) self%h_prev = t_new - state%t
          state%work_loads = state%work_loads + work_loads
          state%work_drives = state%work_drives + work_drives
          state%dissipated = state%dissipated + dissipated
@@ -510,7 +524,7 @@ contains
          h = t_new - state%t
          chi = em_dissipation(self%model%analysis%rho_inf)
          self%qt = state%q + h*state%v + 0.5_dp*h**2*state%acc
-         self%vt = 2*(self%qt - state%q)/h - state%v
+         call em_velocities(self, h)
          call hold_fixed(self)
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
          call external_forces(dyn, mesh, t_new, self%gt)
@@ -545,8 +559,8 @@ contains
                d = mesh%eq_dof(k)
                correction = max(correction, abs(system%rhs(k, 1))*self%dof_length(d))
                self%qt(d) = self%qt(d) + system%rhs(k, 1)
-               self%vt(d) = 2*(self%qt(d) - state%q(d))/h - state%v(d)
             end do
+            call em_velocities(self, h)
             iterations = iterations + 1
             self%counts%iterations = self%counts%iterations + 1
             if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
@@ -559,9 +573,52 @@ contains
             end if
          end do
          self%acct = (self%vt - state%v)/h
+         ! The step's mean rates, for the next step's massless dofs.
+         self%at = (self%qt - state%q)/h
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
       end associate
    end subroutine em_newton
+
+   !> The velocities v1 of the free dofs from the iterate q1 over a step of
+   !> length h: v1 = 2 (q1 - q0)/h - v0 (the midpoint rule, which the energy
+   !> balance needs on every dof with mass). A dof without mass has no
+   !> equation for its velocity, and that recursion would carry any error of
+   !> it on undamped (v1 + v0 = 2 vm); its velocity is the linear
+   !> extrapolation of the last two steps' mean rates vm to t_n+1 (second
+   !> order), or 2 vm - v0 at the first step.
+   subroutine em_velocities(self, h)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: h
+      real(dp) :: vm
+      integer :: k, d
+      associate (state => self%state)
+         do k = 1, self%mesh%nfree
+            d = self%mesh%eq_dof(k)
+            vm = (self%qt(d) - state%q(d))/h
+            if (self%massless(d) .and. self%h_prev > 0) then
+               self%vt(d) = vm + (vm - state%a(d))*h/(h + self%h_prev)
+            else
+               self%vt(d) = 2*vm - state%v(d)
+            end if
+         end do
+      end associate
+   end subroutine em_velocities
+
+   !> The dofs whose row of the mass matrix (elements' and point masses) is zero.
+   pure function massless_dofs(dyn, mesh) result(massless)
+      type(dynamic_system_type), intent(in) :: dyn
+      type(mesh_type), intent(in) :: mesh
+      logical :: massless(mesh%ndof)
+      real(dp) :: diagonal(mesh%ndof)
+      integer :: e, i
+      diagonal = dyn%point_mass
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            diagonal(mesh%edof(i, e)) = diagonal(mesh%edof(i, e)) + dyn%me(i, i, e)
+         end do
+      end do
+      massless = diagonal == 0
+   end function massless_dofs
 
    !> Supported dofs stay put in the iterate.
    subroutine hold_fixed(self)

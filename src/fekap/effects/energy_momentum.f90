@@ -2,7 +2,7 @@
 !> midpoint rule with the beams' discrete gradient (Simo & Tarnow, ZAMP 43,
 !> 1992; Gonzalez, J. Nonlinear Sci. 6, 1996), unknown q1 = q_n+1,
 !>   v1 = 2 (q1 - q0)/h - v0,                                 (q1 - q0 = h (v0 + v1)/2)
-!>   R = M (v1 - v0)/h + C (v0 + v1)/2 + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
+!>   R = M (v1 - v0)/h + C (q1 - q0)/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
 !> on the free dofs, p the elements' discrete gradients
 !> (fekap_element_discrete_gradient). Contracted with q1 - q0 the free rows
 !> give the energy balance of the step exactly:
@@ -50,8 +50,8 @@ contains
    end function em_dissipation
 
    !> The residual R of the step from (q0, v0) to q1 over all dofs into r
-   !> (v1 and the mean acceleration (v1 - v0)/h given for every dof: on the
-   !> constrained ones the prescribed motion), g0 and g1 the external forces
+   !> (v1 given for every dof: on the constrained ones the prescribed motion;
+   !> the damping acts on the mean rate (q1 - q0)/h), g0 and g1 the external forces
    !> at the step's ends; with `tangent`, the iteration matrix into self.
    subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, r, tangent)
       type(em_system_type), intent(inout) :: self
@@ -74,7 +74,7 @@ contains
             x0(i) = q0(d)
             x1(i) = q1(d)
             am(i) = (v1(d) - v0(d))/h
-            vm(i) = 0.5_dp*(v0(d) + v1(d))
+            vm(i) = (x1(i) - x0(i))/h
          end do
          if (tangent) then
             call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe, ke)
