@@ -167,6 +167,13 @@ contains
             call stepper%advance(step_time(model, n, nsteps), result, step_error)
          end if
          if (timed) c1 = clock_seconds()
+         if (allocated(step_error) .and. interrupt_signal() /= 0) then
+            ! A signal stopped the step in progress (between Newton iterations).
+            write (where_, '(a,i0,a,i0,a,a,a)') 'interrupted by signal ', interrupt_signal(), ' during step ', n, &
+               & ' (t = ', es_text(step_time(model, n, nsteps), 12, 5), ')'
+            call fatal_error(error, trim(where_)//'; the step was stopped, the rows of the completed steps are kept')
+            exit
+         end if
          if (allocated(step_error)) then
             ! A message that names its own time (where the step was cut) gives the only time.
             if (index(step_error%message, 't = ') == 1) then
