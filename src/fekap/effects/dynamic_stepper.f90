@@ -12,14 +12,14 @@
 module fekap_effects_dynamic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
-   use fekap_model, only: model_type, model_size, dof_rot, integrator_energy_momentum
+   use fekap_model, only: model_type, integrator_energy_momentum
    use fekap_model_results, only: step_result_type
-   use fekap_assembly_mesh, only: mesh_type, new_mesh, dof_driven, dof_fixed
-   use fekap_assembly_tracking, only: initial_segments, relocate
-   use fekap_solver_stepper, only: stepper_type, clock_seconds, phase_timed
-   use fekap_solver_linear_system, only: linear_system_type, new_linear_system, assemble_system, factor_system, &
+   use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed
+   use fekap_assembly_tracking, only: relocate
+   use fekap_solver_stepper, only: clock_seconds, phase_timed
+   use fekap_solver_fem_setup, only: fem_base_type, new_fem_base, start_configuration, mesh_plan_line
+   use fekap_solver_linear_system, only: assemble_system, factor_system, &
       & system_pivot, residual_norm, newton_correction, solve_system
-   use fekap_solver_convergence, only: residual_floor
    use fekap_solver_step_control, only: step_cuts_type
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
@@ -58,10 +58,9 @@ module fekap_effects_dynamic_stepper
       real(dp) :: kinetic = 0, strain = 0, energy = 0
    end type dynamic_state_type
 
-   type, extends(stepper_type) :: dynamic_stepper_type
-      type(model_type) :: model
-      type(mesh_type) :: mesh
-      type(linear_system_type) :: system
+   !> The model, mesh, linear system, drives' start values and scales are
+   !> the FEM's (fem_base_type, new_fem_base).
+   type, extends(fem_base_type) :: dynamic_stepper_type
       type(dynamic_system_type) :: dynamics
       type(kinetostatics_type) :: rows
       type(dynamic_state_type) :: state
@@ -69,13 +68,6 @@ module fekap_effects_dynamic_stepper
       type(em_system_type) :: em
       !> The iterate of a step.
       real(dp), allocatable :: qt(:), vt(:), acct(:), at(:), gt(:)
-      !> Drive laws at the start, and their value, rate and second rate.
-      real(dp), allocatable :: law0(:), law_value(:), law_rate(:), law_rate2(:)
-      !> Length weight of each dof in the correction test (rotations: model size).
-      real(dp), allocatable :: dof_length(:)
-      real(dp) :: model_length = 1
-      !> Residual below which Newton has converged at round-off (as the FEM's).
-      real(dp) :: residual_floor = 0
       !> Energy of the start (kinetic + strain + gravity), for the balance.
       real(dp) :: energy0 = 0
       !> Velocities at the start over all dofs, if given (tests, benchmarks);
@@ -104,10 +96,8 @@ contains
    subroutine new_dynamic_stepper(self, model)
       type(dynamic_stepper_type), intent(out) :: self
       type(model_type), intent(in) :: model
-      integer :: n, nd
-      self%model = model
-      call new_mesh(self%mesh, model)
-      call new_linear_system(self%system, self%mesh, dense=.false.)
+      integer :: n
+      call new_fem_base(self, model, dense=.false.)
       call new_dynamic_system(self%dynamics, model, self%mesh)
       call new_kinetostatics(self%rows, model, self%mesh)
       self%damped = has_damping(self%dynamics)
@@ -116,15 +106,10 @@ contains
          self%massless = massless_dofs(self%dynamics, self%mesh)
       end if
       n = self%mesh%ndof
-      nd = self%mesh%ndriven
       allocate (self%state%q(n), self%state%v(n), self%state%acc(n), self%state%a(n), self%state%g(n), &
          & self%state%r(n), source=0.0_dp)
       allocate (self%qt(n), self%vt(n), self%acct(n), self%at(n), self%gt(n), source=0.0_dp)
-      allocate (self%law0(nd), self%law_value(nd), self%law_rate(nd), self%law_rate2(nd), source=0.0_dp)
       allocate (self%state%seg(size(self%mesh%slides)), source=1)
-      self%model_length = model_size(model)
-      self%dof_length = merge(self%model_length, 1.0_dp, self%mesh%dof_kind == dof_rot)
-      self%residual_floor = residual_floor(self%mesh, self%model_length)
    end subroutine new_dynamic_stepper
 
    !> The mesh and the integrator for the listing's plan.
@@ -134,10 +119,7 @@ contains
       character(len=200) :: line
       type(alpha_coefficients_type) :: c
       c = new_alpha_coefficients(self%model%analysis%rho_inf, self%model%analysis%dt)
-      write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0)') 'mesh: ', size(self%mesh%elements), ' elements, ', &
-         & self%mesh%ndof, ' dofs, ', self%mesh%nfree, ' equations, ', self%mesh%ndriven, &
-         & ' driven; half-bandwidth ', self%mesh%kd
-      text = trim(line)
+      text = mesh_plan_line(self)
       if (self%model%analysis%integrator == integrator_energy_momentum) then
          write (line, '(a,f6.4,a,f7.4,a)') 'integrator: energy-momentum (midpoint rule, discrete gradient), rho_inf ', &
             & c%rho_inf, ' (strain dissipation chi ', em_dissipation(c%rho_inf), ')'
@@ -154,17 +136,11 @@ contains
       class(dynamic_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      integer :: i, info
-      real(dp) :: f, df, ddf
-      associate (state => self%state, mesh => self%mesh, model => self%model)
-         state%t = model%analysis%t_start
-         state%q = mesh%q0
-         call initial_segments(mesh, model, state%q, self%model_length, state%seg, error)
+      integer :: info
+      associate (state => self%state, mesh => self%mesh)
+         ! The drives' start values law0 are new_fem_base's.
+         call start_configuration(self, state%t, state%q, state%seg, error)
          if (allocated(error)) return
-         do i = 1, mesh%ndriven
-            call model%drives(i)%law%eval(state%t, f, df, ddf)
-            self%law0(i) = f
-         end do
          call drive_motion(self, state%t, state%q, state%v, state%acc)
          call start_velocities(self, info)
          if (has_damping(self%dynamics)) call update_damping(self%dynamics, mesh, state%q)

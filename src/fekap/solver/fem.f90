@@ -34,18 +34,18 @@
 module fekap_solver_fem
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
-   use fekap_model, only: model_type, model_size, dof_rot, predictor_previous, predictor_taylor, &
+   use fekap_model, only: model_type, predictor_previous, predictor_taylor, &
       & convergence_paper, solver_dense, effects_kinematics
    use fekap_model_effects, only: planned_effects
    use fekap_model_results, only: step_result_type, note_length, has_note
-   use fekap_assembly_mesh, only: mesh_type, new_mesh, describe_dof, dof_fixed
+   use fekap_assembly_mesh, only: describe_dof, dof_fixed
    use fekap_assembly_assemble, only: max_strain
-   use fekap_assembly_tracking, only: initial_segments, relocate, check_gaps
-   use fekap_solver_stepper, only: stepper_type, clock_seconds, phase_timed
+   use fekap_assembly_tracking, only: relocate, check_gaps
+   use fekap_solver_stepper, only: clock_seconds, phase_timed
+   use fekap_solver_fem_setup, only: fem_base_type, new_fem_base, start_configuration, set_driven, mesh_plan_line
    use fekap_solver_convergence, only: convergence_type, is_converged, converged_by_estimate, estimate_margin, &
-      & residual_floor, &
       & divergence_length
-   use fekap_solver_linear_system, only: linear_system_type, new_linear_system, assemble_system, &
+   use fekap_solver_linear_system, only: assemble_system, &
       & assemble_system_residual, factor_system, system_pivot, residual_norm, newton_correction, &
       & apply_correction, drive_response, drive_load_rhs, solve_system, apply_response, system_rcond
    use fekap_solver_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, &
@@ -57,6 +57,7 @@ module fekap_solver_fem
    use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate, assemble_strain_rate, &
       & factor_strain_rate, solve_strain_rate, strain_rate_rcond
    use fekap_solver_step_control, only: step_cuts_type
+   use fekap_solver_interrupt, only: interrupt_signal, interrupt_error
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_solver_change_point, only: change_verdict, change_regular, hermite_fill, correct_fill, fill_order, &
       & rates_drop, fill_shift, response_trusted
@@ -119,11 +120,10 @@ module fekap_solver_fem
       real(dp) :: turn = 0
    end type verification_type
 
-   type, extends(stepper_type) :: fem_stepper_type
-      type(model_type) :: model
-      type(mesh_type) :: mesh
+   !> The model, mesh, linear system, drives' start values and scales are
+   !> fem_base_type's (new_fem_base), as the dynamics stepper's.
+   type, extends(fem_base_type) :: fem_stepper_type
       type(convergence_type) :: conv
-      type(linear_system_type) :: system
       type(branch_check_type) :: branch
       type(fem_state_type) :: state
       !> Whether the system holds the factor of the tangent at (within
@@ -139,13 +139,6 @@ module fekap_solver_fem
       logical :: smooth_prediction = .false.
       !> Pivot ratio of the factor behind the last drive response.
       real(dp) :: response_pivot = 0
-      !> Drive laws' values at the start time: drives move from the initial configuration.
-      real(dp), allocatable :: law0(:)
-      !> Length weight of each dof for the correction test: 1 for translations,
-      !> the model size for rotations.
-      real(dp), allocatable :: dof_length(:)
-      !> The model size (model_size).
-      real(dp) :: model_length = 1
       !> Whether the model has external loads (a flexible, stressed analysis).
       logical :: loaded = .false.
       !> Work over the dofs: a change or rate of the loads (mesh%loads).
@@ -154,9 +147,8 @@ module fekap_solver_fem
       !> step loop): the iterate, scratch, and the responses to a step's drive
       !> increment at its two ends.
       real(dp), allocatable :: qt(:), work(:), dq_new(:), dq_old(:)
-      !> Work arrays over the drives: the laws' values, rates and second rates
-      !> at a time, and the increment over a step.
-      real(dp), allocatable :: law_value(:), law_rate(:), law_rate2(:), drive_step(:)
+      !> The drives' increment over a step.
+      real(dp), allocatable :: drive_step(:)
       !> Master segment of each slideline during the step.
       integer, allocatable :: seg(:)
       !> The drive response at the new configuration (swapped with the state's).
@@ -214,14 +206,9 @@ contains
    subroutine new_fem_stepper(self, model)
       type(fem_stepper_type), intent(out) :: self
       type(model_type), intent(in) :: model
-      integer :: i
-      real(dp) :: f, df, ddf
-      self%model = model
-      call new_mesh(self%mesh, model)
-      call new_linear_system(self%system, self%mesh, dense=model%analysis%solver == solver_dense)
+      call new_fem_base(self, model, dense=model%analysis%solver == solver_dense)
       associate (n => self%mesh%ndof, nd => self%mesh%ndriven, state => self%state)
-         allocate (self%law0(nd), self%law_value(nd), self%law_rate(nd), self%law_rate2(nd), self%drive_step(nd), &
-            & source=0.0_dp)
+         allocate (self%drive_step(nd), source=0.0_dp)
          allocate (state%q(n), state%v(n), state%a(n), self%qt(n), self%work(n), self%dq_new(n), self%dq_old(n), &
             & source=0.0_dp)
          call new_predictor_history(state%history, n)
@@ -229,12 +216,6 @@ contains
          allocate (state%jump_response(n, nd), self%jump_response_new(n, nd), source=0.0_dp)
          allocate (self%seg(size(self%mesh%slides)), state%seg(size(self%mesh%slides)), source=1)
       end associate
-      do i = 1, self%mesh%ndriven
-         call model%drives(i)%law%eval(model%analysis%t_start, f, df, ddf)
-         self%law0(i) = f
-      end do
-      self%model_length = model_size(model)
-      self%dof_length = merge(self%model_length, 1.0_dp, self%mesh%dof_kind == dof_rot)
       self%loaded = self%mesh%loads%is_loaded()
       allocate (self%load_work(self%mesh%ndof), source=0.0_dp)
       call new_strain_rate(self%root, self%mesh)
@@ -247,7 +228,7 @@ contains
       self%conv%length = model%analysis%length_tol*self%model_length
       self%admissible_strain = min(max_admissible_strain, max(min_admissible_strain, 100*model%analysis%tol))
       call new_branch_check(self%branch, model, self%mesh)
-      self%conv%residual_floor = residual_floor(self%mesh, self%model_length)
+      self%conv%residual_floor = self%residual_floor
    end subroutine new_fem_stepper
 
    !> The mesh for the listing's plan: its size, band and slideline penalties.
@@ -256,10 +237,7 @@ contains
       character(:), allocatable :: text
       character(len=160) :: line
       integer :: i
-      write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0)') 'mesh: ', size(self%mesh%elements), ' elements, ', &
-         & self%mesh%ndof, ' dofs, ', self%mesh%nfree, ' equations, ', self%mesh%ndriven, &
-         & ' driven; half-bandwidth ', self%mesh%kd
-      text = trim(line)
+      text = mesh_plan_line(self)
       do i = 1, size(self%mesh%slides)
          write (line, '(a,a,a,a)') 'slideline '//self%model%slidelines(i)%name//': penalty ', &
             & es_text(self%mesh%slides(i)%kp, 12, 5), ', rotational tie ', es_text(self%mesh%slides(i)%kr, 12, 5)
@@ -277,9 +255,7 @@ contains
       real(dp) :: clock, pivot, rcond
       clock = clock_seconds()
       self%system%timing = .true.
-      self%state%t = self%model%analysis%t_start
-      self%state%q = self%mesh%q0
-      call initial_segments(self%mesh, self%model, self%state%q, self%model_length, self%seg, error)
+      call start_configuration(self, self%state%t, self%state%q, self%seg, error)
       if (allocated(error)) return
       self%state%seg = self%seg
       self%state%history%filled = 0
@@ -605,6 +581,11 @@ contains
          self%verify_depth = depth
          call solve_step(self, t_try, it, step_residual, step_error)
          iterations = iterations + it
+         if (allocated(step_error) .and. interrupt_signal() /= 0) then
+            ! A signal stopped the step: no cut, the run stops.
+            call move_alloc(step_error, error)
+            return
+         end if
          ! Only a run's step, at its first try, checks for a change point.
          self%detect_change = .false.
          if (self%change_found) return
@@ -692,6 +673,9 @@ contains
             relocations: do pass = 0, size(mesh%slides)*8
                at_predictor = .false.
                do i = 0, self%model%analysis%max_iter
+                  ! A signal ends the step here (a slow step would delay the stop).
+                  call interrupt_error(error)
+                  if (allocated(error)) return
                   call newton_assembly(self, qt, t, kg_above)
                   ! The predictor's guard, once per step: it needs the strains of this first assembly.
                   if (self%guard_pending) then
@@ -1121,20 +1105,6 @@ contains
          call drive_response(self%system, self%mesh, resp, self%counts)
       end if
    end subroutine accepted_response
-
-   !> Driven dofs at time t: the initial value plus the law's change since t_start.
-   subroutine set_driven(self, t, q)
-      type(fem_stepper_type), intent(in) :: self
-      real(dp), intent(in) :: t
-      real(dp), contiguous, intent(inout) :: q(:)
-      real(dp) :: f, df, ddf
-      integer :: i, dof
-      do i = 1, self%mesh%ndriven
-         call self%model%drives(i)%law%eval(t, f, df, ddf)
-         dof = self%mesh%driven_dof(i)
-         q(dof) = self%mesh%q0(dof) + (f - self%law0(i))
-      end do
-   end subroutine set_driven
 
    !> The branch check of the step to qt (see fekap_solver_branch), with the
    !> drive responses at its two ends: at the new configuration from the
