@@ -387,17 +387,9 @@ contains
       ! all its master points (the slave may reach any master segment).
       call coupling_groups(self, group_start, group_dof)
       ! Adjacency (CSR) of the free dofs: two dofs are adjacent when a group couples them.
+      ! Two passes over the coupled pairs: count each dof's neighbours, then list them.
       allocate (deg(nf), source=0)
-      do e = 1, size(group_start) - 1
-         do ia = group_start(e), group_start(e + 1) - 1
-            a = free_index(group_dof(ia))
-            if (a == 0) cycle
-            do ib = group_start(e), group_start(e + 1) - 1
-               b = free_index(group_dof(ib))
-               if (b /= 0 .and. b /= a) deg(a) = deg(a) + 1
-            end do
-         end do
-      end do
+      call couple_pairs(.false.)
       allocate (adj_start(nf + 1))
       adj_start(1) = 1
       do i = 1, nf
@@ -406,19 +398,7 @@ contains
       nnz = adj_start(nf + 1) - 1
       allocate (adj(nnz), fill(nf))
       fill = adj_start(1:nf)
-      do e = 1, size(group_start) - 1
-         do ia = group_start(e), group_start(e + 1) - 1
-            a = free_index(group_dof(ia))
-            if (a == 0) cycle
-            do ib = group_start(e), group_start(e + 1) - 1
-               b = free_index(group_dof(ib))
-               if (b /= 0 .and. b /= a) then
-                  adj(fill(a)) = b
-                  fill(a) = fill(a) + 1
-               end if
-            end do
-         end do
-      end do
+      call couple_pairs(.true.)
 
       ! Cuthill-McKee, component by component, from a pseudo-peripheral dof.
       allocate (order(nf), level(nf), seen(nf))
@@ -483,6 +463,28 @@ contains
       end do
 
    contains
+
+      !> Every pair (a, b) of distinct free dofs that a coupling group couples:
+      !> counted in deg(a), or (record) listed in adj from fill(a) on.
+      subroutine couple_pairs(record)
+         logical, intent(in) :: record
+         do e = 1, size(group_start) - 1
+            do ia = group_start(e), group_start(e + 1) - 1
+               a = free_index(group_dof(ia))
+               if (a == 0) cycle
+               do ib = group_start(e), group_start(e + 1) - 1
+                  b = free_index(group_dof(ib))
+                  if (b == 0 .or. b == a) cycle
+                  if (record) then
+                     adj(fill(a)) = b
+                     fill(a) = fill(a) + 1
+                  else
+                     deg(a) = deg(a) + 1
+                  end if
+               end do
+            end do
+         end do
+      end subroutine couple_pairs
 
       !> A pseudo-peripheral dof of the component of v0 (George-Liu: repeat the
       !> BFS from a lowest-degree dof of the last level while its depth grows).
