@@ -57,6 +57,7 @@ module fekap_solver_fem
    use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate, assemble_strain_rate, &
       & factor_strain_rate, solve_strain_rate, strain_rate_rcond
    use fekap_solver_step_control, only: step_cuts_type
+   use fekap_solver_interrupt, only: interrupt_signal, interrupt_error
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_solver_change_point, only: change_verdict, change_regular, hermite_fill, correct_fill, fill_order, &
       & rates_drop, fill_shift, response_trusted
@@ -580,6 +581,11 @@ contains
          self%verify_depth = depth
          call solve_step(self, t_try, it, step_residual, step_error)
          iterations = iterations + it
+         if (allocated(step_error) .and. interrupt_signal() /= 0) then
+            ! A signal stopped the step: no cut, the run stops.
+            call move_alloc(step_error, error)
+            return
+         end if
          ! Only a run's step, at its first try, checks for a change point.
          self%detect_change = .false.
          if (self%change_found) return
@@ -667,6 +673,9 @@ contains
             relocations: do pass = 0, size(mesh%slides)*8
                at_predictor = .false.
                do i = 0, self%model%analysis%max_iter
+                  ! A signal ends the step here (a slow step would delay the stop).
+                  call interrupt_error(error)
+                  if (allocated(error)) return
                   call newton_assembly(self, qt, t, kg_above)
                   ! The predictor's guard, once per step: it needs the strains of this first assembly.
                   if (self%guard_pending) then
