@@ -40,11 +40,24 @@ module fekap_model_effects
 
 contains
 
+   !> The plan of the analysis type a deck asks for (effects): it runs, or
+   !> the obstacle (if not '') is the plan's problem.
+   pure subroutine plan_asked(plan, effects, obstacle)
+      type(effects_plan_type), intent(inout) :: plan
+      integer, intent(in) :: effects
+      character(*), intent(in) :: obstacle
+      if (len(obstacle) > 0) then
+         plan%problem = effects_name(effects)//' cannot run: '//obstacle
+      else
+         plan%effects = effects
+         plan%why = 'ANALysis type '//effects_name(effects)
+      end if
+   end subroutine plan_asked
+
    !> The effects `model` asks for, and why.
    pure function plan_effects(model) result(plan)
       type(model_type), intent(in) :: model
       type(effects_plan_type) :: plan
-      character(:), allocatable :: obstacle
       logical :: masses, gravity, loads, driven
       integer :: m
       masses = has_masses(model)
@@ -63,31 +76,15 @@ contains
          if (loads) plan%problem = 'LOADs ask for statics (the finite element method always takes them): '// &
             & 'ANALysis type statics or auto'
       case (effects_kinetostatics)
-         obstacle = kinetostatics_obstacle(model)
          if (.not. masses) then
             plan%problem = 'kinetostatics needs masses: give rho= (or rhoA=) on SECTions, or a MASSes block'
-         else if (len(obstacle) > 0) then
-            plan%problem = 'kinetostatics cannot run: '//obstacle
          else
-            plan%effects = effects_kinetostatics
-            plan%why = 'ANALysis type kinetostatics'
+            call plan_asked(plan, effects_kinetostatics, kinetostatics_obstacle(model))
          end if
       case (effects_statics)
-         obstacle = statics_obstacle(model)
-         if (len(obstacle) > 0) then
-            plan%problem = 'statics cannot run: '//obstacle
-         else
-            plan%effects = effects_statics
-            plan%why = 'ANALysis type statics'
-         end if
+         call plan_asked(plan, effects_statics, statics_obstacle(model))
       case (effects_dynamics)
-         obstacle = dynamics_obstacle(model)
-         if (len(obstacle) > 0) then
-            plan%problem = 'dynamics cannot run: '//obstacle
-         else
-            plan%effects = effects_dynamics
-            plan%why = 'ANALysis type dynamics'
-         end if
+         call plan_asked(plan, effects_dynamics, dynamics_obstacle(model))
       case default
          call plan_auto(model, masses, gravity, loads, driven, m, plan)
       end select
