@@ -69,6 +69,8 @@ module fekap_assembly_band
       procedure :: factor => band_factor
       procedure :: solve => band_solve
       procedure :: pivot_ratio => band_pivot_ratio
+      !> The pivot of one column of the factor, on the matrix's scale.
+      procedure :: column_pivot => band_column_pivot
       procedure :: rcond => band_rcond
    end type band_matrix_type
 
@@ -294,6 +296,22 @@ contains
       end do
    end subroutine band_ldlt_solve
 
+   !> The pivot of column j of the factor, on the matrix's scale: |U(j,j)| for
+   !> LU (and the dense factor), D(j) for U^T D U, U(j,j)^2 for U^T U.
+   pure real(dp) function band_column_pivot(self, j) result(pivot)
+      class(band_matrix_type), intent(in) :: self
+      integer, intent(in) :: j
+      if (self%dense) then
+         pivot = abs(self%fd(j, j))
+      else if (self%is_lu) then
+         pivot = abs(self%f(2*self%kd + 1, j))
+      else if (self%kd <= narrow_band) then
+         pivot = self%f(self%kd + 1, j)
+      else
+         pivot = self%f(self%kd + 1, j)**2
+      end if
+   end function band_column_pivot
+
    !> Smallest pivot of the factor relative to the matrix's own diagonal entry:
    !> min_j U(j,j)^2 / A(j,j) for Cholesky (D(j) / A(j,j) for U^T D U),
    !> min_j |U(j,j)| / |A(j,j)| for LU.
@@ -305,15 +323,7 @@ contains
       real(dp) :: pivot
       ratio = 1
       do j = 1, self%n
-         if (self%dense) then
-            pivot = abs(self%fd(j, j))
-         else if (self%is_lu) then
-            pivot = abs(self%f(2*self%kd + 1, j))
-         else if (self%kd <= narrow_band) then
-            pivot = self%f(self%kd + 1, j)
-         else
-            pivot = self%f(self%kd + 1, j)**2
-         end if
+         pivot = band_column_pivot(self, j)
          if (abs(self%diag(j)) > 0) then
             ratio = min(ratio, pivot/abs(self%diag(j)))
          else

@@ -2,10 +2,12 @@
 !> freedom with double nodes at hinges, elements, supports and drives, and
 !> equation numbers in reverse Cuthill-McKee order for a small bandwidth.
 !>
-!> Why one module of over 600 lines: the mesh is built in one pass
-!> (new_mesh) whose steps (dofs, statuses, numbering, scatter map, envelope,
-!> slidelines) each fill part of the same mesh_type and need the parts
-!> before; they are the mesh's private construction, not concepts of their own.
+!> The graph side of the numbering (the free dofs' adjacency and its
+!> Cuthill-McKee order) is fekap_assembly_ordering's.
+!>
+!> Why just over 600 lines: the rest is one construction (new_mesh) whose
+!> steps (dofs, statuses, numbering, scatter map, envelope, slidelines) each
+!> fill part of the same mesh_type and need the parts before.
 !>
 !> Points 1..size(model%nodes) are the model's nodes in order; a link meshed
 !> with several elements adds its interior points after them. Every point has
@@ -23,6 +25,7 @@ module fekap_assembly_mesh
    use fekap_model_effects, only: planned_effects, has_masses
    use fekap_element_inertia, only: beam_gravity_force
    use fekap_assembly_loads, only: load_set_type
+   use fekap_assembly_ordering, only: group_adjacency, cuthill_mckee
    implicit none
    private
 
@@ -368,10 +371,9 @@ contains
    !> half-bandwidth and envelope that result.
    subroutine number_equations(self)
       type(mesh_type), intent(inout) :: self
-      integer, allocatable :: free_index(:), deg(:), adj_start(:), adj(:), fill(:), order(:), level(:)
+      integer, allocatable :: free_index(:), deg(:), adj_start(:), adj(:), order(:), level(:)
       integer, allocatable :: group_start(:), group_dof(:)
-      integer :: nf, e, a, b, ia, ib, i, n_ordered, start, head, tail, v, w, k, nnz
-      logical, allocatable :: seen(:)
+      integer :: nf, e, i, k
 
       allocate (free_index(self%ndof), source=0)
       nf = 0
@@ -387,73 +389,9 @@ contains
       ! all its master points (the slave may reach any master segment).
       call coupling_groups(self, group_start, group_dof)
       ! Adjacency (CSR) of the free dofs: two dofs are adjacent when a group couples them.
-      allocate (deg(nf), source=0)
-      do e = 1, size(group_start) - 1
-         do ia = group_start(e), group_start(e + 1) - 1
-            a = free_index(group_dof(ia))
-            if (a == 0) cycle
-            do ib = group_start(e), group_start(e + 1) - 1
-               b = free_index(group_dof(ib))
-               if (b /= 0 .and. b /= a) deg(a) = deg(a) + 1
-            end do
-         end do
-      end do
-      allocate (adj_start(nf + 1))
-      adj_start(1) = 1
-      do i = 1, nf
-         adj_start(i + 1) = adj_start(i) + deg(i)
-      end do
-      nnz = adj_start(nf + 1) - 1
-      allocate (adj(nnz), fill(nf))
-      fill = adj_start(1:nf)
-      do e = 1, size(group_start) - 1
-         do ia = group_start(e), group_start(e + 1) - 1
-            a = free_index(group_dof(ia))
-            if (a == 0) cycle
-            do ib = group_start(e), group_start(e + 1) - 1
-               b = free_index(group_dof(ib))
-               if (b /= 0 .and. b /= a) then
-                  adj(fill(a)) = b
-                  fill(a) = fill(a) + 1
-               end if
-            end do
-         end do
-      end do
-
-      ! Cuthill-McKee, component by component, from a pseudo-peripheral dof.
-      allocate (order(nf), level(nf), seen(nf))
-      seen = .false.
-      n_ordered = 0
-      do while (n_ordered < nf)
-         start = minloc(deg, dim=1, mask=.not. seen)
-         start = peripheral(start)
-         head = n_ordered + 1
-         tail = n_ordered + 1
-         order(tail) = start
-         seen(start) = .true.
-         do while (head <= tail)
-            v = order(head)
-            head = head + 1
-            ! Neighbours in order of increasing degree.
-            do
-               w = 0
-               do k = adj_start(v), adj_start(v + 1) - 1
-                  if (.not. seen(adj(k))) then
-                     if (w == 0) then
-                        w = adj(k)
-                     else if (deg(adj(k)) < deg(w)) then
-                        w = adj(k)
-                     end if
-                  end if
-               end do
-               if (w == 0) exit
-               seen(w) = .true.
-               tail = tail + 1
-               order(tail) = w
-            end do
-         end do
-         n_ordered = tail
-      end do
+      call group_adjacency(group_start, group_dof, free_index, nf, adj_start, adj, deg)
+      allocate (order(nf), level(nf))
+      call cuthill_mckee(adj_start, adj, deg, order)
 
       allocate (self%eq(self%ndof), source=0)
       allocate (self%eq_dof(nf))
@@ -481,50 +419,6 @@ contains
             end associate
          end associate
       end do
-
-   contains
-
-      !> A pseudo-peripheral dof of the component of v0 (George-Liu: repeat the
-      !> BFS from a lowest-degree dof of the last level while its depth grows).
-      integer function peripheral(v0) result(r)
-         integer, intent(in) :: v0
-         integer :: depth, new_depth, pass
-         logical :: mark(nf)
-         r = v0
-         depth = -1
-         do pass = 1, 5
-            call bfs_levels(r, mark, new_depth)
-            if (new_depth <= depth) exit
-            depth = new_depth
-            r = minloc(deg, dim=1, mask=mark .and. level == new_depth)
-         end do
-      end function peripheral
-
-      subroutine bfs_levels(v0, mark, depth)
-         integer, intent(in) :: v0
-         logical, intent(out) :: mark(nf)
-         integer, intent(out) :: depth
-         integer :: queue(nf), qh, qt, u, kk
-         mark = .false.
-         level = 0
-         qh = 1
-         qt = 1
-         queue(1) = v0
-         mark(v0) = .true.
-         do while (qh <= qt)
-            u = queue(qh)
-            qh = qh + 1
-            do kk = adj_start(u), adj_start(u + 1) - 1
-               if (.not. mark(adj(kk)) .and. .not. seen(adj(kk))) then
-                  mark(adj(kk)) = .true.
-                  level(adj(kk)) = level(u) + 1
-                  qt = qt + 1
-                  queue(qt) = adj(kk)
-               end if
-            end do
-         end do
-         depth = maxval(level, mask=mark)
-      end subroutine bfs_levels
 
    end subroutine number_equations
 

@@ -14,7 +14,7 @@ module fekap_classical_stepping
    use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
    use fekap_solver_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, extrapolate, &
       & taylor_predict, prediction_none
-   use fekap_solver_step_control, only: step_cuts_type
+   use fekap_solver_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
    use fekap_solver_branch, only: jump_ratio, jump_bound_ratio
    implicit none
    private
@@ -175,38 +175,54 @@ contains
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
       type(step_cuts_type) :: cuts
-      type(error_type), allocatable :: step_error
-      real(dp) :: t_try
-      integer :: iterations, total
-
+      integer :: total
       self%step = self%step + 1
       self%counts%steps = self%counts%steps + 1
-      call cuts%begin(self%history%t(self%history%newest), t)
-      total = 0
-      do while (self%history%t(self%history%newest) < t)
-         t_try = cuts%next(self%history%t(self%history%newest))
-         call self%try_step(t_try, iterations, step_error)
-         total = total + iterations
-         if (allocated(step_error)) then
-            if (step_error%kind /= error_analysis) then
-               call move_alloc(step_error, error)
-               return
-            end if
-            call cuts%reject(step_error, error)
-            if (allocated(error)) return
-            deallocate (step_error)
-            cycle
-         end if
-         if (t_try < t) then
-            ! An intermediate point of a cut step: its rates feed the Taylor predictor only.
-            if (self%analysis%predictor == predictor_taylor) call self%rates_at(t_try, step_error)
-            call cuts%grow()
-         end if
-      end do
+      call advance_by_cuts(self, classical_try, classical_between, self%history%t(self%history%newest), t, 0, cuts, &
+         & total, error)
+      if (allocated(error)) return
       call self%finish_step(t, total, result, error)
       result%cuts = cuts%cuts
       result%note = cuts%note()
    end subroutine classical_advance
+
+   !> The method's try of a step to time t (for advance_by_cuts): its Newton
+   !> solve and branch-jump check (try_step). Unlike the FEM's, a try is never
+   !> verified by half steps (the determinant's sign decides a jump at once),
+   !> so depth is always 0; errors other than analysis failures (a bad model)
+   !> end the run at once instead of cutting the step.
+   recursive subroutine classical_try(stepper, t, depth, iterations, outcome, reason)
+      class(stepper_type), intent(inout) :: stepper
+      real(dp), intent(in) :: t
+      integer, intent(in) :: depth
+      integer, intent(out) :: iterations, outcome
+      type(error_type), allocatable, intent(out) :: reason
+      iterations = 0
+      outcome = try_ended
+      if (depth /= 0) return
+      select type (self => stepper)
+      class is (classical_stepper_type)
+         call self%try_step(t, iterations, reason)
+         outcome = try_accepted
+         if (allocated(reason)) then
+            outcome = try_failed
+            if (reason%kind /= error_analysis) outcome = try_ended
+         end if
+      end select
+   end subroutine classical_try
+
+   !> An intermediate point of a cut step (for advance_by_cuts): its rates feed
+   !> the Taylor predictor only (if they cannot be solved there, the predictor
+   !> extrapolates instead: has_rates stays false).
+   subroutine classical_between(stepper, t)
+      class(stepper_type), intent(inout) :: stepper
+      real(dp), intent(in) :: t
+      type(error_type), allocatable :: rates_error
+      select type (self => stepper)
+      class is (classical_stepper_type)
+         if (self%analysis%predictor == predictor_taylor) call self%rates_at(t, rates_error)
+      end select
+   end subroutine classical_between
 
    !> The head of a step's result at time t: its storage for nnode nodes and
    !> nlink links, the step, the time and the iterations, no note.

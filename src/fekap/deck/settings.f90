@@ -7,7 +7,8 @@ module fekap_deck_settings
       & predictor_previous, &
       & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, &
       & solver_band, solver_dense, effects_auto, effects_kinematics, effects_kinetostatics, effects_statics, &
-      & effects_dynamics, integrator_names, integrator_generalized_alpha
+      & effects_dynamics, integrator_names, integrator_generalized_alpha, &
+      & integrator_energy_momentum
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, word_index
    use fekap_deck_context, only: context_type
@@ -67,14 +68,8 @@ contains
          key = lower(ctx%field(iline, 1))
          if (is_word_of(key, 'method', 4)) then
             if (.not. one_value('method fem|cartesian|angles')) cycle
-            select case (choice(2, method_names))
-            case (1)
-               model%analysis%method = method_fem
-            case (2)
-               model%analysis%method = method_cartesian
-            case (3)
-               model%analysis%method = method_angles
-            end select
+            model%analysis%method = chosen(method_names, [method_fem, method_cartesian, method_angles], &
+               & model%analysis%method)
          else if (is_word_of(key, 'time', 4)) then
             if (.not. ctx%require(iline, 'time START END STEP', 'a time line')) cycle
             if (extra(5, 'time START END STEP')) cycle
@@ -103,24 +98,11 @@ contains
                end select
             end do
          else if (is_word_of(key, 'tolerance', 3)) then
-            if (.not. one_value('tolerance VALUE')) cycle
-            call ctx%real_field(iline, 2, v, ok)
-            if (.not. ok) cycle
-            if (v <= 0 .or. v >= 1) then
-               call ctx%error(iline, 2, 'the tolerance must be between 0 and 1', label='e.g. tolerance 1e-10')
-               cycle
-            end if
-            model%analysis%tol = v
+            if (fraction('tolerance VALUE', 'the tolerance', 'e.g. tolerance 1e-10', v)) model%analysis%tol = v
          else if (is_word_of(key, 'length', 4)) then
-            if (.not. one_value('length VALUE')) cycle
-            call ctx%real_field(iline, 2, v, ok)
-            if (.not. ok) cycle
-            if (v <= 0 .or. v >= 1) then
-               call ctx%error(iline, 2, 'the length tolerance must be between 0 and 1', &
-                  & label='relative to the model size, e.g. length 1e-12')
-               cycle
+            if (fraction('length VALUE', 'the length tolerance', 'relative to the model size, e.g. length 1e-12', v)) then
+               model%analysis%length_tol = v
             end if
-            model%analysis%length_tol = v
          else if (is_word_of(key, 'iterations', 4)) then
             if (.not. one_value('iterations N')) cycle
             call ctx%integer_field(iline, 2, ivalue, ok)
@@ -132,22 +114,12 @@ contains
             model%analysis%max_iter = ivalue
          else if (is_word_of(key, 'predictor', 4)) then
             if (.not. one_value('predictor previous|extrapolate|taylor')) cycle
-            select case (choice(2, predictor_names))
-            case (1)
-               model%analysis%predictor = predictor_previous
-            case (2)
-               model%analysis%predictor = predictor_extrapolate
-            case (3)
-               model%analysis%predictor = predictor_taylor
-            end select
+            model%analysis%predictor = chosen(predictor_names, [predictor_previous, predictor_extrapolate, &
+               & predictor_taylor], model%analysis%predictor)
          else if (is_word_of(key, 'convergence', 4)) then
             if (.not. one_value('convergence default|paper')) cycle
-            select case (choice(2, 'default paper'))
-            case (1)
-               model%analysis%convergence = convergence_default
-            case (2)
-               model%analysis%convergence = convergence_paper
-            end select
+            model%analysis%convergence = chosen('default paper', [convergence_default, convergence_paper], &
+               & model%analysis%convergence)
          else if (is_word_of(key, 'gauss', 4)) then
             if (.not. one_value('gauss 1|2')) cycle
             call ctx%integer_field(iline, 2, ivalue, ok)
@@ -159,48 +131,40 @@ contains
             model%analysis%gauss_points = ivalue
          else if (is_word_of(key, 'redundant', 4)) then
             if (.not. one_value('redundant stop|remove')) cycle
-            select case (choice(2, 'stop remove'))
-            case (1)
-               model%analysis%remove_redundant = .false.
-            case (2)
-               model%analysis%remove_redundant = .true.
-            end select
+            model%analysis%remove_redundant = chosen('stop remove', [0, 1], &
+               & merge(1, 0, model%analysis%remove_redundant)) == 1
          else if (is_word_of(key, 'solver', 4)) then
             if (.not. one_value('solver band|dense')) cycle
-            select case (choice(2, 'band dense'))
-            case (1)
-               model%analysis%solver = solver_band
-            case (2)
-               model%analysis%solver = solver_dense
-            end select
+            model%analysis%solver = chosen('band dense', [solver_band, solver_dense], model%analysis%solver)
          else if (is_word_of(key, 'type', 4)) then
             ! Whether the type can run is checked against the whole deck (check_effects).
             if (.not. one_value('type auto|kinematics|kinetostatics|statics|dynamics')) cycle
-            select case (choice(2, 'auto kinematics kinetostatics statics dynamics'))
-            case (1)
-               model%analysis%effects = effects_auto
-            case (2)
-               model%analysis%effects = effects_kinematics
-            case (3)
-               model%analysis%effects = effects_kinetostatics
-            case (4)
-               model%analysis%effects = effects_statics
-            case (5)
-               model%analysis%effects = effects_dynamics
-            end select
+            model%analysis%effects = chosen('auto kinematics kinetostatics statics dynamics', [effects_auto, &
+               & effects_kinematics, effects_kinetostatics, effects_statics, effects_dynamics], model%analysis%effects)
          else if (is_word_of(key, 'integrator', 4)) then
-            ! integrator generalized-alpha [RHO_INF]: Chung-Hulbert with rho_inf in [0, 1].
-            if (.not. ctx%require(iline, 'integrator generalized-alpha [RHO_INF]', 'an integrator line')) cycle
-            if (extra(4, 'integrator generalized-alpha [RHO_INF]')) cycle
-            if (choice(2, integrator_names) /= 1) cycle
-            model%analysis%integrator = integrator_generalized_alpha
+            ! integrator generalized-alpha [RHO_INF]: Chung-Hulbert with rho_inf in [0, 1] (default 0.8);
+            ! integrator energy-momentum [RHO_INF]: the midpoint rule with the discrete gradient,
+            ! rho_inf in [0, 1] mapped to its dissipation (default 1: conserving).
+            if (.not. ctx%require(iline, 'integrator generalized-alpha|energy-momentum [RHO_INF]', &
+               & 'an integrator line')) cycle
+            if (extra(4, 'integrator generalized-alpha|energy-momentum [RHO_INF]')) cycle
+            select case (choice(2, integrator_names))
+            case (1)
+               model%analysis%integrator = integrator_generalized_alpha
+            case (2)
+               model%analysis%integrator = integrator_energy_momentum
+               model%analysis%rho_inf = 1
+               model%analysis%integrator_loc = ctx%loc(iline, 2)
+            case default
+               cycle
+            end select
             if (ctx%nfields(iline) < 3) cycle
             call ctx%real_field(iline, 3, v, ok)
             if (.not. ok) cycle
             if (v < 0 .or. v > 1) then
-               call ctx%error(iline, 3, 'rho_inf of generalized-alpha must lie in [0, 1]', &
-                  & label='the spectral radius at infinite frequency: 1 no numerical damping (trapezoidal rule), '// &
-                  & '0 the most; default 0.8')
+               call ctx%error(iline, 3, 'rho_inf of '//ctx%field(iline, 2)//' must lie in [0, 1]', &
+                  & label='the spectral radius at infinite frequency: 1 no numerical damping (trapezoidal rule, '// &
+                  & 'energy-momentum: conserving), 0 the most; default 0.8 (energy-momentum: 1)')
                cycle
             end if
             model%analysis%rho_inf = v
@@ -235,6 +199,31 @@ contains
          if (choice == 0) call ctx%error(iline, itok, "unknown value '"//ctx%field(iline, itok)//"' of "// &
             & ctx%field(iline, 1), label='allowed: '//words)
       end function choice
+
+      !> The setting that the line's value (field 2) names among `words`:
+      !> values(k) for the k-th word, or `current` after reporting none.
+      integer function chosen(words, values, current)
+         character(*), intent(in) :: words
+         integer, intent(in) :: values(:), current
+         integer :: k
+         k = choice(2, words)
+         chosen = current
+         if (k > 0) chosen = values(k)
+      end function chosen
+
+      !> The line is `key VALUE` with a real VALUE strictly between 0 and 1
+      !> (else an error saying that `what` must be).
+      logical function fraction(form, what, label, v) result(ok)
+         character(*), intent(in) :: form, what, label
+         real(dp), intent(out) :: v
+         v = 0
+         ok = one_value(form)
+         if (.not. ok) return
+         call ctx%real_field(iline, 2, v, ok)
+         if (.not. ok) return
+         ok = .not. (v <= 0 .or. v >= 1)
+         if (.not. ok) call ctx%error(iline, 2, what//' must be between 0 and 1', label=label)
+      end function fraction
 
       subroutine check_time(iline_)
          integer, intent(in) :: iline_

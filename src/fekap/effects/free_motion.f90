@@ -13,7 +13,7 @@ module fekap_effects_free_motion
    use fekap_error, only: error_type, input_error
    use fekap_model, only: model_type
    use fekap_assembly_mesh, only: mesh_type, describe_dof, dof_free
-   use fekap_assembly_band, only: band_matrix_type, new_band_matrix, narrow_band
+   use fekap_assembly_band, only: band_matrix_type, new_band_matrix
    use fekap_assembly_assemble, only: assemble_tangent
    use fekap_element_inertia, only: beam_mass_matrix
    implicit none
@@ -85,7 +85,7 @@ contains
          ! A positive but collapsed pivot is the round-off of a singular matrix.
          worst = huge(1.0_dp)
          do j = 1, k%n
-            pivot = column_pivot(k, j)
+            pivot = k%column_pivot(j)
             if (k%diag(j) > 0) pivot = pivot/k%diag(j)
             if (pivot < worst) then
                worst = pivot
@@ -99,20 +99,5 @@ contains
          & 'give the links that move in it a density (rho= or rhoA= [rhoI=] on SECTions) or a mass '// &
          & '(MASSes), or hold the motion with a drive (DRIVes) or a support (SUPPorts)')
    end subroutine check_free_motion
-
-   !> The pivot of column j of a factored band matrix, on the matrix's scale.
-   pure real(dp) function column_pivot(a, j) result(pivot)
-      type(band_matrix_type), intent(in) :: a
-      integer, intent(in) :: j
-      if (a%dense) then
-         pivot = abs(a%fd(j, j))
-      else if (a%is_lu) then
-         pivot = abs(a%f(2*a%kd + 1, j))
-      else if (a%kd <= narrow_band) then
-         pivot = a%f(a%kd + 1, j)
-      else
-         pivot = a%f(a%kd + 1, j)**2
-      end if
-   end function column_pivot
 
 end module fekap_effects_free_motion

@@ -72,11 +72,9 @@ contains
       real(dp), contiguous, intent(out) :: v(:)
       type(work_counts_type), intent(inout) :: counts
       real(dp), intent(in), optional :: load_rate(:)
-      integer :: i, k
+      integer :: k
       v = 0
-      do i = 1, mesh%ndriven
-         v(mesh%driven_dof(i)) = vd(i)
-      end do
+      v(mesh%driven_dof) = vd
       call drive_load_rhs(system, mesh, vd, load_rate)
       call solve_system(system, counts)
       do k = 1, mesh%nfree
@@ -101,12 +99,10 @@ contains
       real(dp), contiguous, intent(inout) :: work(:)
       type(work_counts_type), intent(inout) :: counts
       real(dp), intent(in), optional :: load_rate2(:)
-      integer :: i, k
+      integer :: k
       call assemble_second_derivative_at(system, mesh, q, v, seg, work, counts)
       a = 0
-      do i = 1, mesh%ndriven
-         a(mesh%driven_dof(i)) = ad(i)
-      end do
+      a(mesh%driven_dof) = ad
       call drive_load_rhs(system, mesh, ad, load_rate2)
       do k = 1, mesh%nfree
          system%rhs(k, 1) = system%rhs(k, 1) - work(mesh%eq_dof(k))
@@ -128,11 +124,9 @@ contains
       real(dp), contiguous, intent(in) :: vd(:)
       real(dp), contiguous, intent(out) :: v(:)
       real(dp), contiguous, intent(inout) :: work(:)
-      integer :: i, pass
+      integer :: pass
       v = 0
-      do i = 1, mesh%ndriven
-         v(mesh%driven_dof(i)) = vd(i)
-      end do
+      v(mesh%driven_dof) = vd
       do pass = 1, root_passes
          call strain_rates(root, mesh, v, work)
          call add_root_correction(root, mesh, work, v)
@@ -151,11 +145,9 @@ contains
       real(dp), contiguous, intent(in) :: ad(:)
       real(dp), contiguous, intent(out) :: a(:)
       real(dp), contiguous, intent(inout) :: work(:)
-      integer :: i, pass
+      integer :: pass
       a = 0
-      do i = 1, mesh%ndriven
-         a(mesh%driven_dof(i)) = ad(i)
-      end do
+      a(mesh%driven_dof) = ad
       do pass = 1, root_passes
          call strain_accelerations(root, mesh, v, a, work)
          call add_root_correction(root, mesh, work, a)

@@ -2,13 +2,24 @@
 !> converge, or converges to a rejected configuration) is cut in halves, at
 !> most max_cuts times, and the sub-step grows back after each success; the
 !> first and the last reasons for a rejection are kept for the listing.
+!> advance_by_cuts is the one loop that does this for the FEM and the
+!> constraint-equation methods, around a method's "try a step" (try_interface).
 module fekap_solver_step_control
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
+   use fekap_solver_stepper, only: stepper_type
    implicit none
    private
 
-   public :: step_cuts_type
+   public :: step_cuts_type, advance_by_cuts, try_interface, between_interface
+
+   !> Outcomes of a method's try of a (sub-)step: accepted at its time;
+   !> replaced by shorter steps that the method solved itself (accepted at its
+   !> time, counted as cut, `reason` says why); failed (nothing accepted: the
+   !> step is cut, `reason` says why); ended (the advance ends at once, with
+   !> `reason` as its error if allocated, as when the method found a change
+   !> point or an error that cutting cannot mend).
+   integer, parameter, public :: try_accepted = 0, try_replaced = 1, try_failed = 2, try_ended = 3
 
    !> Step cuts (halvings) allowed within one step before it is given up.
    integer, parameter, public :: max_cuts = 8
@@ -37,7 +48,78 @@ module fekap_solver_step_control
       procedure :: note => cuts_note
    end type step_cuts_type
 
+   abstract interface
+      !> One try of a method to advance `stepper` from its accepted state to
+      !> time t; depth is the nesting of advance_by_cuts (0: a run's step),
+      !> for a method that verifies a step by solving it again in parts.
+      recursive subroutine try_interface(stepper, t, depth, iterations, outcome, reason)
+         import :: stepper_type, dp, error_type
+         implicit none
+         class(stepper_type), intent(inout) :: stepper
+         real(dp), intent(in) :: t
+         integer, intent(in) :: depth
+         !> Newton iterations of the try (counted whatever its outcome).
+         integer, intent(out) :: iterations
+         integer, intent(out) :: outcome
+         type(error_type), allocatable, intent(out) :: reason
+      end subroutine try_interface
+
+      !> A try was accepted at time t short of the step's end (an intermediate
+      !> point of a cut step): what the method does there before going on.
+      subroutine between_interface(stepper, t)
+         import :: stepper_type, dp
+         implicit none
+         class(stepper_type), intent(inout) :: stepper
+         real(dp), intent(in) :: t
+      end subroutine between_interface
+   end interface
+
 contains
+
+   !> Advance `stepper` from its accepted time t_from to t by the method's
+   !> tries: a failed try halves the sub-step (at most max_cuts times, then
+   !> its reason is the error), an accepted one lets it grow back; `cuts`
+   !> keeps the count and the reasons for the listing, iterations sums the
+   !> tries' iterations.
+   recursive subroutine advance_by_cuts(stepper, try, between, t_from, t, depth, cuts, iterations, error)
+      class(stepper_type), intent(inout) :: stepper
+      procedure(try_interface) :: try
+      procedure(between_interface) :: between
+      real(dp), intent(in) :: t_from, t
+      integer, intent(in) :: depth
+      type(step_cuts_type), intent(out) :: cuts
+      integer, intent(out) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: reason
+      real(dp) :: t_accepted, t_try
+      integer :: it, outcome
+      call cuts%begin(t_from, t)
+      t_accepted = t_from
+      iterations = 0
+      do while (t_accepted < t)
+         t_try = cuts%next(t_accepted)
+         call try(stepper, t_try, depth, it, outcome, reason)
+         iterations = iterations + it
+         select case (outcome)
+         case (try_ended)
+            if (allocated(reason)) call move_alloc(reason, error)
+            return
+         case (try_failed)
+            call cuts%reject(reason, error)
+            if (allocated(error)) return
+            cycle
+         case (try_replaced)
+            call cuts%replaced(reason%message)
+         case default
+            ! try_accepted: the try's time is the accepted one.
+         end select
+         t_accepted = t_try
+         if (t_accepted < t) then
+            call between(stepper, t_accepted)
+            call cuts%grow()
+         end if
+      end do
+   end subroutine advance_by_cuts
 
    pure subroutine cuts_begin(self, t_from, t_end)
       class(step_cuts_type), intent(inout) :: self
