@@ -168,6 +168,10 @@ contains
             & planned_effects(model) == effects_statics .or. planned_effects(model) == effects_dynamics)) then
             call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
          end if
+         if (.not. allocated(error) .and. planned_effects(model) == effects_kinetostatics .and. &
+            & model%output%deflection) then
+            call open_replace(outdir//'/deflection.csv', units%deflection, error, stream=.true.)
+         end if
          if (.not. allocated(error) .and. planned_effects(model) == effects_dynamics) then
             call open_replace(outdir//'/energy.csv', units%energy, error, stream=.true.)
             units%energy_names = energy_names

@@ -16,7 +16,8 @@ module fekap_run
    use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
       & write_steps_header, write_steps_row, row_prefix_type, new_row_prefix, write_nodes_header, write_nodes_row, &
-      & write_reactions_header, write_reactions_rows, write_energy_header, write_energy_row
+      & write_reactions_header, write_reactions_rows, write_energy_header, write_energy_row, &
+      & write_deflection_header, write_deflection_rows
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop, write_listing_note
    use fekap_output_vtk, only: write_vtu
@@ -61,6 +62,8 @@ module fekap_run
       !> energy.csv, written by dynamics runs only, with its columns after step,t.
       integer :: energy = no_unit
       character(:), allocatable :: energy_names
+      !> deflection.csv, written by kinetostatics runs with OUTPut deflection on.
+      integer :: deflection = no_unit
       logical :: vtk = .false.
       !> The output directory and the deck's stem, for the VTK file names.
       character(:), allocatable :: outdir, stem
@@ -80,7 +83,7 @@ module fekap_run
 
    !> The text of the files written step by step, held between flushes.
    type :: run_buffers_type
-      type(text_buffer_type) :: points, links, steps, nodes, listing, reactions, energy
+      type(text_buffer_type) :: points, links, steps, nodes, listing, reactions, energy, deflection
    end type run_buffers_type
 
 contains
@@ -143,6 +146,7 @@ contains
       if (units%nodes /= no_unit) call write_nodes_header(out%nodes, model)
       if (units%reactions /= no_unit) call write_reactions_header(out%reactions)
       if (units%energy /= no_unit) call write_energy_header(out%energy, units%energy_names)
+      if (units%deflection /= no_unit) call write_deflection_header(out%deflection)
       if (units%listing /= no_unit) call write_listing_step_header(units%listing)
       if (units%vtk) then
          allocate (vtk%links_nodes(2, size(model%links)))
@@ -167,6 +171,13 @@ contains
             call stepper%advance(step_time(model, n, nsteps), result, step_error)
          end if
          if (timed) c1 = clock_seconds()
+         if (allocated(step_error) .and. interrupt_signal() /= 0) then
+            ! A signal stopped the step in progress (between Newton iterations).
+            write (where_, '(a,i0,a,i0,a,a,a)') 'interrupted by signal ', interrupt_signal(), ' during step ', n, &
+               & ' (t = ', es_text(step_time(model, n, nsteps), 12, 5), ')'
+            call fatal_error(error, trim(where_)//'; the step was stopped, the rows of the completed steps are kept')
+            exit
+         end if
          if (allocated(step_error)) then
             ! A message that names its own time (where the step was cut) gives the only time.
             if (index(step_error%message, 't = ') == 1) then
@@ -185,7 +196,8 @@ contains
          end if
          if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
             if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit .or. &
-               & units%nodes /= no_unit .or. units%reactions /= no_unit .or. units%energy /= no_unit) then
+               & units%nodes /= no_unit .or. units%reactions /= no_unit .or. units%energy /= no_unit .or. &
+               & units%deflection /= no_unit) then
                call new_row_prefix(prefix, result)
             end if
             if (units%points /= no_unit) then
@@ -208,6 +220,10 @@ contains
             if (units%energy /= no_unit) then
                call write_energy_row(out%energy, result, prefix)
                rows = rows + 1
+            end if
+            if (units%deflection /= no_unit) then
+               call write_deflection_rows(out%deflection, model, result, prefix)
+               rows = rows + size(model%nodes)
             end if
             if (units%listing /= no_unit) call write_listing_step(out%listing, result)
             if (units%vtk) then
@@ -386,6 +402,7 @@ contains
       if (units%nodes /= no_unit) call new_text_buffer(out%nodes, units%nodes, formatted=.false.)
       if (units%reactions /= no_unit) call new_text_buffer(out%reactions, units%reactions, formatted=.false.)
       if (units%energy /= no_unit) call new_text_buffer(out%energy, units%energy, formatted=.false.)
+      if (units%deflection /= no_unit) call new_text_buffer(out%deflection, units%deflection, formatted=.false.)
       if (units%listing /= no_unit) call new_text_buffer(out%listing, units%listing, formatted=.true.)
    end subroutine new_run_buffers
 
@@ -404,6 +421,7 @@ contains
       if (units%nodes /= no_unit) call flush_one(out%nodes)
       if (units%reactions /= no_unit) call flush_one(out%reactions)
       if (units%energy /= no_unit) call flush_one(out%energy)
+      if (units%deflection /= no_unit) call flush_one(out%deflection)
       if (units%listing /= no_unit) call flush_one(out%listing)
    contains
       subroutine flush_one(buffer)

@@ -97,3 +97,102 @@ def test_statics_needs_loads(tmp_path):
     run = run_fekap("-q", "-o", str(tmp_path / "s"), str(deck))
     assert run.returncode == 2
     assert "variant.deck:26:8: error: statics cannot run: statics needs loads" in run.stderr
+
+
+# --- the elastic deflection (OUTPut deflection on) --------------------------------------------------
+
+RHO_A = 100 * 1e-2  # decks/fourbar-kinetostatics.deck: rho = 100, A = 1e-2
+LINKS = {"AB": ("A", "B"), "BC": ("B", "C"), "DC": ("D", "C")}
+
+
+def stiff_run(tmp_path: Path, e: float, name: str) -> Path:
+    """The four-bar kinetostatics deck with sections E = e, G = 0.4 e (stiff links), every node
+    tracked and the deflection written."""
+    text = (ROOT / DECK).read_text().replace("E=1e7  G=4e6", f"E={e:g}  G={0.4 * e:g}")
+    text = text.replace("  track B C\n", "  deflection on\n")
+    deck = tmp_path / f"{name}.deck"
+    deck.write_text(text)
+    out = tmp_path / name
+    run = run_fekap("-q", "-o", str(out), str(deck))
+    assert run.returncode == 0, run.stderr
+    return out
+
+
+def by_step_node(rows: list[dict[str, str]], key: str, *columns: str) -> dict[tuple[int, str], tuple[float, ...]]:
+    return {(int(r["step"]), r[key]): tuple(float(r[c]) for c in columns) for r in rows}
+
+
+def test_deflection_is_each_links_axial_stretch(tmp_path):
+    """With stiff links each link's stretch in deflection.csv, (u2 - u1) . t, is the integral of
+    its axial force over EA: N(s) = -g1 . t - int_0^s p . t, p = rhoA (g - a(s)) with a(s) linear
+    between the ends' accelerations (points.csv), g1 the joint's force on the link's first end
+    (reactions.csv). Linear elements with consistent loads have exact nodal values in 1D."""
+    e = 1e11
+    out = stiff_run(tmp_path, e, "stiff")
+    ea = e * 1e-2
+    u = by_step_node(read_rows(out / "deflection.csv"), "node", "ux", "uy")
+    points = by_step_node(read_rows(out / "points.csv"), "point", "x", "y", "ax", "ay")
+    joints = {(int(r["step"]), r["link"], r["node"]): (float(r["fx"]), float(r["fy"]))
+              for r in read_rows(out / "reactions.csv") if r["kind"] == "joint"}
+    steps = sorted({s for s, _ in u})
+    assert len(steps) == 101 and len(u) == 101 * 4
+    worst = largest = 0.0
+    for step in steps:
+        for link, (n1, n2) in LINKS.items():
+            x1, y1, ax1, ay1 = points[step, n1]
+            x2, y2, ax2, ay2 = points[step, n2]
+            length = math.hypot(x2 - x1, y2 - y1)
+            t = ((x2 - x1) / length, (y2 - y1) / length)
+            p1 = RHO_A * ((0 - ax1) * t[0] + (-9.81 - ay1) * t[1])
+            p2 = RHO_A * ((0 - ax2) * t[0] + (-9.81 - ay2) * t[1])
+            g1 = joints[step, link, n1]
+            want = (-(g1[0] * t[0] + g1[1] * t[1]) * length - length**2 * (p1 / 3 + p2 / 6)) / ea
+            got = (u[step, n2][0] - u[step, n1][0]) * t[0] + (u[step, n2][1] - u[step, n1][1]) * t[1]
+            worst = max(worst, abs(got - want))
+            largest = max(largest, abs(want))
+    assert largest > 1e-8, largest
+    assert worst < 1e-6 * largest, (worst, largest)
+    # The listing names the run's largest deflection (over every point of the mesh).
+    listing = next(out.glob("*.lis")).read_text()
+    assert "deflection.csv" in plan(out)
+    note = [line for line in listing.splitlines() if "largest elastic deflection" in line]
+    assert len(note) == 1 and "step 100," in note[0], note
+    value = float(note[0].split("largest elastic deflection ")[1].split()[0])
+    assert value >= max(math.hypot(*v) for v in u.values()) * (1 - 1e-5)
+
+
+def test_deflection_scales_as_one_over_the_stiffness(tmp_path):
+    """The motion is the kinematic one whatever E is, and the four-bar held at its drive is
+    statically determinate: doubling E and G halves the deflection."""
+    u1 = by_step_node(read_rows(stiff_run(tmp_path, 1e11, "e1") / "deflection.csv"), "node", "ux", "uy")
+    u2 = by_step_node(read_rows(stiff_run(tmp_path, 2e11, "e2") / "deflection.csv"), "node", "ux", "uy")
+    assert u1.keys() == u2.keys()
+    scale = max(max(abs(c) for c in v) for v in u1.values())
+    assert scale > 0
+    worst = max(max(abs(a - 2 * b) for a, b in zip(u1[k], u2[k])) for k in u1)
+    assert worst < 1e-8 * scale, (worst, scale)
+
+
+@pytest.mark.parametrize("line, message", [
+    ("  deflection maybe", "expected on or off, not 'maybe'"),
+    ("  defl 1", "expected on or off, not '1'"),
+    ("  deflection on off", "unexpected field 'off'"),
+])
+def test_bad_deflection_switch_is_an_input_error(tmp_path, line, message):
+    deck = variant(tmp_path, "  track B C\n", line + "\n")
+    run = run_fekap("-q", "-o", str(tmp_path / "bad"), str(deck))
+    assert run.returncode == 2
+    row = (ROOT / DECK).read_text().splitlines().index("  track B C") + 1
+    assert f"variant.deck:{row}:" in run.stderr and message in run.stderr, run.stderr
+
+
+def test_deflection_is_kinetostatics_only(tmp_path):
+    """Statics with the switch on: the plan says the deflection is not written, and it is not."""
+    deck = tmp_path / "statics.deck"
+    deck.write_text((ROOT / "decks/statics-cantilever.deck").read_text().replace(
+        "  track T\n", "  track T\n  deflection on\n"))
+    out = tmp_path / "statics"
+    run = run_fekap("-q", "-o", str(out), str(deck))
+    assert run.returncode == 0, run.stderr
+    assert "OUTPut deflection: not written" in plan(out)
+    assert not (out / "deflection.csv").exists()

@@ -335,6 +335,59 @@ def test_sighup_stops_the_run_like_sigterm(tmp_path):
     whole_rows(out / "points.csv")
 
 
+#: A cantilever of 20,000 elements: step 0 load-steps a dead tip force of 60 (about 100 Newton
+#: iterations), step 1 adds 1000 more in one step (about 160 iterations and 5 step cuts: 4 s in
+#: the release build, longer in the checking one).
+SLOW_STEP_DECK = """TITLe  a slow step: a cantilever of 20000 elements under a large tip force in one step
+SECTions
+  beam  EA=1e5  kGA=1e5  EI=1
+NODEs
+  R  0  0
+  T  1  0
+LINKs
+  RT  R  T  beam  20000
+SUPPorts
+  R  pin  rot RT
+LOADs
+  T  0  -60  constant
+  T  0  -1000  linear 0 0 1 1
+ANALysis
+  type statics
+  time 0 2 1
+END
+"""
+
+
+@pytest.mark.parametrize("sig", (signal.SIGTERM, signal.SIGINT), ids=lambda s: s.name)
+def test_a_signal_stops_a_slow_step_between_newton_iterations(tmp_path, sig):
+    """The signal comes once step 0's rows are on disk (step 1, the slow one, has begun): the run
+    stops inside step 1 (not after it), exits 1, says so on stderr and in the listing, and keeps
+    step 0's rows whole."""
+    out = tmp_path / "slow"
+    deck = write_deck(tmp_path / "slow.deck", SLOW_STEP_DECK)
+    proc = subprocess.Popen([fekap_binary(), "-q", "-o", str(out), str(deck)], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    points = out / "points.csv"
+    deadline = time.time() + 120
+    # The rows of step 0 reach the file at the first flush after it (a flush waits 0.1 s from the
+    # last, and step 0 takes longer); step 1 starts right after.
+    while not (points.exists() and "\n0," in points.read_text()):
+        assert proc.poll() is None, proc.communicate()
+        assert time.time() < deadline, "step 0 did not finish"
+        time.sleep(0.02)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, (proc.returncode, err)
+    assert f"interrupted by signal {int(sig)} during step 1 " in err, err
+    assert "the step was stopped, the rows of the completed steps are kept" in err
+    listing = (out / "slow.lis").read_text()
+    assert f"interrupted by signal {int(sig)} during step 1" in listing and "SUMMARY" in listing
+    rows = whole_rows(points)
+    assert [row[0] for row in rows] == ["step", "0", "0"], rows
+    reactions = whole_rows(out / "reactions.csv")[1:]
+    assert reactions and all(row[0] == "0" for row in reactions), reactions
+
+
 def test_closed_standard_output_is_not_a_failure(tmp_path):
     done = subprocess.run(["bash", "-c", f'"$0" -o "$1" "$2" | head -c 1 >/dev/null; echo "${{PIPESTATUS[0]}}"',
                            fekap_binary(), str(tmp_path / "o"), str(FOURBAR)], capture_output=True, text=True,

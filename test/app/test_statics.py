@@ -116,3 +116,83 @@ def test_slider_crank_torque_from_the_power_balance(tmp_path):
         assert abs(float(s["fx"])) < 1e-9 * largest
         assert abs(float(s["fy"]) - (-(mass * a - force) * slope)) < 1e-6 * largest
     assert worst < 1e-6 * largest, worst
+
+
+# --- a full dead load at the start: load stepping ------------------------------------------------
+
+DEAD_LOAD_DECK = """TITLe  cantilever under a tip force of P L^2/EI = 30 from t = 0 (a dead load)
+SECTions
+  beam  EA=1e9  kGA=1e9  EI=1
+NODEs
+  R  0  0
+  T  1  0
+LINKs
+  RT  R  T  beam  64
+SUPPorts
+  R  pin  rot RT
+LOADs
+  T  0  -30  constant
+ANALysis
+  type statics
+  time 0 1 0.5
+END
+"""
+
+
+def elastica_tip(k: float, n: int = 4000) -> tuple[float, float]:
+    """The inextensible elastica of a cantilever (L = EI = 1) under a downward tip force k:
+    theta'' = k cos(theta), theta(0) = 0, theta'(1) = 0, by RK4 shooting on theta'(0) (bisection);
+    returns the tip's (x, y)."""
+    def shoot(c: float) -> list[float]:
+        def f(state: list[float]) -> list[float]:
+            th, w, _, _ = state
+            return [w, k * math.cos(th), math.cos(th), math.sin(th)]
+        h = 1.0 / n
+        state = [0.0, c, 0.0, 0.0]
+        for _ in range(n):
+            k1 = f(state)
+            k2 = f([s + h / 2 * d for s, d in zip(state, k1)])
+            k3 = f([s + h / 2 * d for s, d in zip(state, k2)])
+            k4 = f([s + h * d for s, d in zip(state, k3)])
+            state = [s + h / 6 * (a + 2 * b + 2 * c_ + d) for s, a, b, c_, d in zip(state, k1, k2, k3, k4)]
+        return state
+    lo, hi = -k, 0.0
+    for _ in range(50):
+        mid = (lo + hi) / 2
+        if shoot(mid)[1] > 0:
+            hi = mid
+        else:
+            lo = mid
+    state = shoot((lo + hi) / 2)
+    return state[2], state[3]
+
+
+def test_full_dead_load_at_the_start_is_load_stepped(tmp_path):
+    """A tip force of P L^2/EI = 30 from t = 0: Newton from the straight cantilever does not
+    converge (before load stepping: exit 3); the start steps the load factor 0 -> 1 with the step
+    control's cuts, the listing says so, and the tip is the elastica's (Mattiasson's benchmark;
+    EA and kGA stiff: within the 64 linear elements' discretisation error, 4e-5 measured)."""
+    deck = tmp_path / "dead.deck"
+    deck.write_text(DEAD_LOAD_DECK)
+    out = run(tmp_path, deck, "dead")
+    listing = (out / "dead.lis").read_text()
+    note = [line for line in listing.splitlines() if "load stepped" in line]
+    assert len(note) == 1 and "step 0," in note[0] and "Newton did not converge" in note[0], note
+    assert note[0].split("factors ")[1].split(" (")[0].split()[-1] == "1.000E+00"
+    steps = [r for r in read_rows(out / "steps.csv")]
+    assert int(steps[0]["cuts"]) >= 1
+    want = elastica_tip(30.0)
+    for row in read_rows(out / "points.csv"):
+        if row["point"] == "T":
+            assert abs(float(row["x"]) - want[0]) < 1.5e-4, (row["x"], want)
+            assert abs(float(row["y"]) - want[1]) < 1.5e-4, (row["y"], want)
+
+
+def test_load_stepping_that_cannot_reach_the_full_load_stops_with_exit_3(tmp_path):
+    """Two Newton iterations a solve: no load step converges; the message says the start was
+    load stepped and why it failed, and the run exits 3."""
+    deck = tmp_path / "hopeless.deck"
+    deck.write_text(DEAD_LOAD_DECK.replace("  type statics", "  type statics\n  iterations 2"))
+    result = run_fekap("-q", "-o", str(tmp_path / "hopeless"), str(deck))
+    assert result.returncode == 3, result.stderr
+    assert "nor in load steps from 0 to 1" in result.stderr, result.stderr

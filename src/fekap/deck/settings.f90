@@ -243,13 +243,13 @@ contains
    end subroutine read_analysis
 
    !> OUTPut: `track NODE ...`, `angles LINK ...`, `every K`, `files csv|listing|vtk ...`,
-   !> `units length=NAME time=NAME`.
+   !> `units length=NAME time=NAME`, `deflection on|off`.
    !> Without track every node is tracked; without angles every link is reported.
    subroutine read_output(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
-      character(*), parameter :: keys = 'track angles every files units'
+      character(*), parameter :: keys = 'track angles every files units deflection'
       integer :: i, iline, k, idx, every, which
       logical :: ok, tracked, angled
       character(:), allocatable :: key
@@ -310,6 +310,22 @@ contains
                      & label='allowed: csv listing vtk')
                end select
             end do
+         else if (is_word_of(key, 'deflection', 4)) then
+            if (.not. ctx%require(iline, 'deflection on|off', 'a deflection line')) cycle
+            if (ctx%nfields(iline) > 2) then
+               call ctx%error(iline, 3, "unexpected field '"//ctx%field(iline, 3)//"'", &
+                  & label='the line is: deflection on|off')
+               cycle
+            end if
+            select case (word_index(ctx%field(iline, 2), 'on off'))
+            case (1)
+               model%output%deflection = .true.
+            case (2)
+               model%output%deflection = .false.
+            case default
+               call ctx%error(iline, 2, "expected on or off, not '"//ctx%field(iline, 2)//"'", &
+                  & label='deflection on writes deflection.csv (kinetostatics)')
+            end select
          else if (is_word_of(key, 'units', 4)) then
             if (.not. ctx%require(iline, 'units length=NAME [time=NAME]', 'a units line')) cycle
             do k = 2, ctx%nfields(iline)

@@ -105,6 +105,11 @@ contains
       case default
          continue
       end select
+      if (model%output%deflection .and. plan%effects /= effects_kinetostatics) then
+         if (len(plan%left_out) > 0) plan%left_out = plan%left_out//'; '
+         plan%left_out = plan%left_out//'OUTPut deflection: not written (only kinetostatics computes the '// &
+            & 'elastic deflection)'
+      end if
 
    end function plan_effects
 

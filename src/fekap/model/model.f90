@@ -215,6 +215,8 @@ module fekap_model
       logical :: csv = .true.
       logical :: listing = .true.
       logical :: vtk = .false.
+      !> Kinetostatics: write the elastic deflection of the nodes (deflection.csv).
+      logical :: deflection = .false.
       !> Names of the deck's length and time units, for the plots' axis labels
       !> (the numbers are used as given; angles are always radians).
       character(len=16) :: length_unit = 'm'

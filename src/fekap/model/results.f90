@@ -49,6 +49,10 @@ module fekap_model_results
       !> momenta (see fekap_effects_dynamic_stepper's energy_names).
       logical :: has_energy = .false.
       real(dp), allocatable :: energy(:)
+      !> Kinetostatics with OUTPut deflection: the elastic deflection (ux, uy)
+      !> of every node (2, number of nodes), and whether it is known at this step.
+      logical :: has_deflection = .false.
+      real(dp), allocatable :: deflection(:, :)
    end type step_result_type
 
 contains

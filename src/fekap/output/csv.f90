@@ -19,7 +19,7 @@ module fekap_output_csv
    public :: write_points_header, write_points_rows, write_links_header, write_links_rows
    public :: write_steps_header, write_steps_row, write_mesh_csv, new_row_prefix
    public :: write_nodes_header, write_nodes_row, write_mechanism_csv, write_reactions_header, write_reactions_rows
-   public :: write_energy_header, write_energy_row
+   public :: write_energy_header, write_energy_row, write_deflection_header, write_deflection_rows
 
    !> Longest text of a real (es25.16e3 without its leading blank) and of an
    !> integer, and of the prefix `step,t,` of a row.
@@ -387,6 +387,34 @@ contains
       call append_values(out%text, out%n, result%energy)
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_energy_row
+
+   subroutine write_deflection_header(out)
+      type(text_buffer_type), intent(inout) :: out
+      character(*), parameter :: header = 'step,t,node,ux,uy'
+      call reserve_text(out, len(header) + 1)
+      call append_text(out%text, out%n, header//new_line('a'))
+   end subroutine write_deflection_header
+
+   !> `step,t,node,ux,uy` for every node of a kinetostatics step: the elastic
+   !> deflection of the loaded configuration from the kinematic one (empty at
+   !> a step without it, a singular configuration).
+   subroutine write_deflection_rows(out, model, result, prefix)
+      type(text_buffer_type), intent(inout) :: out
+      type(model_type), intent(in) :: model
+      type(step_result_type), intent(in) :: result
+      type(row_prefix_type), intent(in) :: prefix
+      integer :: i
+      do i = 1, size(model%nodes)
+         call reserve_text(out, row_length(len(model%nodes(i)%name), 2))
+         call append_text(out%text, out%n, prefix%text(1:prefix%n)//model%nodes(i)%name)
+         if (result%has_deflection) then
+            call append_values(out%text, out%n, result%deflection(:, i))
+         else
+            call append_text(out%text, out%n, ',,')
+         end if
+         call append_char(out%text, out%n, new_line('a'))
+      end do
+   end subroutine write_deflection_rows
 
    !> `link,node1,node2`: the end points of every link, for drawing the
    !> mechanism; to a unit open for unformatted stream access.

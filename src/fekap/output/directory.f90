@@ -22,8 +22,8 @@ module fekap_output_directory
    !> start of a run (docs/deck-format.md, "What a run writes"): a name, or a
    !> pattern with one `*`. The VTK step files are `vtk/*.vtu`.
    character(*), parameter :: own_files(*) = [character(len=17) :: 'points.csv', 'links.csv', 'steps.csv', &
-      & 'mesh.csv', 'nodes.csv', 'reactions.csv', 'energy.csv', 'mechanism.txt', '*.lis', '*.pvd', '*.fekap-tmp', &
-      & 'paths.png', &
+      & 'mesh.csv', 'nodes.csv', 'reactions.csv', 'energy.csv', 'deflection.csv', 'mechanism.txt', '*.lis', '*.pvd', &
+      & '*.fekap-tmp', 'paths.png', &
       & 'angles.png', 'iterations.png', 'history_*.png', 'shapes.png', 'motion.gif', 'motion.mp4', 'motion-frame.png']
 
 contains

@@ -42,6 +42,7 @@ module fekap_solver_fem
    use fekap_solver_rates, only: near_singular_drop
    use fekap_solver_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
       & try_ended
+   use fekap_solver_interrupt, only: interrupt_signal, interrupt_error
    use fekap_solver_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
       & prepend_cuts_note, model_distance, no_convergence_error
    use fekap_solver_fem_factor, only: refactor_at_accepted, newton_assembly, root_correction, factor_root, &
@@ -283,6 +284,8 @@ contains
       type is (fem_stepper_type)
          self%verify_depth = depth
          call solve_step(self, t, iterations, residual, reason)
+         ! A signal stopped the step: no cut, the run stops.
+         if (allocated(reason) .and. interrupt_signal() /= 0) return
          ! Only a run's step, at its first try, checks for a change point.
          self%detect_change = .false.
          if (self%change_found) return
@@ -373,6 +376,9 @@ contains
             relocations: do pass = 0, size(mesh%slides)*8
                at_predictor = .false.
                do i = 0, self%model%analysis%max_iter
+                  ! A signal ends the step here (a slow step would delay the stop).
+                  call interrupt_error(error)
+                  if (allocated(error)) return
                   call newton_assembly(self, qt, t, kg_above)
                   ! The predictor's guard, once per step: it needs the strains of this first assembly.
                   if (self%guard_pending) then

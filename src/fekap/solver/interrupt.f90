@@ -1,6 +1,8 @@
 !> A stop requested by a signal (SIGINT, SIGTERM, SIGHUP): the handler only records
 !> it, which is all a signal handler may safely do; the time loop looks at the
-!> record after every step and stops there, so the listing and stderr can say
+!> record after every step and stops there, and the long loops inside a step
+!> (Newton's iterations, the step cuts, statics' load steps) look at it too
+!> and end the step with interrupt_error, so the listing and stderr can say
 !> where and why, and every completed step's rows stay.
 !>
 !> The record is the one piece of module state in FEKAP: a signal handler has
@@ -8,10 +10,11 @@
 module fekap_solver_interrupt
    use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
    use fekap_posix, only: c_signal
+   use fekap_error, only: error_type, fatal_error
    implicit none
    private
 
-   public :: catch_interrupts, interrupt_signal
+   public :: catch_interrupts, interrupt_signal, interrupt_error
 
    integer(c_int), parameter :: sighup = 1, sigint = 2, sigterm = 15
 
@@ -37,5 +40,17 @@ contains
    integer function interrupt_signal()
       interrupt_signal = received
    end function interrupt_signal
+
+   !> The error that stops a step in progress when a signal has asked the run
+   !> to stop (kind error_other: exit code 1, as a stop between steps); the
+   !> time loop replaces its message with the step's. Not allocated if no
+   !> signal came.
+   subroutine interrupt_error(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=60) :: text
+      if (received == 0) return
+      write (text, '(a,i0,a)') 'interrupted by signal ', received, ' inside the step'
+      call fatal_error(error, trim(text))
+   end subroutine interrupt_error
 
 end module fekap_solver_interrupt

@@ -1,0 +1,122 @@
+#!/usr/bin/env python3
+"""Compare FEKAP's spin-up beam (decks/dynamics/spin-up.deck) with the
+independent linear rotating-beam model of scripts/spin_up_reference.py: the
+transverse tip deflection in the hub's frame over 0-30 s, for 10, 20, 40 and
+80 elements at dt 0.01, 0.005 and 0.0025 (the deck: 10 elements, dt 0.01).
+A comparison script, not a test (test/app/test_dynamics.py checks the deck).
+
+    scripts/spin_up_compare.py [--plot docs/dynamics/spin-up.png] [--beta B]
+
+--beta B adds a run of the deck with stiffness-proportional Rayleigh damping
+beta = B on the section (the published case has none; see docs/dynamics.md
+for why FEKAP's damping does not suit this spinning beam yet).
+
+Prints a Markdown table (peak deflection and its time, the value at t = 15 s,
+the largest magnitude after t = 15 s, the largest difference from the model);
+FEKAP is the release binary of scripts/build (build/local/bin/fekap).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "scripts"))
+import spin_up_reference as reference  # noqa: E402
+
+DECK = ROOT / "decks" / "dynamics" / "spin-up.deck"
+
+
+def run(elements: int, dt: float, beta: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Times and transverse tip deflections in the hub's frame of one run."""
+    text = DECK.read_text().replace("OT  O  T  beam  10", f"OT  O  T  beam  {elements}")
+    if beta:
+        text = text.replace("rhoI=6e-4", f"rhoI=6e-4  beta={beta:g}")
+    with tempfile.TemporaryDirectory() as work:
+        deck = Path(work) / "spin-up.deck"
+        deck.write_text(text)
+        out = Path(work) / "out"
+        done = subprocess.run([str(ROOT / "build" / "local" / "bin" / "fekap"), "-q", str(deck), "-o", str(out),
+                               "--set", f"dt={dt!r}"], capture_output=True, text=True)
+        if done.returncode != 0:
+            sys.exit(f"fekap failed ({elements} elements, dt {dt}): {done.stderr}")
+        with open(out / "points.csv", newline="") as p, open(out / "links.csv", newline="") as l:
+            rows = [(float(a["t"]), float(a["x"]), float(a["y"]), float(b["angle"]))
+                    for a, b in zip(csv.DictReader(p), csv.DictReader(l))]
+    t, x, y, angle = (np.array(c) for c in zip(*rows))
+    return t, -x * np.sin(angle) + y * np.cos(angle)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--plot", type=Path, help="write the figure to this PNG")
+    parser.add_argument("--beta", type=float, help="also a run with Rayleigh damping beta= on the section")
+    args = parser.parse_args()
+    model_t, model_v = reference.simulate(n_modes=6, dt=1e-3, t_end=30.0, law="table")
+    model = reference.features(model_t, model_v)
+    exact = reference.features(*reference.simulate(n_modes=6, dt=1e-3, t_end=30.0, law="exact"))
+    print("| model | elements | dt (s) | peak | t of peak (s) | at t = 15 s | largest after 15 s | "
+          "largest difference from the model (after 15 s) |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for name, f in (("linear model, published law", exact), ("linear model, the deck's table", model)):
+        print(f"| {name} | 6 modes | RK4 1e-3 | {f['peak']:.5f} | {f['t_peak']:.4f} | {f['at15']:.3e} | "
+              f"{f['residual']:.3e} | |")
+    series = {}
+    for elements in (10, 20, 40, 80):
+        for dt in (0.01, 0.005, 0.0025):
+            t, v = run(elements, dt)
+            series[elements, dt] = (t, v)
+            f = reference.features(t, v)
+            diff = np.abs(v - np.interp(t, model_t, model_v))
+            print(f"| FEKAP | {elements} | {dt:g} | {f['peak']:.5f} | {f['t_peak']:.4f} | {f['at15']:.3e} | "
+                  f"{f['residual']:.3e} | {diff.max():.2e} ({diff[t >= 15].max():.2e}) |")
+    if args.beta:
+        damped_t, damped_v = run(10, 0.01, beta=args.beta)
+        f = reference.features(damped_t, damped_v)
+        late = np.abs(damped_v[damped_t >= 25]).max()
+        print(f"| FEKAP, beta = {args.beta:g} | 10 | 0.01 | {f['peak']:.5f} | {f['t_peak']:.4f} | {f['at15']:.3e} | "
+              f"{f['residual']:.3e} (after 25 s: {late:.2e}) | |")
+    if args.plot:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        style = ROOT / "scripts" / "fekap.mplstyle"
+        if style.is_file():
+            plt.style.use(str(style))
+        fig, axes = plt.subplots(3, 1, figsize=(8, 9), constrained_layout=True)
+        t10, v10 = series[10, 0.01]
+        t80, v80 = series[80, 0.0025]
+        axes[0].plot(model_t, model_v, "k-", lw=2.5, label="linear rotating-beam model (6 modes)")
+        axes[0].plot(t10, v10, "C1--", label="FEKAP, the deck: 10 elements, dt 0.01")
+        axes[0].set_ylabel("transverse tip deflection")
+        axes[0].set_title("Spin-up beam: tip deflection in the hub's frame")
+        axes[0].legend()
+        after = model_t >= 14
+        axes[1].plot(model_t[after], model_v[after], "k-", lw=2.5, label="model")
+        for (t, v), label, style_ in (((t10, v10), "10 elements, dt 0.01", "C1--"),
+                                      ((t80, v80), "80 elements, dt 0.0025", "C2:")):
+            axes[1].plot(t[t >= 14], v[t >= 14], style_, label=f"FEKAP, {label}")
+        axes[1].set_ylabel("after the spin-up")
+        axes[1].legend(ncol=2, fontsize="small")
+        for (t, v), label, style_ in (((t10, v10), "10 elements, dt 0.01", "C1-"),
+                                      ((t80, v80), "80 elements, dt 0.0025", "C2-")):
+            axes[2].plot(t, v - np.interp(t, model_t, model_v), style_, label=f"FEKAP {label}")
+        axes[2].set_ylabel("FEKAP - model")
+        axes[2].set_xlabel("t (s)")
+        axes[2].legend()
+        args.plot.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(args.plot, dpi=110)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
