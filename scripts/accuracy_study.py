@@ -18,10 +18,17 @@ Studies (deck, what is swept, the exact answer):
              y = (1 - cos(phi))/kappa with kappa = 2 pi t, phi = kappa L, L = 1;
              2 ... 128 elements
   dynamics   (a table of its own) the stiff pendulum (decks/dynamics/pendulum.deck):
-             its first bottom pass against T/4 = 0.591960487 s and 4.429446918 m/s;
-             the A02 chain, N = 2, over 4 s: the crank's rate against the energy
-             integral (away from the change points); dt and rho_inf swept, with
-             Newton iterations and microseconds (analysis) per step
+             its first bottom pass against T/4 = 0.591960487 s and 4.429446918 m/s,
+             generalized-alpha with rho_inf 0.5, 0.8, 1; the A02 chain, N = 2,
+             over 4 s: the first crank's angle and rate against the exact
+             motion (scripts/a02_exact.py, the energy integral's quadrature)
+             before the first change point (t <= 0.7 s: the integrator's
+             error, with its observed order) and over the 4 s (with the
+             change points, where the elastic bars take a kick), generalized-alpha (GA) and energy-momentum (EM) with
+             rho_inf 1, 0.9, 0.8, 0.5, dt 8e-3 ... 2.5e-4, the observed order
+             against the next larger dt, and with bars 100 x stiffer (the
+             elastic model's share of the error); Newton iterations and
+             microseconds (analysis) per step
 
 Errors are the largest distance between a tracked point and its exact position
 over every written step (positions), and for Example 1 also the largest
@@ -34,8 +41,9 @@ mean analysis time, median CPU time.
 Writes docs/performance/accuracy.png, docs/performance/accuracy.json and the
 table between the accuracy markers of docs/performance.md.
 
-Usage: python3 scripts/accuracy_study.py [--short] [--bin FEKAP]
+Usage: python3 scripts/accuracy_study.py [--short] [--dynamics] [--bin FEKAP] [--repeat N]
   --short: a few points per study, prints the table, writes no docs.
+  --dynamics: the dynamics table alone.
 """
 
 from __future__ import annotations
@@ -56,6 +64,8 @@ import fekap_bench as fb  # noqa: E402
 
 sys.path.insert(0, str(fb.ROOT / "test" / "app"))
 from test_examples import fourbar_exact  # noqa: E402  (hyper-dual closed form of Example 1)
+import a02_exact  # noqa: E402  (the A02 chain's exact motion)
+import numpy as np  # noqa: E402
 
 
 def slider_exact(t: float) -> tuple[float, float]:
@@ -240,52 +250,103 @@ def pendulum_errors(outdir: Path) -> dict:
     return {"error": float("nan"), "second": float("nan")}
 
 
+#: The A02 chain (N = 2) reaches its first change point (every bar flat) at t = 0.7148 s.
+A02_FIRST_CHANGE = 0.70
+
+
 def a02_errors(outdir: Path, n: int = 2) -> dict:
-    """Largest error of the first crank's rate against the energy integral,
-    more than 0.15 rad from the change points."""
-    inertia, moment = (n + 1) / 3 + n, ((n + 1) / 2 + n) * 9.81
-    worst = 0.0
+    """Largest errors of the first crank's angle (rad) and rate (rad/s)
+    against the exact motion (scripts/a02_exact.py: the energy integral's
+    quadrature): at the steps before the first change point (the integrator's
+    error: error, second) and at every step of the run (angle_all, rate_all:
+    with the change points, where the elastic bars' stiff modes take a kick
+    that the rigid answer has not)."""
     with open(outdir / "links.csv", newline="") as handle:
-        for row in csv.DictReader(handle):
-            angle, omega = float(row["angle"]), float(row["omega"])
-            if abs(math.sin(angle)) > 0.15:
-                worst = max(worst, abs(omega + math.sqrt(1 + 2 * moment / inertia * (1 - math.sin(angle)))))
-    return {"error": worst, "second": float("nan")}
+        rows = list(csv.DictReader(handle))
+    times = np.array([float(row["t"]) for row in rows])
+    theta, omega = a02_exact.exact(n, times)
+    angle = np.abs(np.array([float(row["angle"]) for row in rows]) - theta)
+    rate = np.abs(np.array([float(row["omega"]) for row in rows]) - omega)
+    before = times <= A02_FIRST_CHANGE
+    return {"error": float(angle[before].max()), "second": float(rate[before].max()),
+            "angle_all": float(angle.max()), "rate_all": float(rate.max())}
+
+
+#: Integrators of the dynamics table: (ANALysis integrator line, label).
+INTEGRATORS = (("generalized-alpha 1", "GA 1"), ("generalized-alpha 0.9", "GA 0.9"),
+               ("generalized-alpha 0.8", "GA 0.8"), ("generalized-alpha 0.5", "GA 0.5"),
+               ("energy-momentum 1", "EM 1"), ("energy-momentum 0.9", "EM 0.9"),
+               ("energy-momentum 0.8", "EM 0.8"), ("energy-momentum 0.5", "EM 0.5"))
+A02_CASE = "A02 N = 2: crank angle (rad), rate (rad/s)"
 
 
 def dynamics_studies(short: bool) -> list[tuple]:
-    """(case, deck, dt, rho_inf, t_end) of the dynamics table."""
+    """(case, deck, dt, integrator, t_end, text_edit) of the dynamics table."""
     out = []
     for rho in ((0.8, 1.0) if short else (0.5, 0.8, 1.0)):
         for dt in ((4e-3, 1e-3) if short else (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4)):
-            out.append(("pendulum: bottom pass time (s), speed (m/s)", "dynamics/pendulum.deck", dt, rho, 0.62))
-        for dt in ((4e-3,) if short else (8e-3, 4e-3, 2e-3, 1e-3)):
-            out.append(("A02 N = 2, 4 s: crank rate (rad/s)", "dynamics/a02-n2.deck", dt, rho, 4.0))
+            out.append(("pendulum: bottom pass time (s), speed (m/s)", "dynamics/pendulum.deck", dt,
+                        f"generalized-alpha {rho!r}", 0.62, None))
+    integrators = (INTEGRATORS[0], INTEGRATORS[2], INTEGRATORS[4], INTEGRATORS[6]) if short else INTEGRATORS
+    for line, _ in integrators:
+        for dt in ((4e-3, 2e-3) if short else (8e-3, 4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4)):
+            out.append((A02_CASE, "dynamics/a02-n2.deck", dt, line, 4.0, None))
+    if not short:
+        # The elastic model's share: bars 100 times stiffer.
+        for line in ("generalized-alpha 0.8", "energy-momentum 0.8"):
+            for dt in (1e-3, 5e-4, 2.5e-4):
+                out.append((A02_CASE + ", bars 100 x stiffer", "dynamics/a02-n2.deck", dt, line, 4.0, stiffer))
     return out
 
 
+def stiffer(text: str) -> str:
+    """The A02 bars 100 times stiffer (EA = kGA = 1e12, EI = 1e10)."""
+    return text.replace("EA=1e10  kGA=1e10  EI=1e8", "EA=1e12  kGA=1e12  EI=1e10")
+
+
 def measure_dynamics(binary: str, work: Path, item: tuple, repeat: int) -> dict:
-    case, deck, dt, rho, t_end = item
-    result = run(binary, work, deck, {"time": f"0 {t_end!r} {dt!r}", "integrator": f"generalized-alpha {rho!r}"},
-                 repeat=repeat)
-    errors = {"error": float("nan"), "second": float("nan")}
+    case, deck, dt, integrator, t_end, edit = item
+    result = run(binary, work, deck, {"time": f"0 {t_end!r} {dt!r}", "integrator": integrator},
+                 text_edit=edit, repeat=repeat)
+    errors = {"error": float("nan"), "second": float("nan"), "angle_all": float("nan"), "rate_all": float("nan")}
     if result["rc"] == 0:
-        errors = pendulum_errors(result["outdir"]) if "pendulum" in deck else a02_errors(result["outdir"])
+        errors.update(pendulum_errors(result["outdir"]) if "pendulum" in deck else a02_errors(result["outdir"]))
     shutil.rmtree(result["outdir"], ignore_errors=True)
     s = result.get("summary", {})
     steps = max(1, s.get("configurations solved", 1) - 1)
-    return {"case": case, "dt": dt, "rho_inf": rho, "rc": result["rc"], **errors,
+    return {"case": case, "dt": dt, "integrator": integrator, "rc": result["rc"], **errors,
             "iterations_per_step": s.get("Newton iterations", 0) / steps,
             "us_per_step": 1e6 * result["analysis"] / steps}
 
 
+def observed_orders(rows: list[dict]) -> None:
+    """Each row's observed order of its error against the row before it (the
+    same case and integrator, the previous dt): log(e_prev / e) / log(dt_prev / dt)."""
+    for prev, row in zip(rows, rows[1:]):
+        same = prev["case"] == row["case"] and prev["integrator"] == row["integrator"]
+        for key in ("error", "second"):
+            a, b = prev[key], row[key]
+            ok = same and a > 0 and b > 0 and math.isfinite(a) and math.isfinite(b)
+            row[f"order_{key}"] = math.log(a / b) / math.log(prev["dt"] / row["dt"]) if ok else float("nan")
+
+
 def dynamics_table(rows: list[dict]) -> str:
-    lines = ["| case | dt | rho_inf | exit | error | second error | Newton its/step | analysis (us/step) |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    observed_orders(rows)
+    lines = ["| case | integrator (rho_inf) | dt | exit | error | order | second error | order "
+             "| A02 over 4 s: angle, rate | Newton its/step | analysis (us/step) |",
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for r in rows:
-        lines.append(f"| {r['case']} | {r['dt']:g} | {r['rho_inf']:g} | {r['rc']} | {fmt(r['error'])} | "
-                     f"{fmt(r['second'])} | {r['iterations_per_step']:.2f} | {r['us_per_step']:.1f} |")
+        whole = "-" if math.isnan(r["angle_all"]) else f"{fmt(r['angle_all'])}, {fmt(r['rate_all'])}"
+        lines.append(f"| {r['case']} | {r['integrator']} | {r['dt']:g} | {r['rc']} | {fmt(r['error'])} | "
+                     f"{order(r.get('order_error'))} | {fmt(r['second'])} | {order(r.get('order_second'))} | "
+                     f"{whole} | {r['iterations_per_step']:.2f} | {r['us_per_step']:.1f} |")
     return "\n".join(lines)
+
+
+def order(value) -> str:
+    if value is None or not math.isfinite(value):
+        return "-"
+    return f"{value:.2f}"
 
 
 def fmt(value) -> str:
@@ -336,19 +397,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--short", action="store_true", help="a few points per study; no docs written")
     parser.add_argument("--bin", help="fekap executable")
     parser.add_argument("--repeat", type=int, help="runs per point (default 5, short 1)")
+    parser.add_argument("--dynamics", action="store_true",
+                        help="the dynamics table alone (written to docs/performance.md unless --short)")
     args = parser.parse_args(argv)
     binary = fb.fekap_binary(args.bin)
     work = fb.scratch_dir("fekap-accuracy-")
     repeat = args.repeat or (1 if args.short else 5)
-    rows = [measure(binary, work, item, repeat) for item in studies(args.short)]
+    rows = [] if args.dynamics else [measure(binary, work, item, repeat) for item in studies(args.short)]
     dynamics = [measure_dynamics(binary, work, item, repeat) for item in dynamics_studies(args.short)]
     shutil.rmtree(work, ignore_errors=True)
     text = table(rows)
     print(text)
     dynamics_text = dynamics_table(dynamics)
-    print("\nDynamics: error against the exact answers by dt and rho_inf\n")
+    print("\nDynamics: error against the exact answers by dt and integrator\n")
     print(dynamics_text)
-    if not args.short:
+    if args.dynamics and not args.short:
+        fb.replace_block(fb.ROOT / "docs" / "performance.md", "accuracy-dynamics", dynamics_text)
+        print("wrote docs/performance.md (dynamics table)")
+    elif not args.short:
         fb.replace_block(fb.ROOT / "docs" / "performance.md", "accuracy", text)
         fb.replace_block(fb.ROOT / "docs" / "performance.md", "accuracy-dynamics", dynamics_text)
         plot(rows, fb.ROOT / "docs" / "performance" / "accuracy.png")

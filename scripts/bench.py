@@ -21,6 +21,16 @@ release binary first).
    configuration, peak RSS and half-bandwidth for N = 10 ... 10,000 with the
    band solver, and with a dense LU (ANALysis `solver dense`) where feasible.
 
+3. Dynamics (decks/dynamics): microseconds per step (the listing's analysis
+   time, and the process's CPU time less a one-step run's) and Newton iterations per step of the
+   flexible slider-crank and the A02 chain N = 40, and Exudyn's CPU time and
+   iterations per step on the same slider-crank when build/venv-exudyn exists
+   (scripts/exudyn_slider_crank.py --cost), with the speed ratios at equal
+   accuracy of the last study it recorded (docs/dynamics/exudyn-slider-crank.json).
+   Its line, before the last:
+
+  dynamics slider-crank_us_per_step=X slider-crank_cpu_us_per_step=X ... slider-crank_exudyn_cpu_us_per_step=X ...
+
 The last line printed is
 
   fourbar us_per_config_full=X us_per_config_positions=X us_per_config_with_output=X iterations_per_step=X
@@ -39,8 +49,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import resource
 import shutil
 import statistics
+import subprocess
 import sys
 from pathlib import Path
 
@@ -169,35 +181,73 @@ def scissor_case(binary: str, work: Path, cells: int, solver: str, repeat: int) 
     return median
 
 
-#: Dynamics benchmarks of the bench line: deck, its --set overrides (quick and full).
-DYNAMICS = {"slider-crank": ("slider-crank.deck", {"t_end": "0.02"}, {"t_end": "0.1"}),
-            "a02-n40": ("a02-n40.deck", {"t_end": "0.2"}, {"t_end": "2"})}
+#: Dynamics benchmarks of the bench line: deck, its --set overrides (quick, full, and one step: the start-up).
+DYNAMICS = {"slider-crank": ("slider-crank.deck", {"t_end": "0.02"}, {"t_end": "0.1"}, {"t_end": "1e-4"}),
+            "a02-n40": ("a02-n40.deck", {"t_end": "0.2"}, {"t_end": "2"}, {"t_end": "0.002"})}
 
 
 def dynamics_case(binary: str, work: Path, name: str, quick: bool, repeat: int) -> dict:
-    """Microseconds per step (analysis time) and Newton iterations per step of
-    a dynamics benchmark deck, median of `repeat` runs."""
-    deck, short, full = DYNAMICS[name]
+    """Microseconds per step (analysis time, the listing's wall clock; and the
+    process's CPU time less that of a one-step run, the start-up) and Newton
+    iterations per step of a dynamics benchmark deck, median of `repeat` runs."""
+    deck, short, full, one = DYNAMICS[name]
     sets = [x for key, value in (short if quick else full).items() for x in ("--set", f"{key}={value}")]
     runs = []
     for k in range(repeat):
+        cpu = children_cpu()
+        fb.run_deck(binary, fb.ROOT / "decks" / "dynamics" / deck, work / f"dyn-{name}-start-{k}",
+                    *[x for key, value in one.items() for x in ("--set", f"{key}={value}")])
+        start = children_cpu() - cpu
+        cpu = children_cpu()
         result = fb.run_deck(binary, fb.ROOT / "decks" / "dynamics" / deck, work / f"dyn-{name}-{k}", *sets)
+        cpu = children_cpu() - cpu - start
         if result["rc"] != 0 or "summary" not in result:
             raise SystemExit(f"fekap failed on {deck} (exit {result['rc']}):\n{result['stderr']}")
         s = result["summary"]
         steps = max(1, s["configurations solved"] - 1)
-        runs.append({"us_per_step": 1e6 * s["time in analysis (s)"] / steps,
+        runs.append({"us_per_step": 1e6 * s["time in analysis (s)"] / steps, "cpu_us_per_step": 1e6 * cpu / steps,
                      "iterations_per_step": s["Newton iterations"] / steps, "steps": steps,
                      "equations": result["plan"].get("equations", 0)})
         shutil.rmtree(result["outdir"], ignore_errors=True)
+        shutil.rmtree(work / f"dyn-{name}-start-{k}", ignore_errors=True)
     return {key: statistics.median(r[key] for r in runs) for key in runs[0]}
 
 
-def dynamics_table(cases: dict) -> str:
-    rows = ["| benchmark | equations | steps | us per step | Newton iterations per step |", "|---|---|---|---|---|"]
+def children_cpu() -> float:
+    """User + system CPU seconds of the finished child processes so far."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+#: Exudyn's side of the slider-crank (scripts/exudyn_slider_crank.py, in its own
+#: environment) and the last equal-accuracy study it recorded.
+EXUDYN_PYTHON = fb.ROOT / "build" / "venv-exudyn" / "bin" / "python"
+EXUDYN_STUDY = fb.ROOT / "docs" / "dynamics" / "exudyn-slider-crank.json"
+
+
+def exudyn_case(quick: bool, repeat: int) -> dict | None:
+    """Exudyn's CPU microseconds and Newton iterations per step on the
+    slider-crank at the deck's dt (least of `repeat` runs); None without
+    build/venv-exudyn (made by the first run of scripts/exudyn_slider_crank.py)."""
+    if not EXUDYN_PYTHON.is_file():
+        return None
+    t_end = DYNAMICS["slider-crank"][1 if quick else 2]["t_end"]
+    done = subprocess.run([str(EXUDYN_PYTHON), str(fb.ROOT / "scripts" / "exudyn_slider_crank.py"), "--cost",
+                           "--t-end", t_end, "--repeat", str(repeat)], capture_output=True, text=True)
+    if done.returncode != 0:
+        return None
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def dynamics_table(cases: dict, exudyn: dict | None) -> str:
+    rows = ["| benchmark | equations | steps | us per step (analysis) | CPU us per step | Newton iterations per step |",
+            "|---|---|---|---|---|---|"]
     for name, c in cases.items():
         rows.append(f"| {name} | {c['equations']:.0f} | {c['steps']:.0f} | {c['us_per_step']:.1f} | "
-                    f"{c['iterations_per_step']:.2f} |")
+                    f"{c['cpu_us_per_step']:.1f} | {c['iterations_per_step']:.2f} |")
+    if exudyn:
+        rows.append(f"| slider-crank, Exudyn 1.13.6 | | {exudyn['steps']:.0f} | | {exudyn['us_per_step']:.1f} | "
+                    f"{exudyn['iterations_per_step']:.2f} |")
     return "\n".join(rows)
 
 
@@ -305,7 +355,19 @@ def main(argv: list[str] | None = None) -> int:
     dynamics = {name: dynamics_case(binary, work, name, args.quick, repeat) for name in DYNAMICS}
     for name, c in dynamics.items():
         print(f"  {name:14s} {c['equations']:5.0f} equations, {c['steps']:6.0f} steps: {c['us_per_step']:9.1f} us "
-              f"per step, {c['iterations_per_step']:.2f} Newton iterations per step")
+              f"per step (analysis), {c['cpu_us_per_step']:9.1f} us CPU, "
+              f"{c['iterations_per_step']:.2f} Newton iterations per step")
+    exudyn = exudyn_case(args.quick, repeat)
+    if exudyn:
+        print(f"  slider-crank, Exudyn 1.13.6: {exudyn['us_per_step']:9.1f} us CPU per step, "
+              f"{exudyn['iterations_per_step']:.2f} Newton iterations per step "
+              f"({exudyn['us_per_step'] / dynamics['slider-crank']['cpu_us_per_step']:.1f} x FEKAP's CPU per step)")
+    else:
+        print("  slider-crank, Exudyn: not run (no build/venv-exudyn: scripts/exudyn_slider_crank.py makes it)")
+    equal = json.loads(EXUDYN_STUDY.read_text())["equal_error"] if EXUDYN_STUDY.is_file() else []
+    if equal:
+        print("  at equal accuracy (docs/dynamics.md, scripts/exudyn_slider_crank.py --study): Exudyn / FEKAP CPU "
+              + ", ".join(f"{e['ratio']:.1f} x at {e['error']:.0e} m" for e in equal))
 
     scissor_cases: list[dict] = []
     if not args.no_scissor:
@@ -336,19 +398,23 @@ def main(argv: list[str] | None = None) -> int:
                          f"and tolerances): {aim['iterations']:g} over {aim['steps']} steps, "
                          f"**{aim['per_step']:.3f} per step** ({aim['configurations']:g} configurations "
                          "solved, step-doubling checks included).")
-        fb.replace_block(doc, "bench-dynamics", dynamics_table(dynamics))
+        fb.replace_block(doc, "bench-dynamics", dynamics_table(dynamics, exudyn))
         if scissor_cases:
             fb.replace_block(doc, "bench-scissor", scissor_table(scissor_cases))
             plot_scissor(scissor_cases, fb.ROOT / "docs" / "performance" / "scissor.png")
         record = {"machine": info, "dt": dt, "repeat": repeat, "aim_iterations": aim,
                   "fourbar": {f"{k[0]}/{k[1]}": v for k, v in cases.items()}, "scissor": scissor_cases,
-                  "dynamics": dynamics}
+                  "dynamics": dynamics, "exudyn": exudyn}
         (fb.ROOT / "docs" / "performance").mkdir(parents=True, exist_ok=True)
         (fb.ROOT / "docs" / "performance" / "bench.json").write_text(json.dumps(record, indent=1) + "\n")
 
     print("dynamics " + " ".join(f"{name}_us_per_step={c['us_per_step']:.2f} "
+                                 f"{name}_cpu_us_per_step={c['cpu_us_per_step']:.2f} "
                                  f"{name}_iterations_per_step={c['iterations_per_step']:.3f}"
-                                 for name, c in dynamics.items()))
+                                 for name, c in dynamics.items())
+          + (f" slider-crank_exudyn_cpu_us_per_step={exudyn['us_per_step']:.2f} "
+             f"slider-crank_exudyn_iterations_per_step={exudyn['iterations_per_step']:.3f}" if exudyn else "")
+          + "".join(f" slider-crank_equal_error_{e['error']:.0e}_ratio={e['ratio']:.2f}" for e in equal))
     full = cases[("full", "no_output")]
     print(f"fourbar us_per_config_full={full['analysis_us']:.3f} "
           f"us_per_config_positions={cases[('positions', 'no_output')]['analysis_us']:.3f} "

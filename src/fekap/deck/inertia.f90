@@ -5,7 +5,7 @@
 module fekap_deck_inertia
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, mass_type, effects_auto
-   use fekap_model_effects, only: effects_plan_type, plan_effects
+   use fekap_model_effects, only: effects_plan_type, plan_effects, integrator_obstacle
    use fekap_deck_context, only: context_type
    use fekap_deck_card, only: card_none, is_word_of
    use fekap_deck_geometry, only: has_end, welded, lookup_node, lookup_link
@@ -183,6 +183,13 @@ contains
       end do
       plan = plan_effects(model)
       if (len(plan%problem) == 0) return
+      if (len(integrator_obstacle(model)) > 0 .and. model%analysis%integrator_loc%line > 0) then
+         if (index(plan%problem, integrator_obstacle(model)) > 0) then
+            call ctx%error_at(model%analysis%integrator_loc, integrator_obstacle(model), &
+               & label='integrator generalized-alpha covers them')
+            return
+         end if
+      end if
       if (type_line > 0 .and. model%analysis%effects /= effects_auto) then
          call ctx%error(type_line, 2, plan%problem, label='ANALysis type auto|kinematics|kinetostatics|statics|dynamics')
       else if (allocated(model%masses)) then

@@ -7,7 +7,8 @@ module fekap_deck_settings
       & predictor_previous, &
       & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, &
       & solver_band, solver_dense, effects_auto, effects_kinematics, effects_kinetostatics, effects_statics, &
-      & effects_dynamics, integrator_names, integrator_generalized_alpha
+      & effects_dynamics, integrator_names, integrator_generalized_alpha, &
+      & integrator_energy_momentum
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, word_index
    use fekap_deck_context, only: context_type
@@ -141,18 +142,29 @@ contains
             model%analysis%effects = chosen('auto kinematics kinetostatics statics dynamics', [effects_auto, &
                & effects_kinematics, effects_kinetostatics, effects_statics, effects_dynamics], model%analysis%effects)
          else if (is_word_of(key, 'integrator', 4)) then
-            ! integrator generalized-alpha [RHO_INF]: Chung-Hulbert with rho_inf in [0, 1].
-            if (.not. ctx%require(iline, 'integrator generalized-alpha [RHO_INF]', 'an integrator line')) cycle
-            if (extra(4, 'integrator generalized-alpha [RHO_INF]')) cycle
-            if (choice(2, integrator_names) /= 1) cycle
-            model%analysis%integrator = integrator_generalized_alpha
+            ! integrator generalized-alpha [RHO_INF]: Chung-Hulbert with rho_inf in [0, 1] (default 0.8);
+            ! integrator energy-momentum [RHO_INF]: the midpoint rule with the discrete gradient,
+            ! rho_inf in [0, 1] mapped to its dissipation (default 1: conserving).
+            if (.not. ctx%require(iline, 'integrator generalized-alpha|energy-momentum [RHO_INF]', &
+               & 'an integrator line')) cycle
+            if (extra(4, 'integrator generalized-alpha|energy-momentum [RHO_INF]')) cycle
+            select case (choice(2, integrator_names))
+            case (1)
+               model%analysis%integrator = integrator_generalized_alpha
+            case (2)
+               model%analysis%integrator = integrator_energy_momentum
+               model%analysis%rho_inf = 1
+               model%analysis%integrator_loc = ctx%loc(iline, 2)
+            case default
+               cycle
+            end select
             if (ctx%nfields(iline) < 3) cycle
             call ctx%real_field(iline, 3, v, ok)
             if (.not. ok) cycle
             if (v < 0 .or. v > 1) then
-               call ctx%error(iline, 3, 'rho_inf of generalized-alpha must lie in [0, 1]', &
-                  & label='the spectral radius at infinite frequency: 1 no numerical damping (trapezoidal rule), '// &
-                  & '0 the most; default 0.8')
+               call ctx%error(iline, 3, 'rho_inf of '//ctx%field(iline, 2)//' must lie in [0, 1]', &
+                  & label='the spectral radius at infinite frequency: 1 no numerical damping (trapezoidal rule, '// &
+                  & 'energy-momentum: conserving), 0 the most; default 0.8 (energy-momentum: 1)')
                cycle
             end if
             model%analysis%rho_inf = v

@@ -12,7 +12,7 @@
 module fekap_effects_dynamic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
-   use fekap_model, only: model_type
+   use fekap_model, only: model_type, integrator_energy_momentum
    use fekap_model_results, only: step_result_type
    use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed
    use fekap_assembly_tracking, only: relocate
@@ -26,6 +26,8 @@ module fekap_effects_dynamic_stepper
       & alpha_update
    use fekap_effects_dynamic_system, only: dynamic_system_type, new_dynamic_system, external_forces, &
       & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6
+   use fekap_effects_energy_momentum, only: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, &
+      & solve_em
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
    use fekap_output_format, only: es_text
@@ -62,6 +64,8 @@ module fekap_effects_dynamic_stepper
       type(dynamic_system_type) :: dynamics
       type(kinetostatics_type) :: rows
       type(dynamic_state_type) :: state
+      !> The energy-momentum integrator's band LU storage (if it integrates).
+      type(em_system_type) :: em
       !> The iterate of a step.
       real(dp), allocatable :: qt(:), vt(:), acct(:), at(:), gt(:)
       !> Energy of the start (kinetic + strain + gravity), for the balance.
@@ -71,6 +75,10 @@ module fekap_effects_dynamic_stepper
       real(dp), allocatable :: v_start(:)
       !> Whether some element is damped (has_damping).
       logical :: damped = .false.
+      !> Energy-momentum: the dofs without mass (their velocities are the
+      !> rates of the mean rates, see em_velocities), and the last step's length.
+      logical, allocatable :: massless(:)
+      real(dp) :: h_prev = 0
       !> Steps and Newton iterations so far.
       integer :: steps = 0, newton_iterations = 0
       !> How the start's velocities were found, for the plan.
@@ -93,6 +101,10 @@ contains
       call new_dynamic_system(self%dynamics, model, self%mesh)
       call new_kinetostatics(self%rows, model, self%mesh)
       self%damped = has_damping(self%dynamics)
+      if (model%analysis%integrator == integrator_energy_momentum) then
+         call new_em_system(self%em, self%mesh)
+         self%massless = massless_dofs(self%dynamics, self%mesh)
+      end if
       n = self%mesh%ndof
       allocate (self%state%q(n), self%state%v(n), self%state%acc(n), self%state%a(n), self%state%g(n), &
          & self%state%r(n), source=0.0_dp)
@@ -108,8 +120,13 @@ contains
       type(alpha_coefficients_type) :: c
       c = new_alpha_coefficients(self%model%analysis%rho_inf, self%model%analysis%dt)
       text = mesh_plan_line(self)
-      write (line, '(a,f6.4,a,f7.4,a,f7.4,a,f7.4,a,f7.4,a)') 'integrator: generalized-alpha (Chung-Hulbert), rho_inf ', &
-         & c%rho_inf, ' (alpha_m ', c%am, ', alpha_f ', c%af, ', beta ', c%beta, ', gamma ', c%gamma, ')'
+      if (self%model%analysis%integrator == integrator_energy_momentum) then
+         write (line, '(a,f6.4,a,f7.4,a)') 'integrator: energy-momentum (midpoint rule, discrete gradient), rho_inf ', &
+            & c%rho_inf, ' (strain dissipation chi ', em_dissipation(c%rho_inf), ')'
+      else
+         write (line, '(a,f6.4,a,f7.4,a,f7.4,a,f7.4,a,f7.4,a)') 'integrator: generalized-alpha (Chung-Hulbert), rho_inf ', &
+            & c%rho_inf, ' (alpha_m ', c%am, ', alpha_f ', c%af, ', beta ', c%beta, ', gamma ', c%gamma, ')'
+      end if
       text = text//new_line('a')//'  '//trim(line)
       if (len_trim(self%start_velocity) > 0) text = text//new_line('a')//'  start: '//trim(self%start_velocity)
    end function dynamic_plan_text
@@ -317,31 +334,110 @@ contains
       if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
    end subroutine dynamic_advance
 
-   !> One step of generalized-alpha from the accepted state to t_new; the
-   !> state is left untouched on failure.
+   !> One step from the accepted state to t_new (generalized-alpha or the
+   !> energy-momentum integrator); the state is left untouched on failure.
    subroutine solve_step(self, t_new, iterations, residual, error)
       type(dynamic_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t_new
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
-      type(alpha_coefficients_type) :: c
-      real(dp) :: correction, r0, work_loads, work_drives, dissipated, kinetic, strain, energy, created
-      integer :: info, k, d
+      real(dp) :: work_loads, work_drives, dissipated, kinetic, strain, energy, created
+      integer :: d
       integer :: seg(size(self%state%seg))
-      logical :: moved
+      logical :: moved, em
+      character(len=300) :: msg
+      em = self%model%analysis%integrator == integrator_energy_momentum
+      associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
+         if (self%damped) call update_damping(dyn, mesh, state%q)
+         if (em) then
+            call em_newton(self, t_new, iterations, residual, error)
+         else
+            call alpha_newton(self, t_new, iterations, residual, error)
+         end if
+         if (allocated(error)) return
+         if (.not. all(abs(self%qt) <= huge(1.0_dp))) then
+            call analysis_error(error, 'the configuration is not finite')
+            return
+         end if
+         ! Work over the step: the trapezoidal rule of the forces on the
+         ! displacement (exact for the trapezoidal integrator of a linear system).
+         work_loads = 0
+         work_drives = 0
+         do d = 1, mesh%ndof
+            associate (dq => self%qt(d) - state%q(d))
+               work_loads = work_loads + 0.5_dp*(state%g(d) + self%gt(d) - 2*dyn%weight(d))*dq
+               ! Energy-momentum: the residual is the step's reaction.
+               if (mesh%status(d) == dof_driven .and. em) then
+                  work_drives = work_drives + system%r(d)*dq
+               else if (mesh%status(d) == dof_driven) then
+                  work_drives = work_drives + 0.5_dp*(state%r(d) + system%r(d))*dq
+               end if
+            end associate
+         end do
+         dissipated = 0
+         if (self%damped .and. em) then
+            ! Energy-momentum: the damping acts on the step's mean rate.
+            call damping_work(dyn, mesh, (self%qt - state%q)/(t_new - state%t), (self%qt - state%q)/(t_new - state%t), &
+               & self%qt - state%q, dissipated)
+         else if (self%damped) then
+            call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
+         end if
+         kinetic = kinetic_energy(dyn, mesh, self%vt)
+         strain = strain_energy(mesh, self%qt)
+         energy = kinetic + strain - dot_product(dyn%weight, self%qt)
+         ! The integrator dissipates (rho_inf < 1) or keeps (1) energy: a step
+         ! that creates much of it has jumped to another solution of its
+         ! nonlinear equations (stiff modes of a large motion); a shorter one does not.
+         created = energy - state%energy - work_loads - work_drives + dissipated
+         if (created > max_created*max(kinetic + strain, state%kinetic + state%strain, abs(work_loads + work_drives))) &
+            & then
+            write (msg, '(a,a,a,a,a)') 'the step creates energy (', es_text(created, 12, 4), ' against ', &
+               & es_text(kinetic + strain, 12, 4), ' kinetic and strain): a jump to another solution of its equations'
+            call analysis_error(error, trim(msg))
+            return
+         end if
+         seg = state%seg
+         call relocate(mesh, self%model, t_new, self%qt, seg, moved, error)
+         if (allocated(error)) return
+         state%seg = seg
+         if (em) self%h_prev = t_new - state%t
+         state%work_loads = state%work_loads + work_loads
+         state%work_drives = state%work_drives + work_drives
+         state%dissipated = state%dissipated + dissipated
+         state%kinetic = kinetic
+         state%strain = strain
+         state%energy = energy
+         state%t = t_new
+         state%q = self%qt
+         state%v = self%vt
+         state%acc = self%acct
+         state%a = self%at
+         state%g = self%gt
+         state%r = system%r
+         self%steps = self%steps + 1
+         self%newton_iterations = self%newton_iterations + iterations
+         self%counts%steps = self%counts%steps + 1
+      end associate
+   end subroutine solve_step
+
+   !> Newton on a step of generalized-alpha from the accepted state to
+   !> t_new: the iterate into qt, vt, acct, at and the residual (the
+   !> reactions) into system%r.
+   subroutine alpha_newton(self, t_new, iterations, residual, error)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t_new
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: residual
+      type(error_type), allocatable, intent(out) :: error
+      type(alpha_coefficients_type) :: c
+      real(dp) :: correction, r0
+      integer :: info, k, d
       character(len=300) :: msg
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
-         if (self%damped) call update_damping(dyn, mesh, state%q)
          call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
-         do d = 1, mesh%ndof
-            if (mesh%status(d) == dof_fixed) then
-               self%qt(d) = state%q(d)
-               self%vt(d) = 0
-               self%acct(d) = 0
-            end if
-         end do
+         call hold_fixed(self)
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
          call external_forces(dyn, mesh, t_new, self%gt)
          iterations = 0
@@ -352,16 +448,13 @@ contains
                & c%c1, c%c2)
             residual = residual_norm(system, mesh)
             if (.not. residual <= huge(1.0_dp)) then
-               call analysis_error(error, 'the residual of the equations of motion is not finite (the step is '// &
-                  & 'too long for the motion, or the mechanism has a dof without mass and stiffness)')
+               call not_finite(error)
                return
             end if
             if (iterations == 0) r0 = residual
             if (residual <= self%residual_floor .and. iterations > 0) exit
             if (iterations >= self%model%analysis%max_iter) then
-               write (msg, '(a,i0,a,a,a,a)') 'Newton did not converge in ', iterations, ' iterations (residual ', &
-                  & es_text(residual, 12, 5), ', first ', es_text(r0, 12, 5)//')'
-               call analysis_error(error, trim(msg))
+               call no_convergence(error, iterations, residual, r0)
                return
             end if
             call factor_system(system, info, self%counts)
@@ -385,58 +478,152 @@ contains
                exit
             end if
          end do
-         if (.not. all(abs(self%qt) <= huge(1.0_dp))) then
-            call analysis_error(error, 'the configuration is not finite')
-            return
-         end if
-         ! Work over the step: the trapezoidal rule of the forces on the
-         ! displacement (exact for the trapezoidal integrator of a linear system).
-         work_loads = 0
-         work_drives = 0
-         do d = 1, mesh%ndof
-            associate (dq => self%qt(d) - state%q(d))
-               work_loads = work_loads + 0.5_dp*(state%g(d) + self%gt(d) - 2*dyn%weight(d))*dq
-               if (mesh%status(d) == dof_driven) work_drives = work_drives + 0.5_dp*(state%r(d) + system%r(d))*dq
-            end associate
-         end do
-         dissipated = 0
-         if (self%damped) call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
-         kinetic = kinetic_energy(dyn, mesh, self%vt)
-         strain = strain_energy(mesh, self%qt)
-         energy = kinetic + strain - dot_product(dyn%weight, self%qt)
-         ! The integrator dissipates (rho_inf < 1) or keeps (1) energy: a step
-         ! that creates much of it has jumped to another solution of its
-         ! nonlinear equations (stiff modes of a large motion); a shorter one does not.
-         created = energy - state%energy - work_loads - work_drives + dissipated
-         if (created > max_created*max(kinetic + strain, state%kinetic + state%strain, abs(work_loads + work_drives))) &
-            & then
-            write (msg, '(a,a,a,a,a)') 'the step creates energy (', es_text(created, 12, 4), ' against ', &
-               & es_text(kinetic + strain, 12, 4), ' kinetic and strain): a jump to another solution of its equations'
-            call analysis_error(error, trim(msg))
-            return
-         end if
-         seg = state%seg
-         call relocate(mesh, self%model, t_new, self%qt, seg, moved, error)
-         if (allocated(error)) return
-         state%seg = seg
-         state%work_loads = state%work_loads + work_loads
-         state%work_drives = state%work_drives + work_drives
-         state%dissipated = state%dissipated + dissipated
-         state%kinetic = kinetic
-         state%strain = strain
-         state%energy = energy
-         state%t = t_new
-         state%q = self%qt
-         state%v = self%vt
-         state%acc = self%acct
-         state%a = self%at
-         state%g = self%gt
-         state%r = system%r
-         self%steps = self%steps + 1
-         self%newton_iterations = self%newton_iterations + iterations
-         self%counts%steps = self%counts%steps + 1
       end associate
-   end subroutine solve_step
+   end subroutine alpha_newton
+
+   !> Newton on a step of the energy-momentum integrator
+   !> (fekap_effects_energy_momentum) from the accepted state to t_new: the
+   !> iterate into qt, vt (v1 = 2 (q1 - q0)/h - v0 on the free dofs) and acct
+   !> (the step's mean acceleration (v1 - v0)/h; the drives' second rate on
+   !> theirs), the residual (the step's reactions) into system%r. The
+   !> predictor is q0 + h v0 + h^2/2 acc0.
+   subroutine em_newton(self, t_new, iterations, residual, error)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t_new
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: residual
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: h, chi, correction, r0
+      integer :: info, k, d
+      character(len=300) :: msg
+      associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
+         h = t_new - state%t
+         chi = em_dissipation(self%model%analysis%rho_inf)
+         self%qt = state%q + h*state%v + 0.5_dp*h**2*state%acc
+         call em_velocities(self, h)
+         call hold_fixed(self)
+         call drive_motion(self, t_new, self%qt, self%vt, self%acct)
+         call external_forces(dyn, mesh, t_new, self%gt)
+         iterations = 0
+         r0 = 0
+         residual = huge(1.0_dp)
+         do
+            call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
+               & self%damped, system%r, tangent=.true.)
+            self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
+            residual = residual_norm(system, mesh)
+            if (.not. residual <= huge(1.0_dp)) then
+               call not_finite(error)
+               return
+            end if
+            if (iterations == 0) r0 = residual
+            if (residual <= self%residual_floor .and. iterations > 0) exit
+            if (iterations >= self%model%analysis%max_iter) then
+               call no_convergence(error, iterations, residual, r0)
+               return
+            end if
+            call factor_em(self%em, info)
+            if (info == 0) call solve_em(self%em, system%rhs(:, 1), info)
+            if (info /= 0) then
+               write (msg, '(a,i0,a)') 'the iteration matrix dp/dq + C/h + 2 M/h^2 is singular at equation ', info, &
+                  & ' (a free dof with neither mass nor stiffness)'
+               call analysis_error(error, trim(msg))
+               return
+            end if
+            correction = 0
+            do k = 1, mesh%nfree
+               d = mesh%eq_dof(k)
+               correction = max(correction, abs(system%rhs(k, 1))*self%dof_length(d))
+               self%qt(d) = self%qt(d) + system%rhs(k, 1)
+            end do
+            call em_velocities(self, h)
+            iterations = iterations + 1
+            self%counts%iterations = self%counts%iterations + 1
+            if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
+               ! The residual at the converged iterate: the step's reactions.
+               call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
+                  & self%damped, system%r, tangent=.false.)
+               self%counts%residual_assemblies = self%counts%residual_assemblies + 1
+               residual = residual_norm(system, mesh)
+               exit
+            end if
+         end do
+         self%acct = (self%vt - state%v)/h
+         ! The step's mean rates, for the next step's massless dofs.
+         self%at = (self%qt - state%q)/h
+         call drive_motion(self, t_new, self%qt, self%vt, self%acct)
+      end associate
+   end subroutine em_newton
+
+   !> The velocities v1 of the free dofs from the iterate q1 over a step of
+   !> length h: v1 = 2 (q1 - q0)/h - v0 (the midpoint rule, which the energy
+   !> balance needs on every dof with mass). A dof without mass has no
+   !> equation for its velocity, and that recursion would carry any error of
+   !> it on undamped (v1 + v0 = 2 vm); its velocity is the linear
+   !> extrapolation of the last two steps' mean rates vm to t_n+1 (second
+   !> order), or 2 vm - v0 at the first step.
+   subroutine em_velocities(self, h)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: h
+      real(dp) :: vm
+      integer :: k, d
+      associate (state => self%state)
+         do k = 1, self%mesh%nfree
+            d = self%mesh%eq_dof(k)
+            vm = (self%qt(d) - state%q(d))/h
+            if (self%massless(d) .and. self%h_prev > 0) then
+               self%vt(d) = vm + (vm - state%a(d))*h/(h + self%h_prev)
+            else
+               self%vt(d) = 2*vm - state%v(d)
+            end if
+         end do
+      end associate
+   end subroutine em_velocities
+
+   !> The dofs whose row of the mass matrix (elements' and point masses) is zero.
+   pure function massless_dofs(dyn, mesh) result(massless)
+      type(dynamic_system_type), intent(in) :: dyn
+      type(mesh_type), intent(in) :: mesh
+      logical :: massless(mesh%ndof)
+      real(dp) :: diagonal(mesh%ndof)
+      integer :: e, i
+      diagonal = dyn%point_mass
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            diagonal(mesh%edof(i, e)) = diagonal(mesh%edof(i, e)) + dyn%me(i, i, e)
+         end do
+      end do
+      massless = diagonal == 0
+   end function massless_dofs
+
+   !> Supported dofs stay put in the iterate.
+   subroutine hold_fixed(self)
+      type(dynamic_stepper_type), intent(inout) :: self
+      integer :: d
+      do d = 1, self%mesh%ndof
+         if (self%mesh%status(d) == dof_fixed) then
+            self%qt(d) = self%state%q(d)
+            self%vt(d) = 0
+            self%acct(d) = 0
+         end if
+      end do
+   end subroutine hold_fixed
+
+   subroutine not_finite(error)
+      type(error_type), allocatable, intent(out) :: error
+      call analysis_error(error, 'the residual of the equations of motion is not finite (the step is '// &
+         & 'too long for the motion, or the mechanism has a dof without mass and stiffness)')
+   end subroutine not_finite
+
+   subroutine no_convergence(error, iterations, residual, r0)
+      type(error_type), allocatable, intent(out) :: error
+      integer, intent(in) :: iterations
+      real(dp), intent(in) :: residual, r0
+      character(len=300) :: msg
+      write (msg, '(a,i0,a,a,a,a)') 'Newton did not converge in ', iterations, ' iterations (residual ', &
+         & es_text(residual, 12, 5), ', first ', es_text(r0, 12, 5)//')'
+      call analysis_error(error, trim(msg))
+   end subroutine no_convergence
 
    !> The energy the damping dissipated over a step: the trapezoidal rule of
    !> C v on the displacement dq (C of the step).

@@ -18,14 +18,14 @@
 module fekap_model_effects
    use fekap_error, only: error_type, input_error
    use fekap_model, only: model_type, method_fem, effects_auto, effects_kinematics, effects_kinetostatics, &
-      & effects_statics, effects_dynamics, joint_prismatic
+      & effects_statics, effects_dynamics, joint_prismatic, integrator_energy_momentum
    use fekap_strings, only: int_text
    use fekap_model_loads, only: load_count
    implicit none
    private
 
    public :: effects_plan_type, plan_effects, planned_effects, check_effects_request, has_masses, has_gravity, effects_name
-   public :: mobility
+   public :: mobility, integrator_obstacle
 
    !> Whether the dynamics stepper exists: until it does, a plan for dynamics
    !> is refused with "not available yet" (the dynamics engineer sets this).
@@ -221,8 +221,26 @@ contains
          text = 'dynamics runs with method fem only'
       else if (.not. dynamics_available) then
          text = 'ANALysis type dynamics is not available yet (issue 19)'
+      else
+         text = integrator_obstacle(model)
       end if
    end function dynamics_obstacle
+
+   !> What the dynamics integrator asked for does not cover in `model`, or
+   !> '': the energy-momentum integrator's discrete gradient is that of the
+   !> one-Gauss-point beam, and slidelines' penalty forces have none.
+   pure function integrator_obstacle(model) result(text)
+      type(model_type), intent(in) :: model
+      character(:), allocatable :: text
+      text = ''
+      if (model%analysis%integrator /= integrator_energy_momentum) return
+      if (model%analysis%gauss_points /= 1) then
+         text = 'the energy-momentum integrator needs one Gauss point (ANALysis gauss 1)'
+      else if (allocated(model%slidelines)) then
+         if (size(model%slidelines) > 0) text = 'the energy-momentum integrator does not cover SLIDelines '// &
+            & '(use integrator generalized-alpha)'
+      end if
+   end function integrator_obstacle
 
    !> The mobility count (Gruebler-Kutzbach) of the scene with its supports
    !> and drives held: the free degrees of freedom at the nodes (two

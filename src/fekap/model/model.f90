@@ -43,10 +43,11 @@ module fekap_model
    !> motion), statics (equilibrium under loads) or dynamics (see fekap_model_effects).
    integer, parameter, public :: effects_auto = 0, effects_kinematics = 1, effects_kinetostatics = 2, &
       & effects_statics = 3, effects_dynamics = 4
-   !> Time integrators of dynamics (ANALysis integrator): generalized-alpha (Chung & Hulbert 1993).
-   integer, parameter, public :: integrator_generalized_alpha = 1
+   !> Time integrators of dynamics (ANALysis integrator): generalized-alpha (Chung & Hulbert 1993),
+   !> energy-momentum (the midpoint rule with the beams' discrete gradient, docs/dynamics.md).
+   integer, parameter, public :: integrator_generalized_alpha = 1, integrator_energy_momentum = 2
    !> The integrators' names, each at the position of its code (as method_names).
-   character(*), parameter, public :: integrator_names = 'generalized-alpha'
+   character(*), parameter, public :: integrator_names = 'generalized-alpha energy-momentum'
 
    !> Where an entity was declared: for diagnostics that point into the deck.
    type :: source_loc_type
@@ -202,6 +203,8 @@ module fekap_model
       !> frequency rho_inf in [0, 1] (1: the trapezoidal rule, no numerical damping).
       integer :: integrator = integrator_generalized_alpha
       real(dp) :: rho_inf = 0.8_dp
+      !> Where an energy-momentum integrator line is (for the errors of what it does not cover).
+      type(source_loc_type) :: integrator_loc
    end type analysis_type
 
    !> What to write.

@@ -284,8 +284,7 @@ contains
       type is (fem_stepper_type)
          self%verify_depth = depth
          call solve_step(self, t, iterations, residual, reason)
-         ! A signal stopped the step: no cut, the run stops.
-         if (allocated(reason) .and. interrupt_signal() /= 0) return
+         if (allocated(reason) .and. interrupt_signal() /= 0) return  ! a signal: no cut, the run stops
          ! Only a run's step, at its first try, checks for a change point.
          self%detect_change = .false.
          if (self%change_found) return

@@ -1,0 +1,125 @@
+!> One step of the energy-momentum integrator (docs/dynamics.md): the
+!> midpoint rule with the beams' discrete gradient (Simo & Tarnow, ZAMP 43,
+!> 1992; Gonzalez, J. Nonlinear Sci. 6, 1996), unknown q1 = q_n+1,
+!>   v1 = 2 (q1 - q0)/h - v0,                                 (q1 - q0 = h (v0 + v1)/2)
+!>   R = M (v1 - v0)/h + C (q1 - q0)/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
+!> on the free dofs, p the elements' discrete gradients
+!> (fekap_element_discrete_gradient). Contracted with q1 - q0 the free rows
+!> give the energy balance of the step exactly:
+!>   T1 - T0 + W1 - W0 + V1 - V0 = work of loads and drives - h |v_mid|_C^2
+!>     - chi/2 sum L |Delta eps|_D^2,
+!> (V the gravity potential): chi = 0 conserves the energy, chi > 0 makes it
+!> decay. The iteration matrix dR/dq1 = dp/dq1 + C/h + 2 M/h^2 is not
+!> symmetric: it is factored by LAPACK's band LU (dgbtrf) in its own storage.
+module fekap_effects_energy_momentum
+   use fekap_kinds, only: dp
+   use fekap_assembly_mesh, only: mesh_type
+   use fekap_assembly_lapack, only: band_lu_factor, band_lu_solve
+   use fekap_element_discrete_gradient, only: beam_discrete_gradient
+   use fekap_effects_dynamic_system, only: dynamic_system_type, times6
+   implicit none
+   private
+
+   public :: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, solve_em
+
+   !> The band LU storage of the free equations' iteration matrix.
+   type :: em_system_type
+      !> (2 kd + kd + 1, nfree): A(i, j) at ab(2 kd + 1 + i - j, j), rows 1:kd for the fill.
+      real(dp), allocatable :: ab(:, :)
+      integer, allocatable :: ipiv(:)
+      integer :: kd = 0
+   end type em_system_type
+
+contains
+
+   !> Storage for the mesh's free equations.
+   subroutine new_em_system(self, mesh)
+      type(em_system_type), intent(out) :: self
+      type(mesh_type), intent(in) :: mesh
+      self%kd = mesh%kd
+      allocate (self%ab(3*mesh%kd + 1, mesh%nfree), source=0.0_dp)
+      allocate (self%ipiv(mesh%nfree), source=0)
+   end subroutine new_em_system
+
+   !> The dissipation chi of the discrete gradient for rho_inf in [0, 1]:
+   !> chi = (1 - rho)/(1 + rho), so that the strain branch of a linear
+   !> oscillator's amplification tends to -rho as omega h grows (1: none).
+   pure real(dp) function em_dissipation(rho_inf) result(chi)
+      real(dp), intent(in) :: rho_inf
+      chi = (1 - rho_inf)/(1 + rho_inf)
+   end function em_dissipation
+
+   !> The residual R of the step from (q0, v0) to q1 over all dofs into r
+   !> (v1 given for every dof: on the constrained ones the prescribed motion;
+   !> the damping acts on the mean rate (q1 - q0)/h), g0 and g1 the external forces
+   !> at the step's ends; with `tangent`, the iteration matrix into self.
+   subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, r, tangent)
+      type(em_system_type), intent(inout) :: self
+      type(dynamic_system_type), intent(in) :: dyn
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: q0(:), q1(:), v0(:), v1(:), g0(:), g1(:)
+      real(dp), intent(in) :: h, chi
+      logical, intent(in) :: damped
+      real(dp), contiguous, intent(out) :: r(:)
+      logical, intent(in) :: tangent
+      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2
+      integer :: e, i, j, ei, ej, d
+      c1 = 1/h
+      c2 = 2/h**2
+      r = dyn%point_mass*(v1 - v0)/h - 0.5_dp*(g0 + g1)
+      if (tangent) self%ab = 0
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            d = mesh%edof(i, e)
+            x0(i) = q0(d)
+            x1(i) = q1(d)
+            am(i) = (v1(d) - v0(d))/h
+            vm(i) = (x1(i) - x0(i))/h
+         end do
+         if (tangent) then
+            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe, ke)
+            ke = ke + c2*dyn%me(:, :, e)
+            if (damped) ke = ke + c1*dyn%ce(:, :, e)
+         else
+            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe)
+         end if
+         pe = pe + times6(dyn%me, e, am)
+         if (damped) pe = pe + times6(dyn%ce, e, vm)
+         do i = 1, 6
+            d = mesh%edof(i, e)
+            r(d) = r(d) + pe(i)
+         end do
+         if (.not. tangent) cycle
+         do j = 1, 6
+            ej = mesh%eq(mesh%edof(j, e))
+            if (ej == 0) cycle
+            do i = 1, 6
+               ei = mesh%eq(mesh%edof(i, e))
+               if (ei == 0) cycle
+               self%ab(2*self%kd + 1 + ei - ej, ej) = self%ab(2*self%kd + 1 + ei - ej, ej) + ke(i, j)
+            end do
+         end do
+      end do
+      if (.not. tangent) return
+      do i = 1, mesh%nfree
+         d = mesh%eq_dof(i)
+         self%ab(2*self%kd + 1, i) = self%ab(2*self%kd + 1, i) + c2*dyn%point_mass(d)
+      end do
+   end subroutine assemble_em
+
+   !> LU factor of the assembled iteration matrix; info > 0: singular there.
+   subroutine factor_em(self, info)
+      type(em_system_type), intent(inout) :: self
+      integer, intent(out) :: info
+      call band_lu_factor(self%ab, self%kd, self%kd, self%ipiv, info)
+   end subroutine factor_em
+
+   !> Solve with the factor: b becomes the solution.
+   subroutine solve_em(self, b, info)
+      type(em_system_type), intent(in) :: self
+      real(dp), contiguous, intent(inout) :: b(:)
+      integer, intent(out) :: info
+      call band_lu_solve(self%ab, self%kd, self%kd, self%ipiv, b, info)
+   end subroutine solve_em
+
+end module fekap_effects_energy_momentum
