@@ -378,8 +378,8 @@ def read_steps(path: Path, buckets: int = MAX_BUCKETS, slow: bool = False) -> Re
 
 
 #: The columns of energy.csv (dynamics runs) after step, t.
-ENERGY_COLUMNS = ("kinetic", "strain", "gravity", "work_loads", "work_drives", "dissipated", "balance",
-                  "px", "py", "angular")
+ENERGY_COLUMNS = ("kinetic", "strain", "penalty", "gravity", "work_loads", "work_drives", "dissipated",
+                  "balance", "px", "py", "angular")
 
 
 def read_energy(path: Path, buckets: int = MAX_BUCKETS, slow: bool = False) -> Reduced | None:

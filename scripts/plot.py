@@ -11,7 +11,7 @@ draws into OUTDIR:
 - history_<P>.png  time histories of x, y (vx, vy, ax, ay when computed) of each tracked point P;
 - angles.png       time histories of the link angles (omega, alpha when computed);
 - iterations.png   Newton iterations (and the final residual) per step;
-- energy.png       dynamics runs (energy.csv): kinetic, strain and gravity energy, the work of
+- energy.png       dynamics runs (energy.csv): kinetic, strain, penalty and gravity energy, the work of
                    loads and drives and the damping's dissipation, their balance (the integrator's
                    numerical dissipation), linear and angular momentum;
 - motion.mp4       with --animate: the mechanism moving, with the time, the drive's value and
@@ -425,7 +425,8 @@ def plot_energy(run: Run, energy: fs.Reduced) -> Figure:
     plt = pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(9, 9.5), sharex=True)
     ax = axes[0]
-    labels = {"kinetic": "kinetic", "strain": "strain", "gravity": "gravity potential",
+    labels = {"kinetic": "kinetic", "strain": "strain", "penalty": "slidelines' penalty",
+              "gravity": "gravity potential",
               "work_loads": "work of the loads", "work_drives": "work of the drives",
               "dissipated": "dissipated by damping"}
     for index, (quantity, label) in enumerate(labels.items()):
@@ -438,7 +439,7 @@ def plot_energy(run: Run, energy: fs.Reduced) -> Figure:
     _, t, balance = energy.curve("balance")
     ax.plot(t, balance, "-", color="C3", lw=1.0)
     ax.set_ylabel("balance (J)")
-    ax.set_title("kinetic + strain + gravity - work + dissipated, less its start value", color="0.3",
+    ax.set_title("kinetic + strain + penalty + gravity - work + dissipated, less its start value", color="0.3",
                  fontsize="small")
     ax = axes[2]
     for index, (quantity, label) in enumerate((("px", "p_x (N s)"), ("py", "p_y (N s)"),

@@ -23,6 +23,7 @@ module fekap_contact_slideline
    public :: slide_geometry, slide_force, slide_second_derivative
    public :: slide_tie_offset, slide_tie_force, slide_tie_second_derivative
    public :: slide_locate, default_penalty
+   public :: slide_energy, slide_tie_energy, slide_gap_gradient
 
    !> Status of `slide_locate`: the slave stays on its master element.
    integer, parameter, public :: slide_on_element = 0
@@ -165,6 +166,24 @@ contains
       d2f = -kp*(gdd*fr%ns + 2*gd*nsd + fr%g*nsdd)
    end subroutine slide_second_derivative
 
+   !> Energy E = kp g**2/2 of the gap spring at xs, x1, x2: f of slide_force is -dE/dd.
+   pure real(dp) function slide_energy(xs, x1, x2, kp) result(energy)
+      real(dp), intent(in) :: xs(2), x1(2), x2(2), kp
+      type(frame_type) :: fr
+      call master_frame(xs, x1, x2, fr)
+      energy = 0.5_dp*kp*fr%g**2
+   end function slide_energy
+
+   !> The gap's gradient N_s = grad g (61) over the contact dofs (67): the gap
+   !> rate is N_s . v, and a dashpot c on it applies -c (N_s . v) N_s.
+   pure function slide_gap_gradient(xs, x1, x2) result(ns)
+      real(dp), intent(in) :: xs(2), x1(2), x2(2)
+      real(dp) :: ns(6)
+      type(frame_type) :: fr
+      call master_frame(xs, x1, x2, fr)
+      ns = fr%ns
+   end function slide_gap_gradient
+
    !> Offset c0 of the rotational tie of a prismatic joint, chosen so that the tie
    !> is free in the given (initial) configuration: c0 = phi_master - theta_s.
    pure function slide_tie_offset(theta_s, x1, x2) result(c0)
@@ -222,6 +241,15 @@ contains
          k = -kr*k
       end if
    end subroutine slide_tie_force
+
+   !> Energy E = kr e**2/2 of a prismatic joint's rotational tie (e wrapped as
+   !> in slide_tie_force, whose f is -dE/dd).
+   pure real(dp) function slide_tie_energy(theta_s, x1, x2, c0, kr) result(energy)
+      real(dp), intent(in) :: theta_s, x1(2), x2(2), c0, kr
+      real(dp) :: e, grad(5), s1, t(2), n(2)
+      call tie_frame(theta_s, x1, x2, c0, e, grad, s1, t, n)
+      energy = 0.5_dp*kr*e**2
+   end function slide_tie_energy
 
    !> Exact second directional derivative d^2 f/dd^2 [v, v] of the tie force along
    !> v = (theta_s', x1', y1', x2', y2'), for the acceleration right-hand side.

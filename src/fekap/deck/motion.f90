@@ -26,6 +26,8 @@ module fekap_deck_motion
    real(dp), parameter :: slave_tol = 1.0e-6_dp
    !> Largest magnitude of a table entry (keeps the spline's arithmetic finite).
    real(dp), parameter :: table_max = 1.0e100_dp
+   !> Largest slideline damping (as the sections' Rayleigh coefficients).
+   real(dp), parameter :: max_damping = 1.0e100_dp
    !> Largest magnitude of a rate, harmonic or polynomial coefficient: larger
    !> drives overflow the residual long before they mean anything.
    real(dp), parameter :: law_max = 1.0e15_dp
@@ -375,14 +377,14 @@ contains
          & is_word_of(field, 'table', 4) .or. is_word_of(field, 'linear', 4)
    end function is_load_law
 
-   !> SLIDelines: `name slave on LINK [LINK ...] [pin | prismatic LINK] [penalty=VALUE]`
-   !> or `name slave guide X1 Y1 X2 Y2 [pin | prismatic LINK] [penalty=VALUE]`.
+   !> SLIDelines: `name slave on LINK [LINK ...] [pin | prismatic LINK] [penalty=VALUE] [damping=VALUE]`
+   !> or `name slave guide X1 Y1 X2 Y2 [pin | prismatic LINK] [penalty=VALUE] [damping=VALUE]`.
    subroutine read_slidelines(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
       character(*), parameter :: form = 'name slave-node on LINK [LINK ...] | guide X1 Y1 X2 Y2, '// &
-         & 'then [pin | prismatic LINK] [penalty=VALUE]'
+         & 'then [pin | prismatic LINK] [penalty=VALUE] [damping=VALUE]'
       type(slideline_type), allocatable :: list(:)
       integer :: n, i, iline, k, link, j, nf
       logical :: ok, fine
@@ -461,7 +463,7 @@ contains
             ok = .false.
             k = nf + 1
          end if
-         ! Options: pin | prismatic LINK, penalty=VALUE.
+         ! Options: pin | prismatic LINK, penalty=VALUE, damping=VALUE.
          do while (k <= nf)
             word = lower(ctx%field(iline, k))
             if (word == 'pin') then
@@ -490,9 +492,17 @@ contains
                   call ctx%error(iline, k, 'the penalty must not be negative', label='0 selects the automatic penalty')
                   ok = .false.
                end if
+            else if (index(word, 'damping=') == 1) then
+               call ctx%real_field(iline, k, list(n)%damping, fine, text=word(9:))
+               ok = ok .and. fine
+               if (fine .and. .not. (list(n)%damping >= 0 .and. list(n)%damping <= max_damping)) then
+                  call ctx%error(iline, k, 'the damping must be zero or positive, at most 1e100', &
+                     & label='a dashpot on the gap rate (force per velocity); 0: none')
+                  ok = .false.
+               end if
             else
                call ctx%error(iline, k, "unexpected field '"//ctx%field(iline, k)//"'", &
-                  & label='options: pin | prismatic LINK | penalty=VALUE')
+                  & label='options: pin | prismatic LINK | penalty=VALUE | damping=VALUE')
                ok = .false.
             end if
             k = k + 1
@@ -513,7 +523,8 @@ contains
 
    pure logical function is_option(field)
       character(*), intent(in) :: field
-      is_option = lower(field) == 'pin' .or. is_word_of(field, 'prismatic', 4) .or. index(lower(field), 'penalty=') == 1
+      is_option = lower(field) == 'pin' .or. is_word_of(field, 'prismatic', 4) .or. &
+         & index(lower(field), 'penalty=') == 1 .or. index(lower(field), 'damping=') == 1
    end function is_option
 
    !> The slave must start on its master line.

@@ -1,7 +1,8 @@
 !> Flexible dynamics on the FEM's mesh: the equations of motion
 !> (fekap_effects_dynamic_system) integrated by generalized-alpha
 !> (fekap_effects_generalized_alpha), each step solved by Newton on the band
-!> iteration matrix K + c1 C + c2 M, cut in halves when it fails and grown
+!> iteration matrix K + c1 C + c2 M, or by the energy-momentum integrator
+!> (fekap_effects_energy_momentum: its step's equations and band LU), cut in halves when it fails and grown
 !> back (fekap_solver_step_control). Drives prescribe their dofs' motion
 !> (value, rate and second rate of their laws); what the drives and supports
 !> apply is the residual on their dofs (reactions.csv, as kinetostatics'
@@ -9,6 +10,11 @@
 !> whole mechanism (else rest), and the consistent accelerations of
 !> M a0 = g(0) - P(q0) - C v0. Each step also gives the energies, the work of
 !> loads and drives and the momenta (energy.csv).
+!>
+!> Over 600 lines: the stepper's start, the two integrators' Newton loops and
+!> the energy, work and reactions of an accepted step all work on the one
+!> stepper state (iterate, accepted state, step control); the equations
+!> themselves live in the modules named above.
 module fekap_effects_dynamic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
@@ -21,13 +27,15 @@ module fekap_effects_dynamic_stepper
    use fekap_solver_linear_system, only: assemble_system, factor_system, &
       & system_pivot, residual_norm, newton_correction, solve_system
    use fekap_solver_step_control, only: step_cuts_type
+   use fekap_solver_interrupt, only: interrupt_signal, interrupt_error
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
       & alpha_update
    use fekap_effects_dynamic_system, only: dynamic_system_type, new_dynamic_system, external_forces, &
-      & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6
+      & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6, &
+      & has_slide_damping, update_slide_damping, slide_damping_work, penalty_energy
    use fekap_effects_energy_momentum, only: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, &
-      & solve_em
+      & solve_em, em_free_velocities, massless_dofs
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
    use fekap_output_format, only: es_text
@@ -38,9 +46,9 @@ module fekap_effects_dynamic_stepper
    public :: dynamic_stepper_type, new_dynamic_stepper, dynamic_state_type, energy_names
 
    !> The columns of energy.csv after step,t (see dynamic_stepper_type's energy).
-   character(*), parameter :: energy_names = 'kinetic,strain,gravity,work_loads,work_drives,dissipated,'// &
+   character(*), parameter :: energy_names = 'kinetic,strain,penalty,gravity,work_loads,work_drives,dissipated,'// &
       & 'balance,px,py,angular'
-   integer, parameter, public :: energy_count = 10
+   integer, parameter, public :: energy_count = 11
    !> A step that creates more energy than this fraction of the kinetic and
    !> strain energy (or of the step's work) is rejected and cut.
    real(dp), parameter :: max_created = 0.05_dp
@@ -55,7 +63,8 @@ module fekap_effects_dynamic_stepper
       !> Work of the loads, of the drives, and the energy the damping dissipated.
       real(dp) :: work_loads = 0, work_drives = 0, dissipated = 0
       !> Kinetic and strain energy, and their sum with the gravity potential.
-      real(dp) :: kinetic = 0, strain = 0, energy = 0
+      !> (penalty: the slidelines' springs.)
+      real(dp) :: kinetic = 0, strain = 0, penalty = 0, energy = 0
    end type dynamic_state_type
 
    !> The model, mesh, linear system, drives' start values and scales are
@@ -73,8 +82,9 @@ module fekap_effects_dynamic_stepper
       !> Velocities at the start over all dofs, if given (tests, benchmarks);
       !> else the drives' kinematic velocities.
       real(dp), allocatable :: v_start(:)
-      !> Whether some element is damped (has_damping).
-      logical :: damped = .false.
+      !> Whether some element is damped (has_damping), and some slideline
+      !> (has_slide_damping: generalized-alpha only, see effects.f90's plan).
+      logical :: damped = .false., slide_damped = .false.
       !> Energy-momentum: the dofs without mass (their velocities are the
       !> rates of the mean rates, see em_velocities), and the last step's length.
       logical, allocatable :: massless(:)
@@ -101,6 +111,7 @@ contains
       call new_dynamic_system(self%dynamics, model, self%mesh)
       call new_kinetostatics(self%rows, model, self%mesh)
       self%damped = has_damping(self%dynamics)
+      self%slide_damped = has_slide_damping(self%dynamics)
       if (model%analysis%integrator == integrator_energy_momentum) then
          call new_em_system(self%em, self%mesh)
          self%massless = massless_dofs(self%dynamics, self%mesh)
@@ -144,6 +155,7 @@ contains
          call drive_motion(self, state%t, state%q, state%v, state%acc)
          call start_velocities(self, info)
          if (has_damping(self%dynamics)) call update_damping(self%dynamics, mesh, state%q)
+         if (self%slide_damped) call update_slide_damping(self%dynamics, mesh, state%q, state%seg)
          call start_accelerations(self, error)
          if (allocated(error)) return
          state%a = state%acc
@@ -152,7 +164,8 @@ contains
          state%dissipated = 0
          state%kinetic = kinetic_energy(self%dynamics, mesh, state%v)
          state%strain = strain_energy(mesh, state%q)
-         state%energy = state%kinetic + state%strain - dot_product(self%dynamics%weight, state%q)
+         state%penalty = penalty_energy(mesh, state%q, state%seg)
+         state%energy = state%kinetic + state%strain + state%penalty - dot_product(self%dynamics%weight, state%q)
          self%energy0 = state%energy
          result%iterations = 0
          result%residual = 0
@@ -319,6 +332,11 @@ contains
          t_try = cuts%next(self%state%t)
          call solve_step(self, t_try, it, residual, step_error)
          result%iterations = result%iterations + it
+         if (allocated(step_error) .and. interrupt_signal() /= 0) then
+            ! A signal stopped the step: no cut, the run stops.
+            call move_alloc(step_error, error)
+            return
+         end if
          if (allocated(step_error)) then
             call cuts%reject(step_error, error)
             if (allocated(error)) return
@@ -342,7 +360,7 @@ contains
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: work_loads, work_drives, dissipated, kinetic, strain, energy, created
+      real(dp) :: work_loads, work_drives, dissipated, kinetic, strain, penalty, energy, created
       integer :: d
       integer :: seg(size(self%state%seg))
       logical :: moved, em
@@ -350,6 +368,7 @@ contains
       em = self%model%analysis%integrator == integrator_energy_momentum
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          if (self%damped) call update_damping(dyn, mesh, state%q)
+         if (self%slide_damped) call update_slide_damping(dyn, mesh, state%q, state%seg)
          if (em) then
             call em_newton(self, t_new, iterations, residual, error)
          else
@@ -383,9 +402,12 @@ contains
          else if (self%damped) then
             call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
          end if
+         if (self%slide_damped) dissipated = dissipated + slide_damping_work(dyn, state%v, self%vt, self%qt - state%q)
          kinetic = kinetic_energy(dyn, mesh, self%vt)
          strain = strain_energy(mesh, self%qt)
-         energy = kinetic + strain - dot_product(dyn%weight, self%qt)
+         ! The springs of the step's own segments (those its forces used).
+         penalty = penalty_energy(mesh, self%qt, state%seg)
+         energy = kinetic + strain + penalty - dot_product(dyn%weight, self%qt)
          ! The integrator dissipates (rho_inf < 1) or keeps (1) energy: a step
          ! that creates much of it has jumped to another solution of its
          ! nonlinear equations (stiff modes of a large motion); a shorter one does not.
@@ -407,6 +429,7 @@ contains
          state%dissipated = state%dissipated + dissipated
          state%kinetic = kinetic
          state%strain = strain
+         state%penalty = penalty
          state%energy = energy
          state%t = t_new
          state%q = self%qt
@@ -444,6 +467,9 @@ contains
          r0 = 0
          residual = huge(1.0_dp)
          do
+            ! A signal ends the step here (a slow step would delay the stop).
+            call interrupt_error(error)
+            if (allocated(error)) return
             call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts, &
                & c%c1, c%c2)
             residual = residual_norm(system, mesh)
@@ -508,6 +534,8 @@ contains
          r0 = 0
          residual = huge(1.0_dp)
          do
+            call interrupt_error(error)
+            if (allocated(error)) return
             call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
                & self%damped, system%r, tangent=.true.)
             self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
@@ -555,46 +583,13 @@ contains
       end associate
    end subroutine em_newton
 
-   !> The velocities v1 of the free dofs from the iterate q1 over a step of
-   !> length h: v1 = 2 (q1 - q0)/h - v0 (the midpoint rule, which the energy
-   !> balance needs on every dof with mass). A dof without mass has no
-   !> equation for its velocity, and that recursion would carry any error of
-   !> it on undamped (v1 + v0 = 2 vm); its velocity is the linear
-   !> extrapolation of the last two steps' mean rates vm to t_n+1 (second
-   !> order), or 2 vm - v0 at the first step.
+   !> The free dofs' velocities of the iterate (em_free_velocities).
    subroutine em_velocities(self, h)
       type(dynamic_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: h
-      real(dp) :: vm
-      integer :: k, d
-      associate (state => self%state)
-         do k = 1, self%mesh%nfree
-            d = self%mesh%eq_dof(k)
-            vm = (self%qt(d) - state%q(d))/h
-            if (self%massless(d) .and. self%h_prev > 0) then
-               self%vt(d) = vm + (vm - state%a(d))*h/(h + self%h_prev)
-            else
-               self%vt(d) = 2*vm - state%v(d)
-            end if
-         end do
-      end associate
+      call em_free_velocities(self%mesh, self%massless, h, self%h_prev, self%state%q, self%state%v, self%state%a, &
+         & self%qt, self%vt)
    end subroutine em_velocities
-
-   !> The dofs whose row of the mass matrix (elements' and point masses) is zero.
-   pure function massless_dofs(dyn, mesh) result(massless)
-      type(dynamic_system_type), intent(in) :: dyn
-      type(mesh_type), intent(in) :: mesh
-      logical :: massless(mesh%ndof)
-      real(dp) :: diagonal(mesh%ndof)
-      integer :: e, i
-      diagonal = dyn%point_mass
-      do e = 1, size(mesh%elements)
-         do i = 1, 6
-            diagonal(mesh%edof(i, e)) = diagonal(mesh%edof(i, e)) + dyn%me(i, i, e)
-         end do
-      end do
-      massless = diagonal == 0
-   end function massless_dofs
 
    !> Supported dofs stay put in the iterate.
    subroutine hold_fixed(self)
@@ -659,7 +654,8 @@ contains
          result%has_reactions = all(abs(result%reactions) <= huge(1.0_dp))
          p = momentum(dyn, mesh, state%q, state%v)
          if (.not. allocated(result%energy)) allocate (result%energy(energy_count))
-         result%energy = [state%kinetic, state%strain, state%energy - state%kinetic - state%strain, state%work_loads, &
+         result%energy = [state%kinetic, state%strain, state%penalty, &
+            & state%energy - state%kinetic - state%strain - state%penalty, state%work_loads, &
             & state%work_drives, state%dissipated, &
             & state%energy - state%work_loads - state%work_drives + state%dissipated - self%energy0, p(1), p(2), p(3)]
          result%has_energy = .true.
@@ -684,8 +680,9 @@ contains
                ge = pe
                reactions(:, row) = ge(3*rows%row_end(row) - 2:3*rows%row_end(row))
             else if (rows%row_slide(row) > 0) then
-               ! A sliding joint: the penalty force on the slave.
+               ! A sliding joint: the penalty force on the slave, and its dashpot's.
                call slider_force(mesh, rows%row_slide(row), state%q, state%seg, reactions(:, row))
+               if (self%slide_damped) call add_dashpot(rows%row_slide(row), reactions(1:2, row))
             else
                do k = 1, 3
                   dof = rows%row_dof(k, row)
@@ -695,6 +692,18 @@ contains
          end do
       end associate
    contains
+      !> force -= (C_s v) on the slave's translations (slideline i's dashpot).
+      subroutine add_dashpot(i, force)
+         integer, intent(in) :: i
+         real(dp), intent(inout) :: force(2)
+         real(dp) :: ve(6)
+         integer :: j
+         do j = 1, 6
+            ve(j) = 0
+            if (self%dynamics%slide_dofs(j, i) > 0) ve(j) = self%state%v(self%dynamics%slide_dofs(j, i))
+         end do
+         force = force - matmul(self%dynamics%cs(1:2, :, i), ve)
+      end subroutine add_dashpot
       subroutine end_forces(e, fe)
          integer, intent(in) :: e
          real(dp), intent(out) :: fe(6)

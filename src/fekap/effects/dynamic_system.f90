@@ -5,23 +5,30 @@
 !> Rayleigh damping alpha M + beta K_m of each element's section (K_m the
 !> material tangent, taken at the configuration of the step's start so that
 !> C is constant over a step), P the beams' internal forces, F^c the
-!> slidelines' penalty forces, g the weights and the loads at time t. With
+!> slidelines' penalty forces, g the weights and the loads at time t. A
+!> slideline with `damping=` adds its dashpot c N_s N_s^T (N_s the gap's
+!> gradient at the step's start, so constant over the step as Rayleigh's) to C.
+!> With
 !> qd and qdd functions of q through the integrator (qd' = c1, qdd' = c2),
 !> the iteration matrix is dR/dq = K + c1 C + c2 M, in the FEM's band storage.
 !> On the constrained dofs R is what the supports and drives apply.
 module fekap_effects_dynamic_system
    use fekap_kinds, only: dp
-   use fekap_model, only: model_type, dof_rot
+   use fekap_model, only: model_type, dof_rot, joint_prismatic
    use fekap_model_work, only: work_counts_type
    use fekap_assembly_mesh, only: mesh_type
    use fekap_element_beam, only: beam_residual, beam_strain_energy
    use fekap_element_inertia, only: beam_mass_matrix, beam_gravity_force
    use fekap_solver_linear_system, only: linear_system_type, assemble_system, assemble_system_residual
+   use fekap_assembly_tracking, only: slide_position
+   use fekap_assembly_assemble, only: scatter
+   use fekap_contact_slideline, only: slide_energy, slide_tie_energy, slide_gap_gradient
    implicit none
    private
 
    public :: dynamic_system_type, new_dynamic_system, external_forces, assemble_dynamics, update_damping
    public :: kinetic_energy, strain_energy, momentum, has_damping, times6
+   public :: has_slide_damping, update_slide_damping, slide_damping_work, penalty_energy
 
    type :: dynamic_system_type
       !> (6, 6, nelem): each element's consistent mass and damping matrices.
@@ -34,6 +41,11 @@ module fekap_effects_dynamic_system
       real(dp), allocatable :: weight(:)
       !> (ndof) work.
       real(dp), allocatable :: work(:)
+      !> (nslide): each slideline's dashpot on its gap rate; (6, 6, nslide):
+      !> its damping matrix c N_s N_s^T of the step, on the dofs slide_dofs
+      !> (6, nslide) (0: a ground guide's point).
+      real(dp), allocatable :: slide_c(:), cs(:, :, :)
+      integer, allocatable :: slide_dofs(:, :)
    end type dynamic_system_type
 
 contains
@@ -48,6 +60,11 @@ contains
       allocate (self%me(6, 6, ne), self%ce(6, 6, ne), source=0.0_dp)
       allocate (self%alpha(ne), self%beta(ne), source=0.0_dp)
       allocate (self%point_mass(mesh%ndof), self%weight(mesh%ndof), self%work(mesh%ndof), source=0.0_dp)
+      allocate (self%slide_c(size(mesh%slides)), self%cs(6, 6, size(mesh%slides)), source=0.0_dp)
+      allocate (self%slide_dofs(6, size(mesh%slides)), source=0)
+      do i = 1, size(mesh%slides)
+         self%slide_c(i) = model%slidelines(i)%damping
+      end do
       do e = 1, ne
          associate (s => model%sections(model%links(mesh%elink(e))%section), el => mesh%elements(e))
             self%me(:, :, e) = beam_mass_matrix(el%length, s%rho_a, s%rho_i)
@@ -76,6 +93,73 @@ contains
       type(dynamic_system_type), intent(in) :: self
       has_damping = any(self%alpha /= 0 .or. self%beta /= 0)
    end function has_damping
+
+   !> Whether some slideline has a dashpot.
+   pure logical function has_slide_damping(self)
+      type(dynamic_system_type), intent(in) :: self
+      has_slide_damping = any(self%slide_c /= 0)
+   end function has_slide_damping
+
+   !> Each damped slideline's matrix c N_s N_s^T at q (its master segment
+   !> seg): the dashpot for the step that starts at q.
+   pure subroutine update_slide_damping(self, mesh, q, seg)
+      type(dynamic_system_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      real(dp) :: xs(2), x1(2), x2(2), ns(6)
+      integer :: i, j
+      do i = 1, size(mesh%slides)
+         if (self%slide_c(i) == 0) cycle
+         call slide_position(mesh, mesh%slides(i), seg(i), q, xs, x1, x2, self%slide_dofs(:, i))
+         ns = slide_gap_gradient(xs, x1, x2)
+         do j = 1, 6
+            self%cs(:, j, i) = self%slide_c(i)*ns*ns(j)
+         end do
+      end do
+   end subroutine update_slide_damping
+
+   !> The energy the slidelines' dashpots dissipated over a step: the
+   !> trapezoidal rule of C_s v on the displacement dq (C_s of the step).
+   pure real(dp) function slide_damping_work(self, v0, v1, dq) result(work)
+      type(dynamic_system_type), intent(in) :: self
+      real(dp), intent(in) :: v0(:), v1(:), dq(:)
+      real(dp) :: ve(6), de(6)
+      integer :: i, j, d
+      work = 0
+      do i = 1, size(self%slide_c)
+         if (self%slide_c(i) == 0) cycle
+         do j = 1, 6
+            d = self%slide_dofs(j, i)
+            ve(j) = 0
+            de(j) = 0
+            if (d > 0) then
+               ve(j) = v0(d) + v1(d)
+               de(j) = dq(d)
+            end if
+         end do
+         work = work + 0.5_dp*dot_product(de, matmul(self%cs(:, :, i), ve))
+      end do
+   end function slide_damping_work
+
+   !> The slidelines' penalty energy at q: kp g^2/2 of each gap spring and
+   !> kr e^2/2 of each prismatic tie (F^c is minus its gradient).
+   pure real(dp) function penalty_energy(mesh, q, seg) result(energy)
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      real(dp) :: xs(2), x1(2), x2(2)
+      integer :: i, dofs(6)
+      energy = 0
+      do i = 1, size(mesh%slides)
+         associate (sl => mesh%slides(i))
+            call slide_position(mesh, sl, seg(i), q, xs, x1, x2, dofs)
+            energy = energy + slide_energy(xs, x1, x2, sl%kp)
+            if (sl%kind == joint_prismatic) energy = energy + &
+               & slide_tie_energy(q(sl%slave_rot), x1, x2, sl%c0(seg(i)), sl%kr)
+         end associate
+      end do
+   end function penalty_energy
 
    !> g(t): the weights and the loads at time t (the mesh's load set: the
    !> loads with a law at its value, the others times the load factor t).
@@ -117,9 +201,10 @@ contains
       type(work_counts_type), intent(inout) :: counts
       real(dp), intent(in), optional :: c1, c2
       real(dp) :: me(36), k, ae(6), ve(6), fe(6)
-      integer :: e, m, i
-      logical :: damped
+      integer :: e, m, i, j
+      logical :: damped, slide_damped
       damped = has_damping(self)
+      slide_damped = has_slide_damping(self)
       if (present(c2)) then
          ! Full geometric stiffness: the motion strains the links.
          call assemble_system(system, mesh, q, t, seg, 0.0_dp, counts)
@@ -140,8 +225,28 @@ contains
                r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + fe(i)
             end do
          end do
+         if (slide_damped) then
+            ! The slidelines' dashpots: C_s v on their dofs.
+            do i = 1, size(self%slide_c)
+               if (self%slide_c(i) == 0) cycle
+               do j = 1, 6
+                  ve(j) = 0
+                  if (self%slide_dofs(j, i) > 0) ve(j) = v(self%slide_dofs(j, i))
+               end do
+               fe = matmul(self%cs(:, :, i), ve)
+               do j = 1, 6
+                  if (self%slide_dofs(j, i) > 0) r(self%slide_dofs(j, i)) = r(self%slide_dofs(j, i)) + fe(j)
+               end do
+            end do
+         end if
       end associate
       if (.not. present(c2)) return
+      if (slide_damped) then
+         do i = 1, size(self%slide_c)
+            if (self%slide_c(i) /= 0) call scatter(mesh, self%slide_dofs(:, i), c1*self%cs(:, :, i), system%kff, &
+               & system%kfd)
+         end do
+      end if
       do e = 1, size(mesh%elements)
          call combine(self%me(:, :, e), self%ce(:, :, e), c1, c2, me)
          associate (map => mesh%scatter_map(:, :, e), nb => mesh%scatter_count(1, e), nd => mesh%scatter_count(2, e))

@@ -173,6 +173,8 @@ module fekap_model
       real(dp) :: guide(2, 2) = 0
       !> Penalty parameter; <= 0 selects the default scaled from element stiffness.
       real(dp) :: penalty = 0
+      !> Dynamics: a dashpot on the gap rate (force per velocity), 0 for none.
+      real(dp) :: damping = 0
       type(source_loc_type) :: loc
    end type slideline_type
 
