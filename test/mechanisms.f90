@@ -57,20 +57,40 @@ contains
       call add_node(model, 'B', 2.0_dp, 0.0_dp)
       call add_node(model, 'C', 3.0_dp, sqrt(15.0_dp))
       call add_node(model, 'D', 4.0_dp, 0.0_dp)
-      allocate (model%sections(1))
-      model%sections(1)%name = 'bar'
-      ! E = G = 1, A = 100, I = 1, k = 5/6, all scaled.
-      model%sections(1)%ea = 100*s
-      model%sections(1)%kga = 5.0_dp/6*100*s
-      model%sections(1)%ei = s
+      call add_bar_section(model, s)
       call add_link(model, 'AB', 1, 2, ne)
       call add_link(model, 'BC', 2, 3, ne)
       call add_link(model, 'DC', 4, 3, ne)
+      call pin_and_drive(model, [1, 4], dt)
+      model%output%points = [2, 3]
+      model%output%links = [1, 2, 3]
+   end subroutine fourbar_model
+
+
+   !> The four-bars' one section `bar`: E = G = 1, A = 100, I = 1, k = 5/6,
+   !> all scaled by s.
+   subroutine add_bar_section(model, s)
+      type(model_type), intent(inout) :: model
+      real(dp), intent(in) :: s
+      allocate (model%sections(1))
+      model%sections(1)%name = 'bar'
+      model%sections(1)%ea = 100*s
+      model%sections(1)%kga = 5.0_dp/6*100*s
+      model%sections(1)%ei = s
+   end subroutine add_bar_section
+
+   !> The four-bars' frame: pins at the two nodes, link 1 driven at its
+   !> first node at 2 pi rad/s, time step dt, no welds, loads or slidelines.
+   subroutine pin_and_drive(model, pins, dt)
+      type(model_type), intent(inout) :: model
+      integer, intent(in) :: pins(2)
+      real(dp), intent(in) :: dt
+      integer :: k
       allocate (model%supports(2))
-      model%supports(1)%node = 1
-      model%supports(1)%fix = [.true., .true., .false.]
-      model%supports(2)%node = 4
-      model%supports(2)%fix = [.true., .true., .false.]
+      do k = 1, 2
+         model%supports(k)%node = pins(k)
+         model%supports(k)%fix = [.true., .true., .false.]
+      end do
       allocate (model%drives(1))
       model%drives(1)%dof = dof_rot
       model%drives(1)%link = 1
@@ -78,10 +98,7 @@ contains
       call new_rate_law(model%drives(1)%law, 2*pi)
       model%analysis%dt = dt
       allocate (model%welds(0), model%loads(0), model%slidelines(0))
-      model%output%points = [2, 3]
-      model%output%links = [1, 2, 3]
-   end subroutine fourbar_model
-
+   end subroutine pin_and_drive
 
    !> The IFToMM A02 chain with N = 1 (a parallelogram four-bar): pivots
    !> O0 = (0, 0), O1 = (1, 0), tips T0 = (0, 1), T1 = (1, 1), cranks O0-T0
@@ -96,26 +113,11 @@ contains
       call add_node(model, 'O1', 1.0_dp, 0.0_dp)
       call add_node(model, 'T0', 0.0_dp, 1.0_dp)
       call add_node(model, 'T1', 1.0_dp, 1.0_dp)
-      allocate (model%sections(1))
-      model%sections(1)%name = 'bar'
-      model%sections(1)%ea = 100
-      model%sections(1)%kga = 5.0_dp/6*100
-      model%sections(1)%ei = 1
+      call add_bar_section(model, 1.0_dp)
       call add_link(model, 'crank0', 1, 3, 1)
       call add_link(model, 'crank1', 2, 4, 1)
       call add_link(model, 'coupler0', 3, 4, 1)
-      allocate (model%supports(2))
-      model%supports(1)%node = 1
-      model%supports(1)%fix = [.true., .true., .false.]
-      model%supports(2)%node = 2
-      model%supports(2)%fix = [.true., .true., .false.]
-      allocate (model%drives(1))
-      model%drives(1)%dof = dof_rot
-      model%drives(1)%link = 1
-      model%drives(1)%node = 1
-      call new_rate_law(model%drives(1)%law, 2*pi)
-      model%analysis%dt = dt
-      allocate (model%welds(0), model%loads(0), model%slidelines(0))
+      call pin_and_drive(model, [1, 2], dt)
       model%output%points = [3, 4]
       model%output%links = [1, 2, 3]
    end subroutine parallelogram_model

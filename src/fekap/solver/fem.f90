@@ -6,26 +6,16 @@
 !> accelerations (49) with the tangent of the converged configuration. A
 !> step that fails is cut in halves (bounded) and retried.
 !>
-!> This module is the stepper that composes the parts, each a module of its
-!> own: the setup shared with dynamics (fem_setup), the stepper's data
-!> (fem_state), the tangent at the accepted configuration and the
-!> square-root form (fem_factor), the predictor (fem_predict, predictor),
-!> the branch check and the rates of a converged configuration
-!> (fem_converged, branch, rates), change points (fem_fill, change_point),
-!> step control (step_control's advance_by_cuts, shared with the classical
-!> methods), slideline tracking (assembly/tracking), the convergence tests
-!> (convergence) and the result's fields (fields). What stays here is the
-!> Newton iteration of a step with its choices of tangent (solve_step), the
-!> try of a step with the step-doubling verification that the branch check
-!> asks for, and the step over a change point: they call one another
-!> recursively (through advance_by_cuts).
-!>
-!> An exactly constrained kinematic model (assembly/strain_rate: as many
-!> strain and gap rows as free dofs, no loads) solves its Newton
-!> corrections, drive responses and rates in the square-root form, with the
-!> band LU of the strain-rate operator B_f instead of the factor of K_ff =
-!> B_f^T W B_f, whose condition number is the square of B_f's
-!> (docs/theory.md, "Rates at scale"); see fem_factor.
+!> This module composes the parts, each a module of its own: setup
+!> (fem_setup, shared with dynamics), data (fem_state), the tangent at the
+!> accepted configuration and the square-root form of exactly constrained
+!> models (fem_factor; docs/theory.md, "Rates at scale"), the predictor
+!> (fem_predict), the checks and rates of a converged configuration
+!> (fem_converged), change points (fem_fill), the step loop shared with the
+!> classical methods (step_control's advance_by_cuts). What stays here is the
+!> Newton iteration of a step (solve_step), the try of a step with the
+!> step-doubling verification that the branch check asks for, and the step
+!> over a change point: they call one another recursively.
 module fekap_solver_fem
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
@@ -284,8 +274,7 @@ contains
       type is (fem_stepper_type)
          self%verify_depth = depth
          call solve_step(self, t, iterations, residual, reason)
-         ! A signal stopped the step: no cut, the run stops.
-         if (allocated(reason) .and. interrupt_signal() /= 0) return
+         if (allocated(reason) .and. interrupt_signal() /= 0) return  ! a signal: no cut, the run stops
          ! Only a run's step, at its first try, checks for a change point.
          self%detect_change = .false.
          if (self%change_found) return
