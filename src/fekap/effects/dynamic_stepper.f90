@@ -456,7 +456,7 @@ contains
       type(alpha_coefficients_type) :: c
       real(dp) :: correction, r0
       integer :: info, k, d
-      character(len=300) :: msg
+      logical :: converged
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
          call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
@@ -473,21 +473,12 @@ contains
             call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts, &
                & c%c1, c%c2)
             residual = residual_norm(system, mesh)
-            if (.not. residual <= huge(1.0_dp)) then
-               call not_finite(error)
-               return
-            end if
-            if (iterations == 0) r0 = residual
-            if (residual <= self%residual_floor .and. iterations > 0) exit
-            if (iterations >= self%model%analysis%max_iter) then
-               call no_convergence(error, iterations, residual, r0)
-               return
-            end if
+            call residual_test(self, residual, iterations, r0, converged, error)
+            if (allocated(error)) return
+            if (converged) exit
             call factor_system(system, info, self%counts)
             if (info /= 0) then
-               write (msg, '(a,i0,a)') 'the iteration matrix K + c1 C + c2 M is singular at equation ', info, &
-                  & ' (a free dof with neither mass nor stiffness)'
-               call analysis_error(error, trim(msg))
+               call singular_matrix(error, 'K + c1 C + c2 M', info)
                return
             end if
             call newton_correction(system, mesh, self%dof_length, correction, self%counts)
@@ -521,7 +512,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: h, chi, correction, r0
       integer :: info, k, d
-      character(len=300) :: msg
+      logical :: converged
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          h = t_new - state%t
          chi = em_dissipation(self%model%analysis%rho_inf)
@@ -540,22 +531,13 @@ contains
                & self%damped, system%r, tangent=.true.)
             self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
             residual = residual_norm(system, mesh)
-            if (.not. residual <= huge(1.0_dp)) then
-               call not_finite(error)
-               return
-            end if
-            if (iterations == 0) r0 = residual
-            if (residual <= self%residual_floor .and. iterations > 0) exit
-            if (iterations >= self%model%analysis%max_iter) then
-               call no_convergence(error, iterations, residual, r0)
-               return
-            end if
+            call residual_test(self, residual, iterations, r0, converged, error)
+            if (allocated(error)) return
+            if (converged) exit
             call factor_em(self%em, info)
             if (info == 0) call solve_em(self%em, system%rhs(:, 1), info)
             if (info /= 0) then
-               write (msg, '(a,i0,a)') 'the iteration matrix dp/dq + C/h + 2 M/h^2 is singular at equation ', info, &
-                  & ' (a free dof with neither mass nor stiffness)'
-               call analysis_error(error, trim(msg))
+               call singular_matrix(error, 'dp/dq + C/h + 2 M/h^2', info)
                return
             end if
             correction = 0
@@ -604,21 +586,41 @@ contains
       end do
    end subroutine hold_fixed
 
-   subroutine not_finite(error)
-      type(error_type), allocatable, intent(out) :: error
-      call analysis_error(error, 'the residual of the equations of motion is not finite (the step is '// &
-         & 'too long for the motion, or the mechanism has a dof without mass and stiffness)')
-   end subroutine not_finite
-
-   subroutine no_convergence(error, iterations, residual, r0)
-      type(error_type), allocatable, intent(out) :: error
+   !> Both integrators' test of an iterate's residual: converged once below
+   !> the floor after a correction; an error when it is not finite or the
+   !> iterations are spent. r0 keeps the first residual for the message.
+   subroutine residual_test(self, residual, iterations, r0, converged, error)
+      type(dynamic_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: residual
       integer, intent(in) :: iterations
-      real(dp), intent(in) :: residual, r0
+      real(dp), intent(inout) :: r0
+      logical, intent(out) :: converged
+      type(error_type), allocatable, intent(out) :: error
       character(len=300) :: msg
+      converged = .false.
+      if (.not. residual <= huge(1.0_dp)) then
+         call analysis_error(error, 'the residual of the equations of motion is not finite (the step is '// &
+            & 'too long for the motion, or the mechanism has a dof without mass and stiffness)')
+         return
+      end if
+      if (iterations == 0) r0 = residual
+      converged = residual <= self%residual_floor .and. iterations > 0
+      if (converged .or. iterations < self%model%analysis%max_iter) return
       write (msg, '(a,i0,a,a,a,a)') 'Newton did not converge in ', iterations, ' iterations (residual ', &
          & es_text(residual, 12, 5), ', first ', es_text(r0, 12, 5)//')'
       call analysis_error(error, trim(msg))
-   end subroutine no_convergence
+   end subroutine residual_test
+
+   !> The iteration matrix (named by `what`) has no factor.
+   subroutine singular_matrix(error, what, info)
+      type(error_type), allocatable, intent(out) :: error
+      character(*), intent(in) :: what
+      integer, intent(in) :: info
+      character(len=300) :: msg
+      write (msg, '(a,a,a,i0,a)') 'the iteration matrix ', what, ' is singular at equation ', info, &
+         & ' (a free dof with neither mass nor stiffness)'
+      call analysis_error(error, trim(msg))
+   end subroutine singular_matrix
 
    !> The energy the damping dissipated over a step: the trapezoidal rule of
    !> C v on the displacement dq (C of the step).
