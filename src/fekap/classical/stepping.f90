@@ -133,6 +133,13 @@ contains
    !> Newton on the method's position equations at time t from its current
    !> unknowns, until the shared convergence test passes (increment_residual:
    !> the scale of the default test); iterations are counted as corrections.
+   !> The FEM's Newton (fem.f90's solve_step) shares this loop's parts (the
+   !> convergence test, divergence_length, the step loop advance_by_cuts) but
+   !> not the loop: it chooses its tangent each iteration (material, full, or
+   !> the square-root form's), accepts the predictor, stops on an estimate of
+   !> the next correction, relocates slidelines and detects a round-off stall,
+   !> none of which these methods' exactly determined equations need; and its
+   !> messages keep their formatted-write text (fem_state's no_convergence_error).
    subroutine newton_positions(self, t, increment_residual, iterations, error)
       class(classical_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t, increment_residual

@@ -10,7 +10,7 @@ module fekap_deck_context
    use fekap_deck_name_index, only: name_index_type
    use fekap_deck_diagnostic, only: diagnostics_type, mark_type
    use fekap_deck_expression, only: evaluate_expression, evaluate_integer
-   use fekap_deck_source, only: source_type
+   use fekap_deck_source, only: source_type, line_mark
    implicit none
    private
 
@@ -75,19 +75,8 @@ contains
       class(context_type), intent(in) :: self
       integer, intent(in) :: iline, itok
       type(mark_type) :: mark
-      associate (line => self%source%lines(iline))
-         mark%file = self%source%files(line%file)%s
-         mark%line = line%number
-         mark%text = line%text
-         mark%order = iline
-         if (itok >= 1 .and. itok <= size(line%tokens)) then
-            mark%col = line%tokens(itok)%col
-            mark%length = len(line%tokens(itok)%text)
-         else
-            mark%col = len_trim(line%code) + 2
-            mark%length = 1
-         end if
-      end associate
+      ! A missing field is marked one blank past the end of the line.
+      mark = line_mark(self%source, self%source%lines(iline), iline, itok, 2)
    end function context_mark
 
    pure function context_mark_loc(self, loc) result(mark)

@@ -15,7 +15,7 @@ module fekap_deck_source
    implicit none
    private
 
-   public :: source_type, line_type, load_file, load_string
+   public :: source_type, line_type, load_file, load_string, line_mark
 
    !> Deepest nesting of INCLude.
    integer, parameter :: max_depth = 16
@@ -179,24 +179,36 @@ contains
       end do
    end subroutine load_text
 
-   !> The place of field `itok` of the last appended line (the whole line if it has no such field).
+   !> The place of field `itok` of the last appended line (past the end of
+   !> its code if it has no such field).
    pure function mark_of(source, line, itok) result(mark)
       type(source_type), intent(in) :: source
       type(line_type), intent(in) :: line
       integer, intent(in) :: itok
       type(mark_type) :: mark
+      mark = line_mark(source, line, source%nlines, itok, 1)
+   end function mark_of
+
+   !> The place of field `itok` of `line`, the order-th line of the deck
+   !> (for sorting diagnostics); without such a field, `gap` columns past the
+   !> end of the line's code (a missing field).
+   pure function line_mark(source, line, order, itok, gap) result(mark)
+      type(source_type), intent(in) :: source
+      type(line_type), intent(in) :: line
+      integer, intent(in) :: order, itok, gap
+      type(mark_type) :: mark
       mark%file = source%files(line%file)%s
       mark%line = line%number
       mark%text = line%text
-      mark%order = source%nlines
+      mark%order = order
       if (itok >= 1 .and. itok <= size(line%tokens)) then
          mark%col = line%tokens(itok)%col
          mark%length = len(line%tokens(itok)%text)
       else
-         mark%col = len_trim(line%code) + 1
+         mark%col = len_trim(line%code) + gap
          mark%length = 1
       end if
-   end function mark_of
+   end function line_mark
 
    pure logical function on_stack(path, stack, current)
       character(*), intent(in) :: path, current

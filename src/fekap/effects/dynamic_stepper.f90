@@ -1,7 +1,8 @@
 !> Flexible dynamics on the FEM's mesh: the equations of motion
 !> (fekap_effects_dynamic_system) integrated by generalized-alpha
 !> (fekap_effects_generalized_alpha), each step solved by Newton on the band
-!> iteration matrix K + c1 C + c2 M, cut in halves when it fails and grown
+!> iteration matrix K + c1 C + c2 M, or by the energy-momentum integrator
+!> (fekap_effects_energy_momentum: its step's equations and band LU), cut in halves when it fails and grown
 !> back (fekap_solver_step_control). Drives prescribe their dofs' motion
 !> (value, rate and second rate of their laws); what the drives and supports
 !> apply is the residual on their dofs (reactions.csv, as kinetostatics'
@@ -9,6 +10,11 @@
 !> whole mechanism (else rest), and the consistent accelerations of
 !> M a0 = g(0) - P(q0) - C v0. Each step also gives the energies, the work of
 !> loads and drives and the momenta (energy.csv).
+!>
+!> Over 600 lines: the stepper's start, the two integrators' Newton loops and
+!> the energy, work and reactions of an accepted step all work on the one
+!> stepper state (iterate, accepted state, step control); the equations
+!> themselves live in the modules named above.
 module fekap_effects_dynamic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
@@ -29,7 +35,7 @@ module fekap_effects_dynamic_stepper
       & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6, &
       & has_slide_damping, update_slide_damping, slide_damping_work, penalty_energy
    use fekap_effects_energy_momentum, only: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, &
-      & solve_em
+      & solve_em, em_free_velocities, massless_dofs
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
    use fekap_output_format, only: es_text
@@ -577,46 +583,13 @@ contains
       end associate
    end subroutine em_newton
 
-   !> The velocities v1 of the free dofs from the iterate q1 over a step of
-   !> length h: v1 = 2 (q1 - q0)/h - v0 (the midpoint rule, which the energy
-   !> balance needs on every dof with mass). A dof without mass has no
-   !> equation for its velocity, and that recursion would carry any error of
-   !> it on undamped (v1 + v0 = 2 vm); its velocity is the linear
-   !> extrapolation of the last two steps' mean rates vm to t_n+1 (second
-   !> order), or 2 vm - v0 at the first step.
+   !> The free dofs' velocities of the iterate (em_free_velocities).
    subroutine em_velocities(self, h)
       type(dynamic_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: h
-      real(dp) :: vm
-      integer :: k, d
-      associate (state => self%state)
-         do k = 1, self%mesh%nfree
-            d = self%mesh%eq_dof(k)
-            vm = (self%qt(d) - state%q(d))/h
-            if (self%massless(d) .and. self%h_prev > 0) then
-               self%vt(d) = vm + (vm - state%a(d))*h/(h + self%h_prev)
-            else
-               self%vt(d) = 2*vm - state%v(d)
-            end if
-         end do
-      end associate
+      call em_free_velocities(self%mesh, self%massless, h, self%h_prev, self%state%q, self%state%v, self%state%a, &
+         & self%qt, self%vt)
    end subroutine em_velocities
-
-   !> The dofs whose row of the mass matrix (elements' and point masses) is zero.
-   pure function massless_dofs(dyn, mesh) result(massless)
-      type(dynamic_system_type), intent(in) :: dyn
-      type(mesh_type), intent(in) :: mesh
-      logical :: massless(mesh%ndof)
-      real(dp) :: diagonal(mesh%ndof)
-      integer :: e, i
-      diagonal = dyn%point_mass
-      do e = 1, size(mesh%elements)
-         do i = 1, 6
-            diagonal(mesh%edof(i, e)) = diagonal(mesh%edof(i, e)) + dyn%me(i, i, e)
-         end do
-      end do
-      massless = diagonal == 0
-   end function massless_dofs
 
    !> Supported dofs stay put in the iterate.
    subroutine hold_fixed(self)

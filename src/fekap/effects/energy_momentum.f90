@@ -21,6 +21,7 @@ module fekap_effects_energy_momentum
    private
 
    public :: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, solve_em
+   public :: em_free_velocities, massless_dofs
 
    !> The band LU storage of the free equations' iteration matrix.
    type :: em_system_type
@@ -121,5 +122,47 @@ contains
       integer, intent(out) :: info
       call band_lu_solve(self%ab, self%kd, self%kd, self%ipiv, b, info)
    end subroutine solve_em
+
+   !> The velocities v1 of the free dofs from the iterate q1 over a step of
+   !> length h: v1 = 2 (q1 - q0)/h - v0 (the midpoint rule, which the energy
+   !> balance needs on every dof with mass). A dof without mass has no
+   !> equation for its velocity, and that recursion would carry any error of
+   !> it on undamped (v1 + v0 = 2 vm); its velocity is the linear
+   !> extrapolation of the last two steps' mean rates vm (vm_prev of the step
+   !> of length h_prev before) to t_n+1 (second order), or 2 vm - v0 at the
+   !> first step (h_prev = 0).
+   pure subroutine em_free_velocities(mesh, massless, h, h_prev, q0, v0, vm_prev, q1, v1)
+      type(mesh_type), intent(in) :: mesh
+      logical, intent(in) :: massless(:)
+      real(dp), intent(in) :: h, h_prev, q0(:), v0(:), vm_prev(:), q1(:)
+      real(dp), intent(inout) :: v1(:)
+      real(dp) :: vm
+      integer :: k, d
+      do k = 1, mesh%nfree
+         d = mesh%eq_dof(k)
+         vm = (q1(d) - q0(d))/h
+         if (massless(d) .and. h_prev > 0) then
+            v1(d) = vm + (vm - vm_prev(d))*h/(h + h_prev)
+         else
+            v1(d) = 2*vm - v0(d)
+         end if
+      end do
+   end subroutine em_free_velocities
+
+   !> The dofs whose row of the mass matrix (elements' and point masses) is zero.
+   pure function massless_dofs(dyn, mesh) result(massless)
+      type(dynamic_system_type), intent(in) :: dyn
+      type(mesh_type), intent(in) :: mesh
+      logical :: massless(mesh%ndof)
+      real(dp) :: diagonal(mesh%ndof)
+      integer :: e, i
+      diagonal = dyn%point_mass
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            diagonal(mesh%edof(i, e)) = diagonal(mesh%edof(i, e)) + dyn%me(i, i, e)
+         end do
+      end do
+      massless = diagonal == 0
+   end function massless_dofs
 
 end module fekap_effects_energy_momentum

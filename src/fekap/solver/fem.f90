@@ -284,7 +284,8 @@ contains
       type is (fem_stepper_type)
          self%verify_depth = depth
          call solve_step(self, t, iterations, residual, reason)
-         if (allocated(reason) .and. interrupt_signal() /= 0) return  ! a signal: no cut, the run stops
+         ! A signal stopped the step: no cut, the run stops.
+         if (allocated(reason) .and. interrupt_signal() /= 0) return
          ! Only a run's step, at its first try, checks for a change point.
          self%detect_change = .false.
          if (self%change_found) return
