@@ -234,6 +234,14 @@ contains
          if (units%listing /= no_unit) then
             if (has_note(result%note)) call write_listing_note(out%listing, n, trim(result%note))
          end if
+         ! Before the flush: a signal that comes once this step's rows are on
+         ! disk stops the next step (or comes after it), never this one.
+         if (interrupt_signal() /= 0 .and. n < nsteps) then
+            write (where_, '(a,i0,a,i0,a,a,a)') 'interrupted by signal ', interrupt_signal(), ' after step ', n, &
+               & ' (t = ', es_text(result%t, 12, 5), ')'
+            call fatal_error(error, trim(where_)//'; the rows of the completed steps are kept')
+            exit
+         end if
          now = coarse_clock_seconds()
          if (now - last_flush >= flush_interval) then
             call flush_all(units, out, error)
@@ -254,12 +262,6 @@ contains
             else
                sampled = sampled + [c1 - c0, c2 - c1]
             end if
-         end if
-         if (interrupt_signal() /= 0 .and. n < nsteps) then
-            write (where_, '(a,i0,a,i0,a,a,a)') 'interrupted by signal ', interrupt_signal(), ' after step ', n, &
-               & ' (t = ', es_text(result%t, 12, 5), ')'
-            call fatal_error(error, trim(where_)//'; the rows of the completed steps are kept')
-            exit
          end if
       end do
       ! Every way out of the loop comes here (the last step, an analysis

@@ -360,9 +360,10 @@ END
 
 @pytest.mark.parametrize("sig", (signal.SIGTERM, signal.SIGINT), ids=lambda s: s.name)
 def test_a_signal_stops_a_slow_step_between_newton_iterations(tmp_path, sig):
-    """The signal comes once step 0's rows are on disk (step 1, the slow one, has begun): the run
-    stops inside step 1 (not after it), exits 1, says so on stderr and in the listing, and keeps
-    step 0's rows whole."""
+    """The signal comes once step 0's rows are on disk: the time loop looks for a signal after a
+    step before it flushes that step's rows, so the signal is seen inside step 1 (the slow one,
+    seconds long), never after step 0. The run stops inside step 1 (not after it), exits 1, says
+    so on stderr and in the listing, and keeps step 0's rows whole."""
     out = tmp_path / "slow"
     deck = write_deck(tmp_path / "slow.deck", SLOW_STEP_DECK)
     proc = subprocess.Popen([fekap_binary(), "-q", "-o", str(out), str(deck)], cwd=ROOT,
@@ -370,7 +371,7 @@ def test_a_signal_stops_a_slow_step_between_newton_iterations(tmp_path, sig):
     points = out / "points.csv"
     deadline = time.time() + 120
     # The rows of step 0 reach the file at the first flush after it (a flush waits 0.1 s from the
-    # last, and step 0 takes longer); step 1 starts right after.
+    # last, and step 0 takes longer), after the loop's signal check of step 0.
     while not (points.exists() and "\n0," in points.read_text()):
         assert proc.poll() is None, proc.communicate()
         assert time.time() < deadline, "step 0 did not finish"
