@@ -26,7 +26,8 @@ module fekap_effects_dynamic_stepper
    use fekap_solver_fem_setup, only: fem_base_type, new_fem_base, start_configuration, mesh_plan_line
    use fekap_solver_linear_system, only: assemble_system, factor_system, &
       & system_pivot, residual_norm, newton_correction, solve_system
-   use fekap_solver_step_control, only: step_cuts_type
+   use fekap_solver_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
+   use fekap_solver_stepper, only: stepper_type
    use fekap_solver_interrupt, only: interrupt_signal, interrupt_error
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
@@ -91,6 +92,8 @@ module fekap_effects_dynamic_stepper
       real(dp) :: h_prev = 0
       !> Steps and Newton iterations so far.
       integer :: steps = 0, newton_iterations = 0
+      !> The residual of the last step tried (advance_by_cuts' tries).
+      real(dp) :: try_residual = 0
       !> How the start's velocities were found, for the plan.
       character(len=120) :: start_velocity = ''
       integer :: advances = 0
@@ -311,46 +314,58 @@ contains
       end do
    end subroutine drive_motion
 
-   !> Advance to time t under step control.
+   !> Advance to time t under step control (the kinematics' loop,
+   !> advance_by_cuts: a failed step is cut, and grows back).
    subroutine dynamic_advance(self, t, result, error)
       class(dynamic_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      type(error_type), allocatable :: step_error
       type(step_cuts_type) :: cuts
-      real(dp) :: t_try, residual, clock
-      integer :: it
+      real(dp) :: clock
       self%advances = self%advances + 1
       self%system%timing = phase_timed(self%advances)
       clock = 0
       if (self%system%timing) clock = clock_seconds()
-      call cuts%begin(self%state%t, t)
-      result%iterations = 0
-      residual = 0
-      do while (self%state%t < t)
-         t_try = cuts%next(self%state%t)
-         call solve_step(self, t_try, it, residual, step_error)
-         result%iterations = result%iterations + it
-         if (allocated(step_error) .and. interrupt_signal() /= 0) then
-            ! A signal stopped the step: no cut, the run stops.
-            call move_alloc(step_error, error)
-            return
-         end if
-         if (allocated(step_error)) then
-            call cuts%reject(step_error, error)
-            if (allocated(error)) return
-            deallocate (step_error)
-            cycle
-         end if
-         if (self%state%t < t) call cuts%grow()
-      end do
-      result%residual = residual
+      self%try_residual = 0
+      call advance_by_cuts(self, dynamic_try, no_between, self%state%t, t, 0, cuts, result%iterations, error)
+      if (allocated(error)) return
+      result%residual = self%try_residual
       result%cuts = cuts%cuts
       call fill_result(self, result)
       if (allocated(cuts%first)) result%note = cuts%note()
       if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
    end subroutine dynamic_advance
+
+   !> A try of one step to time t (for advance_by_cuts): failed when Newton
+   !> fails, ended by a signal (no cut, the run stops).
+   recursive subroutine dynamic_try(stepper, t, depth, iterations, outcome, reason)
+      class(stepper_type), intent(inout) :: stepper
+      real(dp), intent(in) :: t
+      integer, intent(in) :: depth
+      integer, intent(out) :: iterations, outcome
+      type(error_type), allocatable, intent(out) :: reason
+      outcome = try_ended
+      iterations = 0
+      ! No verification by half steps here: every try is at depth 0.
+      if (depth /= 0) return
+      select type (self => stepper)
+      class is (dynamic_stepper_type)
+         call solve_step(self, t, iterations, self%try_residual, reason)
+         if (.not. allocated(reason)) then
+            outcome = try_accepted
+         else if (interrupt_signal() == 0) then
+            outcome = try_failed
+         end if
+      end select
+   end subroutine dynamic_try
+
+   !> Between the steps of a cut advance: nothing (the accepted state is all
+   !> the next step needs).
+   subroutine no_between(stepper, t)
+      class(stepper_type), intent(inout) :: stepper
+      real(dp), intent(in) :: t
+   end subroutine no_between
 
    !> One step from the accepted state to t_new (generalized-alpha or the
    !> energy-momentum integrator); the state is left untouched on failure.
