@@ -29,7 +29,7 @@ module fekap_assembly_mesh
    implicit none
    private
 
-   public :: mesh_type, slide_type, new_mesh, describe_dof
+   public :: mesh_type, slide_type, new_mesh, describe_dof, point_masses
 
    !> Status of a degree of freedom.
    integer, parameter, public :: dof_free = 0, dof_fixed = 1, dof_driven = 2
@@ -324,6 +324,26 @@ contains
          end do
       end if
    end subroutine new_load_set
+
+   !> The MASSes block over the dofs: each point mass on its node's two
+   !> translations, its rotary inertia on the rotation of its link's end there.
+   pure function point_masses(self, model) result(mass)
+      type(mesh_type), intent(in) :: self
+      type(model_type), intent(in) :: model
+      real(dp) :: mass(self%ndof)
+      integer :: i, dof
+      mass = 0
+      if (.not. allocated(model%masses)) return
+      do i = 1, size(model%masses)
+         associate (m => model%masses(i))
+            mass(self%tdof(:, m%node)) = mass(self%tdof(:, m%node)) + m%mass
+            if (m%link > 0) then
+               dof = end_dof(self, model, m%link, m%node)
+               mass(dof) = mass(dof) + m%inertia
+            end if
+         end associate
+      end do
+   end function point_masses
 
    !> The rotation dof of link l at its end on node.
    pure integer function end_dof(self, model, l, node) result(dof)

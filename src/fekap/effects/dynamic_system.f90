@@ -16,7 +16,7 @@ module fekap_effects_dynamic_system
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, dof_rot, joint_prismatic
    use fekap_model_work, only: work_counts_type
-   use fekap_assembly_mesh, only: mesh_type
+   use fekap_assembly_mesh, only: mesh_type, point_masses
    use fekap_element_beam, only: beam_residual, beam_strain_energy
    use fekap_element_inertia, only: beam_mass_matrix, beam_gravity_force
    use fekap_solver_linear_system, only: linear_system_type, assemble_system, assemble_system_residual
@@ -55,7 +55,7 @@ contains
       type(dynamic_system_type), intent(out) :: self
       type(model_type), intent(in) :: model
       type(mesh_type), intent(in) :: mesh
-      integer :: e, i, dof, ne
+      integer :: e, i, ne
       ne = size(mesh%elements)
       allocate (self%me(6, 6, ne), self%ce(6, 6, ne), source=0.0_dp)
       allocate (self%alpha(ne), self%beta(ne), source=0.0_dp)
@@ -74,15 +74,11 @@ contains
                & beam_gravity_force(el%length, s%rho_a, model%gravity)
          end associate
       end do
+      self%point_mass = point_masses(mesh, model)
       if (allocated(model%masses)) then
          do i = 1, size(model%masses)
             associate (m => model%masses(i))
-               self%point_mass(mesh%tdof(:, m%node)) = self%point_mass(mesh%tdof(:, m%node)) + m%mass
                self%weight(mesh%tdof(:, m%node)) = self%weight(mesh%tdof(:, m%node)) + m%mass*model%gravity
-               if (m%link > 0) then
-                  dof = mesh%link_rot(merge(1, 2, model%links(m%link)%node(1) == m%node), m%link)
-                  self%point_mass(dof) = self%point_mass(dof) + m%inertia
-               end if
             end associate
          end do
       end if

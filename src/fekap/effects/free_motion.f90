@@ -12,7 +12,7 @@ module fekap_effects_free_motion
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
    use fekap_model, only: model_type
-   use fekap_assembly_mesh, only: mesh_type, describe_dof, dof_free
+   use fekap_assembly_mesh, only: mesh_type, describe_dof, dof_free, point_masses
    use fekap_assembly_band, only: band_matrix_type, new_band_matrix
    use fekap_assembly_assemble, only: assemble_tangent
    use fekap_element_inertia, only: beam_mass_matrix
@@ -60,17 +60,7 @@ contains
             end do
          end do
       end do
-      if (allocated(model%masses)) then
-         do i = 1, size(model%masses)
-            associate (pm => model%masses(i))
-               point_mass(mesh%tdof(:, pm%node)) = point_mass(mesh%tdof(:, pm%node)) + pm%mass
-               if (pm%link > 0) then
-                  di = mesh%link_rot(merge(1, 2, model%links(pm%link)%node(1) == pm%node), pm%link)
-                  point_mass(di) = point_mass(di) + pm%inertia
-               end if
-            end associate
-         end do
-      end if
+      point_mass = point_masses(mesh, model)
       do i = 1, mesh%nfree
          call m%add(i, i, point_mass(mesh%eq_dof(i)))
       end do

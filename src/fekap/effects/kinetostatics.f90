@@ -20,7 +20,7 @@ module fekap_effects_kinetostatics
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, joint_prismatic
    use fekap_model_reactions, only: reaction_row_type, reaction_rows, reaction_count, reaction_drive, &
       & reaction_support, reaction_slider
-   use fekap_assembly_mesh, only: mesh_type
+   use fekap_assembly_mesh, only: mesh_type, point_masses
    use fekap_assembly_tracking, only: slide_position
    use fekap_assembly_assemble, only: gather
    use fekap_contact_slideline, only: slide_force, slide_tie_force
@@ -58,7 +58,7 @@ contains
       type(kinetostatics_type), intent(out) :: self
       type(model_type), intent(in) :: model
       type(mesh_type), intent(in) :: mesh
-      integer :: e, i, l, row, end_, dof
+      integer :: e, i, l, row, end_
       integer, allocatable :: first(:), last(:)
       type(reaction_row_type), allocatable :: rows(:)
       allocate (self%rho_a(size(mesh%elements)), self%rho_i(size(mesh%elements)))
@@ -68,18 +68,8 @@ contains
             self%rho_i(e) = s%rho_i
          end associate
       end do
-      allocate (self%point_mass(mesh%ndof), self%ku(mesh%ndof), source=0.0_dp)
-      if (allocated(model%masses)) then
-         do i = 1, size(model%masses)
-            associate (m => model%masses(i))
-               self%point_mass(mesh%tdof(:, m%node)) = self%point_mass(mesh%tdof(:, m%node)) + m%mass
-               if (m%link > 0) then
-                  dof = mesh%link_rot(merge(1, 2, model%links(m%link)%node(1) == m%node), m%link)
-                  self%point_mass(dof) = self%point_mass(dof) + m%inertia
-               end if
-            end associate
-         end do
-      end if
+      allocate (self%ku(mesh%ndof), source=0.0_dp)
+      self%point_mass = point_masses(mesh, model)
       self%gravity = model%gravity
 
       ! A link's elements run from its first node to its second.
