@@ -6,6 +6,7 @@ energy integral, with the energy balance of energy.csv."""
 from __future__ import annotations
 
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -373,3 +374,15 @@ def test_energy_momentum_refuses_slidelines(tmp_path: Path) -> None:
     run = run_fekap("-q", "-o", str(tmp_path / "out"), str(deck))
     check(run.returncode == 2, f"exit {run.returncode}: {run.stderr}")
     check("does not cover SLIDelines" in run.stderr and f"slider.deck:{at + 2}:" in run.stderr, run.stderr)
+
+
+def test_a_cut_steps_note_stays_with_that_step(tmp_path: Path) -> None:
+    """The A02 chain at dt 0.05 cuts some steps: the listing notes "step cut"
+    at exactly the steps whose cuts column in steps.csv is positive (a note
+    once stayed on every later step)."""
+    run_deck("a02-n2.deck", tmp_path, "--dt", "0.05")
+    cut = {int(row["step"]) for row in read_rows(tmp_path / "steps.csv") if int(row["cuts"]) > 0}
+    listing = (tmp_path / "a02-n2.lis").read_text()
+    noted = {int(step) for step in re.findall(r"note: step (\d+), step cut", listing)}
+    check(len(cut) > 0, "the variant should cut some steps")
+    check(noted == cut, f"steps noted as cut {sorted(noted)[:10]}..., steps cut {sorted(cut)}")

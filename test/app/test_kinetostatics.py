@@ -196,3 +196,23 @@ def test_deflection_is_kinetostatics_only(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "OUTPut deflection: not written" in plan(out)
     assert not (out / "deflection.csv").exists()
+
+
+def test_a_row_without_accelerations_has_no_deflection(tmp_path):
+    """Example 3's double crank with masses, dt 0.025: the row at t = 0.25 is
+    exactly singular and has no accelerations, so no reactions and no
+    deflection; its deflection.csv cells are empty, not the previous row's."""
+    text = (ROOT / "decks" / "double-crank.deck").read_text()
+    for old, new in [("k=5/6", "k=5/6  rho=1"), ("  track F", "  track F\n  deflection on"),
+                     ("time 0 1 0.02", "time 0 1 0.025")]:
+        assert old in text
+        text = text.replace(old, new)
+    deck = tmp_path / "double-crank-masses.deck"
+    deck.write_text(text)
+    run = run_fekap(str(deck), "-o", str(tmp_path / "out"))
+    assert run.returncode == 0, run.stderr
+    rows = read_rows(tmp_path / "out" / "deflection.csv")
+    singular = [row for row in rows if row["step"] == "10"]
+    assert singular and all(row["ux"] == "" and row["uy"] == "" for row in singular)
+    # The rows either side have their deflection.
+    assert all(row["ux"] != "" for row in rows if row["step"] in ("9", "11"))

@@ -66,7 +66,8 @@ contains
    subroutine cuthill_mckee(adj_start, adj, deg, order)
       integer, intent(in) :: adj_start(:), adj(:), deg(:)
       integer, intent(out) :: order(:)
-      ! Allocated, not automatic: a chain of 10^5 links has 3 10^5 dofs.
+      ! Allocated, not automatic (here and in peripheral, bfs_levels): a chain
+      ! of 10^5 links has 3 10^5 dofs.
       integer, allocatable :: level(:)
       logical, allocatable :: seen(:)
       integer :: nf, n_ordered, start, head, tail, v, w, k
@@ -112,7 +113,8 @@ contains
       integer function peripheral(v0) result(r)
          integer, intent(in) :: v0
          integer :: depth, new_depth, pass
-         logical :: mark(nf)
+         logical, allocatable :: mark(:)
+         allocate (mark(nf))
          r = v0
          depth = -1
          do pass = 1, 5
@@ -129,7 +131,9 @@ contains
          integer, intent(in) :: v0
          logical, intent(out) :: mark(nf)
          integer, intent(out) :: depth
-         integer :: queue(nf), qh, qt, u, kk
+         integer, allocatable :: queue(:)
+         integer :: qh, qt, u, kk
+         allocate (queue(nf))
          mark = .false.
          level = 0
          qh = 1

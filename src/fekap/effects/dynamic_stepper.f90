@@ -19,7 +19,7 @@ module fekap_effects_dynamic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type, integrator_energy_momentum
-   use fekap_model_results, only: step_result_type
+   use fekap_model_results, only: step_result_type, has_note
    use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed
    use fekap_assembly_tracking, only: relocate
    use fekap_solver_stepper, only: clock_seconds, phase_timed
@@ -333,6 +333,8 @@ contains
       result%residual = self%try_residual
       result%cuts = cuts%cuts
       call fill_result(self, result)
+      ! The result lives through the run: a note of an earlier step must not stay.
+      if (has_note(result%note)) result%note = ''
       if (allocated(cuts%first)) result%note = cuts%note()
       if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
    end subroutine dynamic_advance

@@ -226,8 +226,14 @@ contains
          call static_reactions(self%kinetostatics, self%fem%mesh, self%fem%state%q, self%fem%state%t, &
             & self%fem%state%seg, self%f, self%u, result%reactions)
       else
+         ! The result lives through the run: a step without accelerations has no
+         ! reactions and no deflection (not the last step's).
+         result%has_deflection = .false.
          result%has_reactions = self%fem%state%has_acceleration .and. self%fem%factor_current
-         if (.not. result%has_reactions) return
+         if (.not. result%has_reactions) then
+            if (self%deflection) call note_largest(self, result)
+            return
+         end if
          call kinetostatic_step(self, result)
       end if
       result%has_reactions = all(abs(result%reactions) <= huge(1.0_dp))
@@ -258,15 +264,13 @@ contains
       end associate
    end subroutine kinetostatic_step
 
-   !> The nodes' deflection (u of their translations) as the step's result;
-   !> the run's largest over every mesh point, a note of the last step.
+   !> The nodes' deflection (u of their translations) as the step's result,
+   !> and the run's largest over every mesh point so far.
    subroutine add_deflection(self, result)
       type(reaction_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
       integer :: ip, nnode
       real(dp) :: size_
-      character(len=40) :: step_text
-      character(:), allocatable :: where_, text
       associate (mesh => self%fem%mesh, model => self%fem%model)
          nnode = size(model%nodes)
          if (.not. allocated(result%deflection)) allocate (result%deflection(2, nnode))
@@ -283,9 +287,22 @@ contains
                self%largest_t = self%fem%state%t
             end if
          end do
+      end associate
+      call note_largest(self, result)
+   end subroutine add_deflection
+
+   !> At the last step, the run's largest deflection as a note (whether or not
+   !> that step has accelerations).
+   subroutine note_largest(self, result)
+      type(reaction_stepper_type), intent(in) :: self
+      type(step_result_type), intent(inout) :: result
+      integer :: ip
+      character(len=40) :: step_text
+      character(:), allocatable :: where_, text
+      associate (model => self%fem%model)
          if (self%fem%state%t < model%analysis%t_end .or. self%largest_point == 0) return
          ip = self%largest_point
-         if (ip <= nnode) then
+         if (ip <= size(model%nodes)) then
             where_ = 'node '//model%nodes(ip)%name
          else
             where_ = 'a point of link '//model%links(self%point_link(ip))%name
@@ -299,6 +316,6 @@ contains
             result%note = text
          end if
       end associate
-   end subroutine add_deflection
+   end subroutine note_largest
 
 end module fekap_effects_reaction_stepper

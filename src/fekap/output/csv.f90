@@ -388,6 +388,7 @@ contains
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_energy_row
 
+   !> `step,t,node,ux,uy`: kinetostatics' elastic deflection (OUTPut deflection on).
    subroutine write_deflection_header(out)
       type(text_buffer_type), intent(inout) :: out
       character(*), parameter :: header = 'step,t,node,ux,uy'

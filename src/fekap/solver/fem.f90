@@ -287,6 +287,7 @@ contains
             end if
          end if
          if (allocated(reason)) then
+            if (interrupt_signal() /= 0) return  ! a signal in the half steps: the run stops
             ! A verification that could not be completed ends every level above
             ! it at once (cutting there would repeat it); the run's step is cut.
             if (self%verify_failed .and. depth > 0) return

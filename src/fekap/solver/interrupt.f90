@@ -1,7 +1,9 @@
 !> A stop requested by a signal (SIGINT, SIGTERM, SIGHUP): the handler only records
 !> it, which is all a signal handler may safely do; the time loop looks at the
 !> record after every step and stops there, and the long loops inside a step
-!> (Newton's iterations, the step cuts, statics' load steps) look at it too
+!> of the FEM and the dynamics integrators (Newton's iterations, the step
+!> cuts, statics' load steps; not the constraint-equation methods, whose
+!> steps are short) look at it too
 !> and end the step with interrupt_error, so the listing and stderr can say
 !> where and why, and every completed step's rows stay.
 !>

@@ -2,8 +2,9 @@
 !> converge, or converges to a rejected configuration) is cut in halves, at
 !> most max_cuts times, and the sub-step grows back after each success; the
 !> first and the last reasons for a rejection are kept for the listing.
-!> advance_by_cuts is the one loop that does this for the FEM and the
-!> constraint-equation methods, around a method's "try a step" (try_interface).
+!> advance_by_cuts is the one loop that does this for the FEM, the
+!> constraint-equation methods and the dynamics integrators, around a
+!> method's "try a step" (try_interface).
 module fekap_solver_step_control
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
