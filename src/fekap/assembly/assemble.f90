@@ -17,7 +17,7 @@ module fekap_assembly_assemble
    private
 
    public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain
-   public :: gather, scatter
+   public :: gather, scatter, scatter_element
 
 contains
 

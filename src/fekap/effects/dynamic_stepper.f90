@@ -22,6 +22,7 @@ module fekap_effects_dynamic_stepper
    use fekap_model_results, only: step_result_type, has_note
    use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed
    use fekap_assembly_tracking, only: relocate
+   use fekap_assembly_assemble, only: scatter_element
    use fekap_solver_stepper, only: clock_seconds, phase_timed
    use fekap_solver_fem_setup, only: fem_base_type, new_fem_base, start_configuration, mesh_plan_line
    use fekap_solver_linear_system, only: assemble_system, factor_system, &
@@ -250,8 +251,8 @@ contains
    subroutine start_accelerations(self, error)
       type(dynamic_stepper_type), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
-      integer :: k, e, m, info
-      real(dp) :: me(36), mdiag
+      integer :: k, e, info
+      real(dp) :: mdiag
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          call external_forces(dyn, mesh, state%t, state%g)
          do k = 1, mesh%nfree
@@ -261,10 +262,9 @@ contains
          state%r = system%r
          call system%kff%zero()
          do e = 1, size(mesh%elements)
-            me = reshape(dyn%me(:, :, e), [36])
-            do m = 1, mesh%scatter_count(1, e)
-               call add_at(system%kff%a, size(system%kff%a), mesh%scatter_map(2, m, e), me(mesh%scatter_map(1, m, e)))
-            end do
+            ! M_ff only: no entries into the free-driven block.
+            call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), 0, dyn%me(:, :, e), &
+               & system%kff%a, system%kfd)
          end do
          do k = 1, mesh%nfree
             mdiag = system%kff%a(mesh%kd + 1, k) + dyn%point_mass(mesh%eq_dof(k))
@@ -290,13 +290,6 @@ contains
          state%r = system%r
       end associate
    end subroutine start_accelerations
-
-   pure subroutine add_at(a, n, position, value)
-      integer, intent(in) :: n, position
-      real(dp), intent(inout) :: a(n)
-      real(dp), intent(in) :: value
-      a(position) = a(position) + value
-   end subroutine add_at
 
    !> The drives' dofs at time t: value, rate, second rate of their laws.
    subroutine drive_motion(self, t, q, v, acc)

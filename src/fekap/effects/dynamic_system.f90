@@ -21,7 +21,7 @@ module fekap_effects_dynamic_system
    use fekap_element_inertia, only: beam_mass_matrix, beam_gravity_force
    use fekap_solver_linear_system, only: linear_system_type, assemble_system, assemble_system_residual
    use fekap_assembly_tracking, only: slide_position
-   use fekap_assembly_assemble, only: scatter
+   use fekap_assembly_assemble, only: scatter, scatter_element
    use fekap_contact_slideline, only: slide_energy, slide_tie_energy, slide_gap_gradient
    implicit none
    private
@@ -197,7 +197,7 @@ contains
       type(work_counts_type), intent(inout) :: counts
       real(dp), intent(in), optional :: c1, c2
       real(dp) :: me(36), k, ae(6), ve(6), fe(6)
-      integer :: e, m, i, j
+      integer :: e, i, j
       logical :: damped, slide_damped
       damped = has_damping(self)
       slide_damped = has_slide_damping(self)
@@ -245,14 +245,8 @@ contains
       end if
       do e = 1, size(mesh%elements)
          call combine(self%me(:, :, e), self%ce(:, :, e), c1, c2, me)
-         associate (map => mesh%scatter_map(:, :, e), nb => mesh%scatter_count(1, e), nd => mesh%scatter_count(2, e))
-            do m = 1, nb
-               call add_band(system%kff%a, size(system%kff%a), map(2, m), me(map(1, m)))
-            end do
-            do m = nb + 1, nb + nd
-               call add_band(system%kfd, size(system%kfd), map(2, m), me(map(1, m)))
-            end do
-         end associate
+         call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), mesh%scatter_count(2, e), me, &
+            & system%kff%a, system%kfd)
       end do
       do i = 1, mesh%nfree
          k = self%point_mass(mesh%eq_dof(i))
@@ -279,14 +273,6 @@ contains
          y = y + m(:, j, e)*x(j)
       end do
    end function times6
-
-   !> a(position) += value, a seen as one block of n numbers.
-   pure subroutine add_band(a, n, position, value)
-      integer, intent(in) :: n, position
-      real(dp), intent(inout) :: a(n)
-      real(dp), intent(in) :: value
-      a(position) = a(position) + value
-   end subroutine add_band
 
    !> Kinetic energy 1/2 v^T M v.
    pure real(dp) function kinetic_energy(self, mesh, v) result(energy)
