@@ -5,7 +5,7 @@ program fekap_main
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
    use fekap_error, only: error_type, error_input, error_analysis, error_output
    use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_statics, &
-      & effects_dynamics
+      & effects_dynamics, effects_kinematics
    use fekap_deck, only: read_deck
    use fekap_model_effects, only: check_effects_request, planned_effects
    use fekap_effects_reaction_stepper, only: reaction_stepper_type, new_reaction_stepper
@@ -114,15 +114,17 @@ contains
       type(dynamic_stepper_type), allocatable :: dynamic
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
+      integer :: effects
+      effects = planned_effects(model)
       select case (model%analysis%method)
       case (method_fem)
          allocate (fem)
          call new_fem_stepper(fem, model)
-         if (any(planned_effects(model) == [effects_kinetostatics, effects_statics])) then
+         if (any(effects == [effects_kinetostatics, effects_statics])) then
             allocate (reactions)
-            call new_reaction_stepper(reactions, fem, planned_effects(model))
+            call new_reaction_stepper(reactions, fem, effects)
             call move_alloc(reactions, stepper)
-         else if (planned_effects(model) == effects_dynamics) then
+         else if (effects == effects_dynamics) then
             ! Bad input first: a free motion with neither mass nor stiffness.
             call check_free_motion(fem%mesh, model, fem%mesh%q0, model%analysis%t_start, fem%seg, error)
             if (allocated(error)) return
@@ -152,8 +154,9 @@ contains
       type(model_type), intent(in) :: model
       type(run_units_type), intent(out) :: units
       type(error_type), allocatable, intent(out) :: error
-      integer :: mesh_unit
+      integer :: mesh_unit, effects
       character(:), allocatable :: stem
+      effects = planned_effects(model)
       call prepare_output_directory(outdir, error)
       if (allocated(error)) return
       stem = deck(index(deck, '/', back=.true.) + 1:)
@@ -164,15 +167,14 @@ contains
          if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/nodes.csv', units%nodes, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)
-         if (.not. allocated(error) .and. (planned_effects(model) == effects_kinetostatics .or. &
-            & planned_effects(model) == effects_statics .or. planned_effects(model) == effects_dynamics)) then
+         if (.not. allocated(error) .and. effects /= effects_kinematics) then
             call open_replace(outdir//'/reactions.csv', units%reactions, error, stream=.true.)
          end if
-         if (.not. allocated(error) .and. planned_effects(model) == effects_kinetostatics .and. &
+         if (.not. allocated(error) .and. effects == effects_kinetostatics .and. &
             & model%output%deflection) then
             call open_replace(outdir//'/deflection.csv', units%deflection, error, stream=.true.)
          end if
-         if (.not. allocated(error) .and. planned_effects(model) == effects_dynamics) then
+         if (.not. allocated(error) .and. effects == effects_dynamics) then
             call open_replace(outdir//'/energy.csv', units%energy, error, stream=.true.)
             units%energy_names = energy_names
          end if

@@ -386,3 +386,20 @@ def test_a_cut_steps_note_stays_with_that_step(tmp_path: Path) -> None:
     noted = {int(step) for step in re.findall(r"note: step (\d+), step cut", listing)}
     check(len(cut) > 0, "the variant should cut some steps")
     check(noted == cut, f"steps noted as cut {sorted(noted)[:10]}..., steps cut {sorted(cut)}")
+
+
+@pytest.mark.parametrize("lines, plan", [
+    ("  integrator energy-momentum\n  integrator generalized-alpha\n", "generalized-alpha (Chung-Hulbert), rho_inf 0.8000"),
+    ("  integrator generalized-alpha 0.5\n  integrator energy-momentum\n", "rho_inf 1.0000"),
+])
+def test_a_later_integrator_line_takes_its_own_default_rho_inf(tmp_path: Path, lines: str, plan: str) -> None:
+    """A later integrator line replaces an earlier one, its rho_inf included:
+    without one of its own it has its integrator's default (0.8 and 1)."""
+    text = (ROOT / "decks" / "dynamics" / "pendulum.deck").read_text()
+    check("ANALysis\n" in text and "time 0 1 0.001" in text, "the pendulum deck's ANALysis block")
+    deck = tmp_path / "integrators.deck"
+    deck.write_text(text.replace("ANALysis\n", "ANALysis\n" + lines, 1).replace("time 0 1 0.001", "time 0 0.01 0.001"))
+    run = run_fekap("-q", "-o", str(tmp_path / "out"), str(deck))
+    check(run.returncode == 0, run.stderr)
+    listing = (tmp_path / "out" / "integrators.lis").read_text()
+    check(plan in listing, f"the plan should say {plan!r}")

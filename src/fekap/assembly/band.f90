@@ -362,14 +362,9 @@ contains
          anorm = max(anorm, column)
       end do
       if (.not. anorm > 0) return
+      ! A zero pivot: the matrix is singular, its estimate stays 0.
       do j = 1, self%n
-         if (self%dense) then
-            if (.not. abs(self%fd(j, j)) > 0) return
-         else if (self%is_lu) then
-            if (.not. abs(self%f(2*kd + 1, j)) > 0) return
-         else if (.not. self%f(kd + 1, j) > 0) then
-            return
-         end if
+         if (.not. band_column_pivot(self, j) > 0) return
       end do
       est = 0
       kase = 0

@@ -32,7 +32,7 @@ module fekap_assembly_strain_rate
    private
 
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
-   public :: strain_rates, strain_accelerations, strain_rows, strain_rate_rcond
+   public :: strain_rates, strain_accelerations, strain_rate_rcond
 
    !> B_f of a mesh, in band storage, and its factor.
    type :: strain_rate_type
@@ -52,14 +52,14 @@ module fekap_assembly_strain_rate
       real(dp), allocatable :: bd(:, :)
       !> (2, nelem): cos and sin of each element's section angle at the last
       !> assembly; (6, nslide): each gap's gradient N_s (61) there, and (6,
-      !> nslide) T_s (63), (2, nslide) the master's unit normal and length.
+      !> nslide) T_s (63), (3, nslide) the master's unit normal and length.
       real(dp), allocatable :: section(:, :), slide_ns(:, :), slide_ts(:, :), slide_nm(:, :)
       !> (6, nslide): the dofs of each gap at the last assembly (0: a ground point).
       integer, allocatable :: slide_dofs(:, :)
       !> (n): the largest magnitude in each column of the assembled B_f.
       real(dp), allocatable :: column_max(:)
-      !> Whether ab holds a factor, and of a stress-free assembly.
-      logical :: factored = .false., stress_free = .false.
+      !> Whether ab holds a factor.
+      logical :: factored = .false.
       !> Pivot ratio of the factor on the scale of the tangent's
       !> (band_pivot_ratio): min over j of (|U(j, j)| / max_i |B(i, j)|)**2.
       !> K = B^T W B has the squares of B's pivots (exactly so for the R of
@@ -85,7 +85,7 @@ contains
       integer :: nelem, nslide, nrow, e, i, k, r, row, d, eq, dofs(6)
       nelem = size(mesh%elements)
       nslide = size(mesh%slides)
-      nrow = 3*nelem + nslide
+      nrow = strain_rows(mesh)
       self%n = mesh%nfree
       allocate (self%element_row(3, nelem), self%slide_row(nslide), source=0)
       if (nrow /= mesh%nfree .or. mesh%nfree == 0) return
@@ -190,7 +190,6 @@ contains
       self%ab = 0
       self%bd = 0
       self%factored = .false.
-      self%stress_free = stress_free
       if (present(largest)) largest = 0
       if (present(element)) element = 0
       do e = 1, size(mesh%elements)

@@ -7,7 +7,7 @@ module fekap_deck_settings
       & predictor_previous, &
       & predictor_extrapolate, predictor_taylor, convergence_paper, convergence_default, &
       & solver_band, solver_dense, effects_auto, effects_kinematics, effects_kinetostatics, effects_statics, &
-      & effects_dynamics, integrator_names, integrator_generalized_alpha, &
+      & effects_dynamics, integrator_names, integrator_generalized_alpha, default_rho_inf, &
       & integrator_energy_momentum
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, word_index
@@ -153,11 +153,12 @@ contains
                model%analysis%integrator = integrator_generalized_alpha
             case (2)
                model%analysis%integrator = integrator_energy_momentum
-               model%analysis%rho_inf = 1
                model%analysis%integrator_loc = ctx%loc(iline, 2)
             case default
                cycle
             end select
+            ! A later integrator line replaces an earlier one, rho_inf included.
+            model%analysis%rho_inf = default_rho_inf(model%analysis%integrator)
             if (ctx%nfields(iline) < 3) cycle
             call ctx%real_field(iline, 3, v, ok)
             if (.not. ok) cycle

@@ -29,7 +29,7 @@ module fekap_effects_dynamic_stepper
       & system_pivot, residual_norm, newton_correction, solve_system
    use fekap_solver_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
    use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_interrupt, only: interrupt_signal, interrupt_error
+   use fekap_solver_interrupt, only: interrupt_error
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
       & alpha_update
@@ -91,8 +91,6 @@ module fekap_effects_dynamic_stepper
       !> rates of the mean rates, see em_velocities), and the last step's length.
       logical, allocatable :: massless(:)
       real(dp) :: h_prev = 0
-      !> Steps and Newton iterations so far.
-      integer :: steps = 0, newton_iterations = 0
       !> The residual of the last step tried (advance_by_cuts' tries).
       real(dp) :: try_residual = 0
       !> How the start's velocities were found, for the plan.
@@ -333,7 +331,8 @@ contains
    end subroutine dynamic_advance
 
    !> A try of one step to time t (for advance_by_cuts): failed when Newton
-   !> fails, ended by a signal (no cut, the run stops).
+   !> fails (advance_by_cuts ends the advance instead of cutting when a
+   !> signal stopped it).
    recursive subroutine dynamic_try(stepper, t, depth, iterations, outcome, reason)
       class(stepper_type), intent(inout) :: stepper
       real(dp), intent(in) :: t
@@ -347,11 +346,7 @@ contains
       select type (self => stepper)
       class is (dynamic_stepper_type)
          call solve_step(self, t, iterations, self%try_residual, reason)
-         if (.not. allocated(reason)) then
-            outcome = try_accepted
-         else if (interrupt_signal() == 0) then
-            outcome = try_failed
-         end if
+         outcome = merge(try_failed, try_accepted, allocated(reason))
       end select
    end subroutine dynamic_try
 
@@ -448,8 +443,6 @@ contains
          state%a = self%at
          state%g = self%gt
          state%r = system%r
-         self%steps = self%steps + 1
-         self%newton_iterations = self%newton_iterations + iterations
          self%counts%steps = self%counts%steps + 1
       end associate
    end subroutine solve_step

@@ -27,10 +27,6 @@ module fekap_model_effects
    public :: effects_plan_type, plan_effects, planned_effects, check_effects_request, has_masses, has_gravity, effects_name
    public :: mobility, integrator_obstacle
 
-   !> Whether the dynamics stepper exists: until it does, a plan for dynamics
-   !> is refused with "not available yet" (the dynamics engineer sets this).
-   logical, parameter, public :: dynamics_available = .true.
-
    !> The plan: the effects, why they were chosen, what is left out, and why
    !> an explicit request cannot be met ('' if it can).
    type :: effects_plan_type
@@ -219,8 +215,6 @@ contains
          text = 'dynamics needs masses: give rho= (or rhoA=) on SECTions, or a MASSes block'
       else if (model%analysis%method /= method_fem) then
          text = 'dynamics runs with method fem only'
-      else if (.not. dynamics_available) then
-         text = 'ANALysis type dynamics is not available yet (issue 19)'
       else
          text = integrator_obstacle(model)
       end if

@@ -48,6 +48,9 @@ module fekap_model
    integer, parameter, public :: integrator_generalized_alpha = 1, integrator_energy_momentum = 2
    !> The integrators' names, each at the position of its code (as method_names).
    character(*), parameter, public :: integrator_names = 'generalized-alpha energy-momentum'
+   !> Each integrator's rho_inf when its line gives none: Chung-Hulbert's
+   !> usual 0.8, and 1 (conserving) for energy-momentum.
+   real(dp), parameter, public :: default_rho_inf(2) = [0.8_dp, 1.0_dp]
 
    !> Where an entity was declared: for diagnostics that point into the deck.
    type :: source_loc_type
@@ -204,7 +207,7 @@ module fekap_model
       !> Dynamics: the time integrator and its spectral radius at infinite
       !> frequency rho_inf in [0, 1] (1: the trapezoidal rule, no numerical damping).
       integer :: integrator = integrator_generalized_alpha
-      real(dp) :: rho_inf = 0.8_dp
+      real(dp) :: rho_inf = default_rho_inf(integrator_generalized_alpha)
       !> Where an energy-momentum integrator line is (for the errors of what it does not cover).
       type(source_loc_type) :: integrator_loc
    end type analysis_type

@@ -32,7 +32,7 @@ module fekap_solver_fem
    use fekap_solver_rates, only: near_singular_drop
    use fekap_solver_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
       & try_ended
-   use fekap_solver_interrupt, only: interrupt_signal, interrupt_error
+   use fekap_solver_interrupt, only: interrupt_error
    use fekap_solver_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
       & prepend_cuts_note, model_distance, no_convergence_error
    use fekap_solver_fem_factor, only: refactor_at_accepted, newton_assembly, root_correction, factor_root, &
@@ -274,7 +274,6 @@ contains
       type is (fem_stepper_type)
          self%verify_depth = depth
          call solve_step(self, t, iterations, residual, reason)
-         if (allocated(reason) .and. interrupt_signal() /= 0) return  ! a signal: no cut, the run stops
          ! Only a run's step, at its first try, checks for a change point.
          self%detect_change = .false.
          if (self%change_found) return
@@ -287,7 +286,6 @@ contains
             end if
          end if
          if (allocated(reason)) then
-            if (interrupt_signal() /= 0) return  ! a signal in the half steps: the run stops
             ! A verification that could not be completed ends every level above
             ! it at once (cutting there would repeat it); the run's step is cut.
             if (self%verify_failed .and. depth > 0) return

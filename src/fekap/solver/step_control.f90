@@ -9,6 +9,7 @@ module fekap_solver_step_control
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
    use fekap_solver_stepper, only: stepper_type
+   use fekap_solver_interrupt, only: interrupt_signal
    implicit none
    private
 
@@ -106,6 +107,11 @@ contains
             if (allocated(reason)) call move_alloc(reason, error)
             return
          case (try_failed)
+            if (interrupt_signal() /= 0) then
+               ! A signal stopped the try: no cut, the run stops.
+               call move_alloc(reason, error)
+               return
+            end if
             call cuts%reject(reason, error)
             if (allocated(error)) return
             cycle
