@@ -191,21 +191,6 @@ def run_check(cells: int, dt: float, fekap: Path, workdir: Path) -> dict[str, fl
     return result
 
 
-def scissor_rows(sizes: tuple[int, ...] = (10, 100, 1000), dt: float = 0.01,
-                 fekap: Path | None = None) -> list[dict[str, object]]:
-    """Rows for the hard-case table (scripts/hard_cases.py): per N, the worst
-    relative error of the rates, Newton iterations per step and the time per
-    configuration (us)."""
-    fekap = fekap or Path(__file__).resolve().parent.parent / "build" / "local" / "bin" / "fekap"
-    rows = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for cells in sizes:
-            r = run_check(cells, dt, fekap, Path(tmp))
-            rows.append({"case": f"scissor lift N = {cells} (dt {dt})", "error": max(r["vel"], r["acc"]),
-                         "its_per_step": r["its"], "us_per_config": r["us"] * r["equations"]})
-    return rows
-
-
 def check_main(sizes: list[int], dt: float, fekap: Path) -> int:
     """Print the check table for the sizes."""
     print("|      N | equations | pos error | vel error | acc error | its/step | us/unknown/config | memory MB |")

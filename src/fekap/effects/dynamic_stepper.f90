@@ -22,7 +22,7 @@ module fekap_effects_dynamic_stepper
    use fekap_model_results, only: step_result_type, has_note
    use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed
    use fekap_assembly_tracking, only: relocate
-   use fekap_assembly_assemble, only: scatter_element
+   use fekap_assembly_assemble, only: scatter_element, gather
    use fekap_solver_stepper, only: clock_seconds, phase_timed
    use fekap_solver_fem_setup, only: fem_base_type, new_fem_base, start_configuration, mesh_plan_line
    use fekap_solver_linear_system, only: assemble_system, factor_system, &
@@ -675,15 +675,14 @@ contains
       type(dynamic_stepper_type), intent(in) :: self
       real(dp), intent(out) :: reactions(:, :)
       integer :: row, e, k, dof
-      real(dp) :: pe(6), ge(6)
+      real(dp) :: pe(6)
       reactions = 0
       associate (state => self%state, mesh => self%mesh, dyn => self%dynamics, rows => self%rows)
          do row = 1, size(reactions, 2)
             e = rows%row_element(row)
             if (e > 0) then
                call end_forces(e, pe)
-               ge = pe
-               reactions(:, row) = ge(3*rows%row_end(row) - 2:3*rows%row_end(row))
+               reactions(:, row) = pe(3*rows%row_end(row) - 2:3*rows%row_end(row))
             else if (rows%row_slide(row) > 0) then
                ! A sliding joint: the penalty force on the slave, and its dashpot's.
                call slider_force(mesh, rows%row_slide(row), state%q, state%seg, reactions(:, row))
@@ -701,13 +700,7 @@ contains
       subroutine add_dashpot(i, force)
          integer, intent(in) :: i
          real(dp), intent(inout) :: force(2)
-         real(dp) :: ve(6)
-         integer :: j
-         do j = 1, 6
-            ve(j) = 0
-            if (self%dynamics%slide_dofs(j, i) > 0) ve(j) = self%state%v(self%dynamics%slide_dofs(j, i))
-         end do
-         force = force - matmul(self%dynamics%cs(1:2, :, i), ve)
+         force = force - matmul(self%dynamics%cs(1:2, :, i), gather(self%state%v, self%dynamics%slide_dofs(:, i)))
       end subroutine add_dashpot
       subroutine end_forces(e, fe)
          integer, intent(in) :: e

@@ -21,7 +21,7 @@ module fekap_effects_dynamic_system
    use fekap_element_inertia, only: beam_mass_matrix, beam_gravity_force
    use fekap_solver_linear_system, only: linear_system_type, assemble_system, assemble_system_residual
    use fekap_assembly_tracking, only: slide_position
-   use fekap_assembly_assemble, only: scatter, scatter_element
+   use fekap_assembly_assemble, only: scatter, scatter_element, gather
    use fekap_contact_slideline, only: slide_energy, slide_tie_energy, slide_gap_gradient
    implicit none
    private
@@ -120,21 +120,13 @@ contains
    pure real(dp) function slide_damping_work(self, v0, v1, dq) result(work)
       type(dynamic_system_type), intent(in) :: self
       real(dp), intent(in) :: v0(:), v1(:), dq(:)
-      real(dp) :: ve(6), de(6)
-      integer :: i, j, d
+      integer :: i
       work = 0
       do i = 1, size(self%slide_c)
          if (self%slide_c(i) == 0) cycle
-         do j = 1, 6
-            d = self%slide_dofs(j, i)
-            ve(j) = 0
-            de(j) = 0
-            if (d > 0) then
-               ve(j) = v0(d) + v1(d)
-               de(j) = dq(d)
-            end if
-         end do
-         work = work + 0.5_dp*dot_product(de, matmul(self%cs(:, :, i), ve))
+         associate (dofs => self%slide_dofs(:, i))
+            work = work + 0.5_dp*dot_product(gather(dq, dofs), matmul(self%cs(:, :, i), gather(v0, dofs) + gather(v1, dofs)))
+         end associate
       end do
    end function slide_damping_work
 
@@ -225,11 +217,7 @@ contains
             ! The slidelines' dashpots: C_s v on their dofs.
             do i = 1, size(self%slide_c)
                if (self%slide_c(i) == 0) cycle
-               do j = 1, 6
-                  ve(j) = 0
-                  if (self%slide_dofs(j, i) > 0) ve(j) = v(self%slide_dofs(j, i))
-               end do
-               fe = matmul(self%cs(:, :, i), ve)
+               fe = matmul(self%cs(:, :, i), gather(v, self%slide_dofs(:, i)))
                do j = 1, 6
                   if (self%slide_dofs(j, i) > 0) r(self%slide_dofs(j, i)) = r(self%slide_dofs(j, i)) + fe(j)
                end do
