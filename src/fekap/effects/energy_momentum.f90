@@ -7,7 +7,8 @@
 !>   v1 = 2 z/h - v0,                                          (z = h (v0 + v1)/2)
 !>   R = M (v1 - v0)/h + C z/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
 !> on the free dofs, p the elements' discrete gradients, conjugate to z
-!> (fekap_element_discrete_gradient). Contracted with z the free rows
+!> (fekap_element_discrete_gradient), and the pin-in-slot slidelines' (the
+!> penalty springs' on the step's segments, fekap_contact_slide_gradient). Contracted with z the free rows
 !> give the energy balance of the step exactly:
 !>   T1 - T0 + W1 - W0 + V1 - V0 = work of loads and drives (on z) - h |z/h|_C^2
 !>     - chi/2 sum L |Delta eps|_D^2,
@@ -20,6 +21,8 @@ module fekap_effects_energy_momentum
    use fekap_kinds, only: dp
    use fekap_model, only: dof_rot
    use fekap_assembly_mesh, only: mesh_type
+   use fekap_assembly_tracking, only: slide_position
+   use fekap_contact_slide_gradient, only: slide_discrete_gradient
    use fekap_assembly_lapack, only: band_lu_factor, band_lu_solve
    use fekap_element_discrete_gradient, only: beam_discrete_gradient, cayley_increment
    use fekap_effects_dynamic_system, only: dynamic_system_type, times6
@@ -61,17 +64,19 @@ contains
    !> the damping acts on the mean rate z/h), g0 and g1 the external forces
    !> at the step's ends; with `tangent`, the iteration matrix into self
    !> (v1 = 2 z/h - v0 on the dofs with mass).
-   subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, r, tangent)
+   subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, seg, r, tangent)
       type(em_system_type), intent(inout) :: self
       type(dynamic_system_type), intent(in) :: dyn
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: q0(:), q1(:), v0(:), v1(:), g0(:), g1(:)
       real(dp), intent(in) :: h, chi
       logical, intent(in) :: damped
+      !> The slidelines' master segments of the step.
+      integer, intent(in) :: seg(:)
       real(dp), contiguous, intent(out) :: r(:)
       logical, intent(in) :: tangent
       real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2, z(size(q0)), dz(size(q0))
-      integer :: e, i, j, ei, ej, d
+      integer :: e, i, j, ei, ej, d, dofs(6)
       c1 = 1/h
       c2 = 2/h**2
       call em_increments(mesh, q0, q1, z, dz)
@@ -101,15 +106,20 @@ contains
             d = mesh%edof(i, e)
             r(d) = r(d) + pe(i)
          end do
-         if (.not. tangent) cycle
-         do j = 1, 6
-            ej = mesh%eq(mesh%edof(j, e))
-            if (ej == 0) cycle
-            do i = 1, 6
-               ei = mesh%eq(mesh%edof(i, e))
-               if (ei == 0) cycle
-               self%ab(2*self%kd + 1 + ei - ej, ej) = self%ab(2*self%kd + 1 + ei - ej, ej) + ke(i, j)
-            end do
+         if (tangent) call add_general(self, mesh, mesh%edof(:, e), ke)
+      end do
+      do e = 1, size(mesh%slides)
+         ! A ground guide's points have dof 0 (and the same place at q0, q1).
+         call slide_position(mesh, mesh%slides(e), seg(e), q0, x0(1:2), x0(3:4), x0(5:6), dofs)
+         call slide_position(mesh, mesh%slides(e), seg(e), q1, x1(1:2), x1(3:4), x1(5:6), dofs)
+         if (tangent) then
+            call slide_discrete_gradient(x0, x1, mesh%slides(e)%kp, pe, ke)
+            call add_general(self, mesh, dofs, ke)
+         else
+            call slide_discrete_gradient(x0, x1, mesh%slides(e)%kp, pe)
+         end if
+         do i = 1, 6
+            if (dofs(i) > 0) r(dofs(i)) = r(dofs(i)) + pe(i)
          end do
       end do
       if (.not. tangent) return
@@ -118,6 +128,26 @@ contains
          self%ab(2*self%kd + 1, i) = self%ab(2*self%kd + 1, i) + c2*dz(d)*dyn%point_mass(d)
       end do
    end subroutine assemble_em
+
+   !> ke on the dofs `dofs` (0: none) into the free equations' band.
+   pure subroutine add_general(self, mesh, dofs, ke)
+      type(em_system_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: dofs(6)
+      real(dp), intent(in) :: ke(6, 6)
+      integer :: i, j, ei, ej
+      do j = 1, 6
+         if (dofs(j) == 0) cycle
+         ej = mesh%eq(dofs(j))
+         if (ej == 0) cycle
+         do i = 1, 6
+            if (dofs(i) == 0) cycle
+            ei = mesh%eq(dofs(i))
+            if (ei == 0) cycle
+            self%ab(2*self%kd + 1 + ei - ej, ej) = self%ab(2*self%kd + 1 + ei - ej, ej) + ke(i, j)
+         end do
+      end do
+   end subroutine add_general
 
    !> The step's increments z over all dofs: q1 - q0 on translations, the
    !> Cayley form psi = 2 tan((q1 - q0)/2) on rotations; dz = dz/dq1.

@@ -221,16 +221,26 @@ contains
    end function dynamics_obstacle
 
    !> What the dynamics integrator asked for does not cover in `model`, or
-   !> '': slidelines' penalty forces have no discrete gradient (yet).
+   !> '': the energy-momentum integrator has the discrete gradient of the
+   !> pin-in-slot slidelines' gap spring, not of the prismatic joints'
+   !> rotational tie, nor a dashpot of its own on the gap.
    pure function integrator_obstacle(model) result(text)
       type(model_type), intent(in) :: model
       character(:), allocatable :: text
+      integer :: i
       text = ''
       if (model%analysis%integrator /= integrator_energy_momentum) return
-      if (allocated(model%slidelines)) then
-         if (size(model%slidelines) > 0) text = 'the energy-momentum integrator does not cover SLIDelines '// &
-            & '(use integrator generalized-alpha)'
-      end if
+      if (.not. allocated(model%slidelines)) return
+      do i = 1, size(model%slidelines)
+         if (model%slidelines(i)%kind == joint_prismatic) then
+            text = 'the energy-momentum integrator covers pin-in-slot SLIDelines only, not prismatic ones '// &
+               & '(use integrator generalized-alpha)'
+         else if (model%slidelines(i)%damping /= 0) then
+            text = 'the energy-momentum integrator does not cover SLIDelines with damping= '// &
+               & '(use integrator generalized-alpha)'
+         end if
+         if (len(text) > 0) return
+      end do
    end function integrator_obstacle
 
    !> The mobility count (Gruebler-Kutzbach) of the scene with its supports
