@@ -250,16 +250,19 @@ contains
    end subroutine combine
 
    !> y = m(:, :, e) x for element e's 6 x 6 matrix of m (6, 6, nelem),
-   !> without a copy of it.
+   !> without a copy of it (explicit shape: the compiler knows the strides).
    pure function times6(m, e, x) result(y)
-      real(dp), intent(in) :: m(:, :, :), x(6)
+      real(dp), intent(in) :: m(6, 6, *), x(6)
       integer, intent(in) :: e
       real(dp) :: y(6)
+      real(dp) :: w(6)
       integer :: j
-      y = m(:, 1, e)*x(1)
+      ! Summed in a local (registers), not through the result's descriptor.
+      w = m(:, 1, e)*x(1)
       do j = 2, 6
-         y = y + m(:, j, e)*x(j)
+         w = w + m(:, j, e)*x(j)
       end do
+      y = w
    end function times6
 
    !> Kinetic energy 1/2 v^T M v.
