@@ -42,7 +42,9 @@ Without --quick the figures also go to docs/performance.md (between the
 bench markers), docs/performance/bench.json and docs/performance/scissor.png.
 
 Usage: scripts/bench [--quick] [--repeat N] [--no-scissor] [--sizes 10,100,1000,10000]
-                     [--dense-sizes 10,100] [--bin FEKAP] [--no-docs]
+                     [--dense-sizes 10,100] [--bin FEKAP] [--no-docs] [--dynamics-only]
+
+--dynamics-only runs section 3 alone (and writes only its table); its line is then the last.
 """
 
 from __future__ import annotations
@@ -306,6 +308,41 @@ def plot_scissor(cases: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+def dynamics_section(binary: str, work: Path, quick: bool, repeat: int) -> tuple[dict, dict | None, list]:
+    """Section 3: the dynamics decks' cost per step, Exudyn's on the
+    slider-crank, and the equal-accuracy ratios of the last study; printed."""
+    print("\nDynamics (decks/dynamics, generalized-alpha rho_inf 0.8; Exudyn on the slider-crank: "
+          "scripts/exudyn_slider_crank.py)")
+    dynamics = {name: dynamics_case(binary, work, name, quick, repeat) for name in DYNAMICS}
+    for name, c in dynamics.items():
+        print(f"  {name:14s} {c['equations']:5.0f} equations, {c['steps']:6.0f} steps: {c['us_per_step']:9.1f} us "
+              f"per step (analysis), {c['cpu_us_per_step']:9.1f} us CPU, "
+              f"{c['iterations_per_step']:.2f} Newton iterations per step")
+    exudyn = exudyn_case(quick, repeat)
+    if exudyn:
+        print(f"  slider-crank, Exudyn 1.13.6: {exudyn['us_per_step']:9.1f} us CPU per step, "
+              f"{exudyn['iterations_per_step']:.2f} Newton iterations per step "
+              f"({exudyn['us_per_step'] / dynamics['slider-crank']['cpu_us_per_step']:.1f} x FEKAP's CPU per step)")
+    else:
+        print("  slider-crank, Exudyn: not run (no build/venv-exudyn: scripts/exudyn_slider_crank.py makes it)")
+    equal = json.loads(EXUDYN_STUDY.read_text())["equal_error"] if EXUDYN_STUDY.is_file() else []
+    if equal:
+        print("  at equal accuracy (docs/dynamics.md, scripts/exudyn_slider_crank.py --study): Exudyn / FEKAP CPU "
+              + ", ".join(f"{e['ratio']:.1f} x at {e['error']:.0e} m" for e in equal))
+    return dynamics, exudyn, equal
+
+
+def dynamics_line(dynamics: dict, exudyn: dict | None, equal: list) -> str:
+    """The one-line summary of section 3 (see the module's docstring)."""
+    return ("dynamics " + " ".join(f"{name}_us_per_step={c['us_per_step']:.2f} "
+                                   f"{name}_cpu_us_per_step={c['cpu_us_per_step']:.2f} "
+                                   f"{name}_iterations_per_step={c['iterations_per_step']:.3f}"
+                                   for name, c in dynamics.items())
+            + (f" slider-crank_exudyn_cpu_us_per_step={exudyn['us_per_step']:.2f} "
+               f"slider-crank_exudyn_iterations_per_step={exudyn['iterations_per_step']:.3f}" if exudyn else "")
+            + "".join(f" slider-crank_equal_error_{e['error']:.0e}_ratio={e['ratio']:.2f}" for e in equal))
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="FEKAP benchmarks")
     parser.add_argument("--quick", action="store_true",
@@ -317,6 +354,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--dense-sizes", help="scissor cells for the dense solver (default 10,100)")
     parser.add_argument("--bin", help="fekap executable (default: $FEKAP_BIN, else build/local/bin/fekap)")
     parser.add_argument("--no-docs", action="store_true", help="do not write docs/performance*")
+    parser.add_argument("--dynamics-only", action="store_true",
+                        help="section 3 only (its table in docs/performance.md); its line is the last")
     args = parser.parse_args(argv)
     repeat = args.repeat or (1 if args.quick else 9)
     dt = args.dt or (1e-3 if args.quick else 1e-4)
@@ -328,6 +367,13 @@ def main(argv: list[str] | None = None) -> int:
     info = fb.machine()
     print(f"machine: {info['nproc']} x {info['cpu']}; {info['gfortran']}; BLAS {info['blas']}")
     print(f"binary: {binary}")
+    if args.dynamics_only:
+        dynamics, exudyn, equal = dynamics_section(binary, work, args.quick, repeat)
+        shutil.rmtree(work, ignore_errors=True)
+        if write_docs:
+            fb.replace_block(fb.ROOT / "docs" / "performance.md", "bench-dynamics", dynamics_table(dynamics, exudyn))
+        print(dynamics_line(dynamics, exudyn, equal))
+        return 0
 
     print(f"\nExample 1, dt = {dt:g} ({round(1 / dt)} steps), median of {repeat} run(s); "
           "us per configuration")
@@ -350,24 +396,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{aim['iterations']:g} Newton iterations over {aim['steps']} steps = {aim['per_step']:.3f} per step "
           f"({aim['configurations']:g} configurations solved, step-doubling checks included)")
 
-    print("\nDynamics (decks/dynamics, generalized-alpha rho_inf 0.8; Exudyn on the slider-crank: "
-          "scripts/exudyn_slider_crank.py)")
-    dynamics = {name: dynamics_case(binary, work, name, args.quick, repeat) for name in DYNAMICS}
-    for name, c in dynamics.items():
-        print(f"  {name:14s} {c['equations']:5.0f} equations, {c['steps']:6.0f} steps: {c['us_per_step']:9.1f} us "
-              f"per step (analysis), {c['cpu_us_per_step']:9.1f} us CPU, "
-              f"{c['iterations_per_step']:.2f} Newton iterations per step")
-    exudyn = exudyn_case(args.quick, repeat)
-    if exudyn:
-        print(f"  slider-crank, Exudyn 1.13.6: {exudyn['us_per_step']:9.1f} us CPU per step, "
-              f"{exudyn['iterations_per_step']:.2f} Newton iterations per step "
-              f"({exudyn['us_per_step'] / dynamics['slider-crank']['cpu_us_per_step']:.1f} x FEKAP's CPU per step)")
-    else:
-        print("  slider-crank, Exudyn: not run (no build/venv-exudyn: scripts/exudyn_slider_crank.py makes it)")
-    equal = json.loads(EXUDYN_STUDY.read_text())["equal_error"] if EXUDYN_STUDY.is_file() else []
-    if equal:
-        print("  at equal accuracy (docs/dynamics.md, scripts/exudyn_slider_crank.py --study): Exudyn / FEKAP CPU "
-              + ", ".join(f"{e['ratio']:.1f} x at {e['error']:.0e} m" for e in equal))
+    dynamics, exudyn, equal = dynamics_section(binary, work, args.quick, repeat)
 
     scissor_cases: list[dict] = []
     if not args.no_scissor:
@@ -408,13 +437,7 @@ def main(argv: list[str] | None = None) -> int:
         (fb.ROOT / "docs" / "performance").mkdir(parents=True, exist_ok=True)
         (fb.ROOT / "docs" / "performance" / "bench.json").write_text(json.dumps(record, indent=1) + "\n")
 
-    print("dynamics " + " ".join(f"{name}_us_per_step={c['us_per_step']:.2f} "
-                                 f"{name}_cpu_us_per_step={c['cpu_us_per_step']:.2f} "
-                                 f"{name}_iterations_per_step={c['iterations_per_step']:.3f}"
-                                 for name, c in dynamics.items())
-          + (f" slider-crank_exudyn_cpu_us_per_step={exudyn['us_per_step']:.2f} "
-             f"slider-crank_exudyn_iterations_per_step={exudyn['iterations_per_step']:.3f}" if exudyn else "")
-          + "".join(f" slider-crank_equal_error_{e['error']:.0e}_ratio={e['ratio']:.2f}" for e in equal))
+    print(dynamics_line(dynamics, exudyn, equal))
     full = cases[("full", "no_output")]
     print(f"fourbar us_per_config_full={full['analysis_us']:.3f} "
           f"us_per_config_positions={cases[('positions', 'no_output')]['analysis_us']:.3f} "

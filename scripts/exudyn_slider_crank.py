@@ -27,7 +27,8 @@ code's error against its CPU time).
 
 Exudyn comes from PyPI (exudyn==1.13.6, with numpy) into its own virtual environment,
 build/venv-exudyn, made on the first run; the script then runs itself there. FEKAP is the
-release binary of scripts/build (build/local/bin/fekap).
+release binary of scripts/build (build/local/bin/fekap), or $FEKAP_BIN (an earlier
+binary, for a before-and-after study in the same spell of the shared machine).
 
 The model: crank 0.15 m and rod 0.30 m of 6 mm round steel (E = 200 GPa, G = 77 GPa,
 rho = 7870), N elements per 0.15 m, the crank's first node turning at 150 rad/s from t = 0
@@ -166,7 +167,7 @@ def run_fekap(n: int, dt: float, t_end: float, rho_inf: float, details: dict | N
     time) and steps of FEKAP's run of the deck, writing every `every`-th step;
     `details` receives the run's process CPU seconds ("cpu") and the
     listing's SUMMARY numbers."""
-    binary = ROOT / "build" / "local" / "bin" / "fekap"
+    binary = Path(os.environ.get("FEKAP_BIN") or ROOT / "build" / "local" / "bin" / "fekap")
     if not binary.is_file():
         sys.exit(f"{binary}: missing; build it with scripts/build")
     deck = (ROOT / "decks" / "dynamics" / "slider-crank.deck").read_text()

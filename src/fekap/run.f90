@@ -164,6 +164,7 @@ contains
          if (timed) c0 = clock_seconds()
          result%step = n
          result%cuts = 0
+         result%written = n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0
          if (n == 0) then
             call stepper%start(result, step_error)
          else
@@ -193,7 +194,7 @@ contains
             if (vtk%from_nodes) call fill_fields_from_nodes(result, vtk%links_nodes)
             if (n == 0) vtk%initial_pos = result%mesh_pos
          end if
-         if (n == 0 .or. n == nsteps .or. mod(n, model%output%every) == 0) then
+         if (result%written) then
             if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit .or. &
                & units%nodes /= no_unit .or. units%reactions /= no_unit .or. units%energy /= no_unit .or. &
                & units%deflection /= no_unit) then

@@ -53,6 +53,9 @@ module fekap_effects_dynamic_stepper
    !> A step that creates more energy than this fraction of the kinetic and
    !> strain energy (or of the step's work) is rejected and cut.
    real(dp), parameter :: max_created = 0.05_dp
+   !> Generalized-alpha's Newton keeps a factor while its iteration is
+   !> bound to contract by at least this (see alpha_newton).
+   real(dp), parameter :: reuse_contraction = 1.0e-3_dp
 
    !> The accepted state: time, configuration, velocity, acceleration, the
    !> integrator's acceleration variable a, the external forces, the residual
@@ -92,6 +95,12 @@ module fekap_effects_dynamic_stepper
       real(dp) :: h_prev = 0
       !> The residual of the last step tried (advance_by_cuts' tries).
       real(dp) :: try_residual = 0
+      !> Newton's quadratic constant as last measured (1 / length), for
+      !> keeping a factor (see alpha_newton); unknown (0) at first.
+      real(dp) :: newton_kappa = 0
+      !> Newton iterations of the last step generalized-alpha converged: from
+      !> that many on, an iterate's residual is assembled alone first (see alpha_newton).
+      integer :: converged_after = 1
       !> How the start's velocities were found, for the plan.
       character(len=120) :: start_velocity = ''
       integer :: advances = 0
@@ -455,6 +464,17 @@ contains
    !> Newton on a step of generalized-alpha from the accepted state to
    !> t_new: the iterate into qt, vt, acct, at and the residual (the
    !> reactions) into system%r.
+   !>
+   !> The factor of the iteration matrix is kept for the next iteration when
+   !> the matrix can have changed little since it was factored: Newton's
+   !> quadratic constant kappa (measured on the steps' full iterations,
+   !> delta_k <= kappa delta_k-1^2) bounds the modified iteration's
+   !> contraction by 2 kappa times the distance moved since the factor, and
+   !> the factor is kept while that is at most reuse_contraction. A correction
+   !> then leaves at most that share of itself as error, and the convergence
+   !> tests are those of full Newton. From the iteration where the last step
+   !> converged, an iterate's residual is assembled alone first (the same
+   !> numbers as with the matrix), the iteration matrix only if needed.
    subroutine alpha_newton(self, t_new, iterations, residual, error)
       type(dynamic_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t_new
@@ -462,9 +482,9 @@ contains
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
       type(alpha_coefficients_type) :: c
-      real(dp) :: correction, r0
+      real(dp) :: correction, r0, moved, previous
       integer :: info, k, d
-      logical :: converged
+      logical :: converged, factored, reuse, full_before
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
          call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
@@ -474,20 +494,36 @@ contains
          iterations = 0
          r0 = 0
          residual = huge(1.0_dp)
+         factored = .false.
+         full_before = .false.
+         moved = 0
+         previous = 0
          do
             ! A signal ends the step here (a slow step would delay the stop).
             call interrupt_error(error)
             if (allocated(error)) return
-            call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts, &
-               & c%c1, c%c2)
-            residual = residual_norm(system, mesh)
-            call residual_test(self, residual, iterations, r0, converged, error)
-            if (allocated(error)) return
-            if (converged) exit
-            call factor_system(system, info, self%counts)
-            if (info /= 0) then
-               call singular_matrix(error, 'K + c1 C + c2 M', info)
-               return
+            reuse = factored .and. self%newton_kappa > 0 .and. 2*self%newton_kappa*moved <= reuse_contraction
+            if (reuse .or. iterations >= self%converged_after) then
+               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
+               residual = residual_norm(system, mesh)
+               call residual_test(self, residual, iterations, r0, converged, error)
+               if (allocated(error)) return
+               if (converged) exit
+            end if
+            if (.not. reuse) then
+               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, &
+                  & self%counts, c%c1, c%c2)
+               residual = residual_norm(system, mesh)
+               call residual_test(self, residual, iterations, r0, converged, error)
+               if (allocated(error)) return
+               if (converged) exit
+               call factor_system(system, info, self%counts)
+               if (info /= 0) then
+                  call singular_matrix(error, 'K + c1 C + c2 M', info)
+                  return
+               end if
+               factored = .true.
+               moved = 0
             end if
             call newton_correction(system, mesh, self%dof_length, correction, self%counts)
             do k = 1, mesh%nfree
@@ -496,6 +532,10 @@ contains
             end do
             iterations = iterations + 1
             self%counts%iterations = self%counts%iterations + 1
+            call measure_kappa(self, reuse, full_before, previous, correction, moved)
+            previous = correction
+            full_before = .not. reuse
+            moved = moved + correction
             if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
                ! The residual at the converged iterate: the reactions.
                call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
@@ -503,8 +543,28 @@ contains
                exit
             end if
          end do
+         self%converged_after = max(1, iterations)
       end associate
    end subroutine alpha_newton
+
+   !> Newton's quadratic constant from a full iteration that follows a full
+   !> one (kappa = delta_k / delta_k-1^2, the latest measure counts); a
+   !> modified iteration that contracted less than its bound asked for
+   !> raises kappa to what it showed (the factor is then renewed sooner).
+   !> Corrections near round-off measure nothing (as converged_by_estimate).
+   subroutine measure_kappa(self, reuse, full_before, previous, correction, moved)
+      type(dynamic_stepper_type), intent(inout) :: self
+      logical, intent(in) :: reuse, full_before
+      real(dp), intent(in) :: previous, correction, moved
+      real(dp) :: least
+      least = 1.0e3_dp*epsilon(1.0_dp)*self%model_length
+      if (previous <= least .or. correction <= least) return
+      if (.not. reuse .and. full_before) then
+         self%newton_kappa = correction/previous**2
+      else if (reuse .and. correction > reuse_contraction*previous) then
+         self%newton_kappa = max(self%newton_kappa, correction/(2*previous*moved))
+      end if
+   end subroutine measure_kappa
 
    !> Newton on a step of the energy-momentum integrator
    !> (fekap_effects_energy_momentum) from the accepted state to t_new: the
@@ -649,7 +709,9 @@ contains
       end do
    end subroutine damping_work
 
-   !> The result of the accepted state: nodes and links, reactions, energy.
+   !> The result of the accepted state: nodes and links, reactions, energy;
+   !> only its time when the step's rows are not written (at fine steps most
+   !> are not, and the reactions and momenta cost a tenth of a step).
    subroutine fill_result(self, result)
       type(dynamic_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
@@ -658,6 +720,7 @@ contains
          result%t = state%t
          result%has_velocity = .true.
          result%has_acceleration = .true.
+         if (.not. result%written) return
          call fill_nodes_links(mesh, self%model, state%q, state%v, state%acc, result)
          if (self%model%output%vtk) call fill_fields(mesh, state%q, state%v, state%acc, result)
          if (.not. allocated(result%reactions)) allocate (result%reactions(3, reaction_count(self%model)))

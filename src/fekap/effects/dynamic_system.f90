@@ -250,17 +250,28 @@ contains
    end subroutine combine
 
    !> y = m(:, :, e) x for element e's 6 x 6 matrix of m (6, 6, nelem),
-   !> without a copy of it.
+   !> without a copy of it (m is contiguous, so its slice is passed in place).
    pure function times6(m, e, x) result(y)
-      real(dp), intent(in) :: m(:, :, :), x(6)
+      real(dp), contiguous, intent(in) :: m(:, :, :)
       integer, intent(in) :: e
+      real(dp), intent(in) :: x(6)
       real(dp) :: y(6)
-      integer :: j
-      y = m(:, 1, e)*x(1)
-      do j = 2, 6
-         y = y + m(:, j, e)*x(j)
-      end do
+      y = product6(m(:, :, e), x)
    end function times6
+
+   !> a x for a 6 x 6 matrix of explicit shape (the compiler knows its
+   !> strides), summed in a local (registers), not through the result.
+   pure function product6(a, x) result(y)
+      real(dp), intent(in) :: a(6, 6), x(6)
+      real(dp) :: y(6)
+      real(dp) :: w(6)
+      integer :: j
+      w = a(:, 1)*x(1)
+      do j = 2, 6
+         w = w + a(:, j)*x(j)
+      end do
+      y = w
+   end function product6
 
    !> Kinetic energy 1/2 v^T M v.
    pure real(dp) function kinetic_energy(self, mesh, v) result(energy)

@@ -21,6 +21,9 @@ module fekap_model_results
       real(dp) :: residual = 0
       !> Times the step was cut in halves to converge.
       integer :: cuts = 0
+      !> Whether the run writes this step's rows (set by the time loop): a
+      !> stepper may leave the rows' values of a step not written unfilled.
+      logical :: written = .true.
       !> A remark for the listing (a near-singular configuration, rates left
       !> out), or empty; left-aligned, so that has_note can tell at once.
       character(len=note_length) :: note = ''
