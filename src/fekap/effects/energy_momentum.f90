@@ -2,14 +2,15 @@
 !> midpoint rule with the beams' discrete gradient (Simo & Tarnow, ZAMP 43,
 !> 1992; Gonzalez, J. Nonlinear Sci. 6, 1996), unknown q1 = q_n+1,
 !>   v1 = 2 (q1 - q0)/h - v0,                                 (q1 - q0 = h (v0 + v1)/2)
-!>   R = M (v1 - v0)/h + C (q1 - q0)/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
+!>   R = M (v1 - v0)/h + alpha M (q1 - q0)/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
 !> on the free dofs, p the elements' discrete gradients
-!> (fekap_element_discrete_gradient). Contracted with q1 - q0 the free rows
+!> (fekap_element_discrete_gradient), Rayleigh's beta in them as the stress
+!> beta/h D Delta eps (the dissipation chi + 2 beta/h). Contracted with q1 - q0 the free rows
 !> give the energy balance of the step exactly:
-!>   T1 - T0 + W1 - W0 + V1 - V0 = work of loads and drives - h |v_mid|_C^2
-!>     - chi/2 sum L |Delta eps|_D^2,
+!>   T1 - T0 + W1 - W0 + V1 - V0 = work of loads and drives - h alpha |v_mid|_M^2
+!>     - sum (beta/h + chi/2) L |Delta eps|_D^2,
 !> (V the gravity potential): chi = 0 conserves the energy, chi > 0 makes it
-!> decay. The iteration matrix dR/dq1 = dp/dq1 + C/h + 2 M/h^2 is not
+!> decay. The iteration matrix dR/dq1 = dp/dq1 + alpha M/h + 2 M/h^2 is not
 !> symmetric: it is factored by LAPACK's band LU (dgbtrf) in its own storage.
 module fekap_effects_energy_momentum
    use fekap_kinds, only: dp
@@ -52,7 +53,7 @@ contains
 
    !> The residual R of the step from (q0, v0) to q1 over all dofs into r
    !> (v1 given for every dof: on the constrained ones the prescribed motion;
-   !> the damping acts on the mean rate (q1 - q0)/h), g0 and g1 the external forces
+   !> alpha M damps the mean rate (q1 - q0)/h), g0 and g1 the external forces
    !> at the step's ends; with `tangent`, the iteration matrix into self.
    subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, r, tangent)
       type(em_system_type), intent(inout) :: self
@@ -63,7 +64,7 @@ contains
       logical, intent(in) :: damped
       real(dp), contiguous, intent(out) :: r(:)
       logical, intent(in) :: tangent
-      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2
+      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2, chi_e
       integer :: e, i, j, ei, ej, d
       c1 = 1/h
       c2 = 2/h**2
@@ -77,15 +78,18 @@ contains
             am(i) = (v1(d) - v0(d))/h
             vm(i) = (x1(i) - x0(i))/h
          end do
+         ! Rayleigh's beta damps the strain rate Delta eps / h: a stress beta/h D Delta eps in the
+         ! discrete gradient, objective (zero for a rigid step) and of work beta/h L |Delta eps|_D^2.
+         chi_e = chi
+         if (damped) chi_e = chi + 2*dyn%beta(e)/h
          if (tangent) then
-            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe, ke)
-            ke = ke + c2*dyn%me(:, :, e)
-            if (damped) ke = ke + c1*dyn%ce(:, :, e)
+            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi_e, pe, ke)
+            ke = ke + (c2 + c1*dyn%alpha(e))*dyn%me(:, :, e)
          else
-            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe)
+            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi_e, pe)
          end if
          pe = pe + times6(dyn%me, e, am)
-         if (damped) pe = pe + times6(dyn%ce, e, vm)
+         if (damped) pe = pe + dyn%alpha(e)*times6(dyn%me, e, vm)
          do i = 1, 6
             d = mesh%edof(i, e)
             r(d) = r(d) + pe(i)
