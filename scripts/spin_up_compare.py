@@ -8,8 +8,8 @@ A comparison script, not a test (test/app/test_dynamics.py checks the deck).
     scripts/spin_up_compare.py [--plot docs/dynamics/spin-up.png] [--beta B]
 
 --beta B adds a run of the deck with stiffness-proportional Rayleigh damping
-beta = B on the section (the published case has none; see docs/dynamics.md
-for why FEKAP's damping does not suit this spinning beam yet).
+beta = B on the section (the published case has none; docs/dynamics.md shows
+the objective damping's run with beta = 0.01).
 
 Prints a Markdown table (peak deflection and its time, the value at t = 15 s,
 the largest magnitude after t = 15 s, the largest difference from the model);

@@ -17,7 +17,7 @@ module fekap_assembly_assemble
    private
 
    public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain
-   public :: gather, scatter, scatter_element
+   public :: gather, scatter, scatter_element, subtract
 
 contains
 
@@ -113,14 +113,19 @@ contains
    end subroutine scatter_element
 
    !> Add ke on the dofs `dofs` (0: no dof, a fixed ground point) to the
-   !> free-free band and the free-driven block.
-   pure subroutine scatter(mesh, dofs, ke, kff, kfd)
+   !> free-free band and the free-driven block; ke symmetric, or with
+   !> `general` any ke (band_add_general: both triangles of the band).
+   pure subroutine scatter(mesh, dofs, ke, kff, kfd, general)
       type(mesh_type), intent(in) :: mesh
       integer, intent(in) :: dofs(:)
       real(dp), intent(in) :: ke(:, :)
       type(band_matrix_type), intent(inout) :: kff
       real(dp), intent(inout) :: kfd(:, :)
+      logical, intent(in), optional :: general
       integer :: i, j, ei, ej, dj
+      logical :: any_entry
+      any_entry = .false.
+      if (present(general)) any_entry = general
       do j = 1, size(dofs)
          dj = dofs(j)
          if (dj == 0) cycle
@@ -129,7 +134,9 @@ contains
             if (dofs(i) == 0) cycle
             ei = mesh%eq(dofs(i))
             if (ei == 0) cycle
-            if (ej > 0) then
+            if (ej > 0 .and. any_entry) then
+               call kff%add_general(ei, ej, ke(i, j))
+            else if (ej > 0) then
                call kff%add(ei, ej, ke(i, j))
             else if (mesh%drive_col(dj) > 0) then
                kfd(ei, mesh%drive_col(dj)) = kfd(ei, mesh%drive_col(dj)) + ke(i, j)

@@ -21,6 +21,10 @@
 !> decks/ and the scissor lifts take the loops. The timings behind this are
 !> in docs/performance.md ("Narrow band loops against LAPACK").
 !>
+!> A matrix is symmetric unless something is added to it by add_general (a
+!> damping force's exact tangent in dynamics): its lower triangle is then the
+!> upper's mirror plus `asym`, and it is factored by the band LU at once.
+!>
 !> A matrix made with `dense=.true.` keeps the same band assembly storage but
 !> factors and solves the matrix as a full n x n array with dgetrf/dgetrs: a
 !> reference for the cost of the band solver, not a production path.
@@ -43,6 +47,11 @@ module fekap_assembly_band
       integer :: kd = 0
       !> Upper band as LAPACK stores it: A(i, j), i <= j, at a(kd + 1 + i - j, j).
       real(dp), allocatable :: a(:, :)
+      !> Whether the lower triangle is the upper's mirror (nothing added by
+      !> add_general since the last zero).
+      logical :: symmetric = .true.
+      !> A(j, i) - A(i, j) for i <= j at asym(kd + 1 + i - j, j), while not symmetric.
+      real(dp), allocatable :: asym(:, :)
       !> Factor: Cholesky (U^T D U up to narrow_band, U^T U beyond) in rows
       !> 1:kd+1, or band LU in rows 1:3*kd+1.
       real(dp), allocatable :: f(:, :)
@@ -66,6 +75,7 @@ module fekap_assembly_band
    contains
       procedure :: zero => band_zero
       procedure :: add => band_add
+      procedure :: add_general => band_add_general
       procedure :: factor => band_factor
       procedure :: solve => band_solve
       procedure :: pivot_ratio => band_pivot_ratio
@@ -109,6 +119,8 @@ contains
       class(band_matrix_type), intent(inout) :: self
       ! As one block: `self%a = 0` on the polymorphic self clears it column by column.
       call zero(self%a, size(self%a))
+      if (.not. self%symmetric) call zero(self%asym, size(self%asym))
+      self%symmetric = .true.
    end subroutine band_zero
 
    !> x(1:n) = 0.
@@ -127,8 +139,35 @@ contains
       if (i <= j) self%a(self%kd + 1 + i - j, j) = self%a(self%kd + 1 + i - j, j) + value
    end subroutine band_add
 
-   !> Factor the matrix: Cholesky first; if it is not positive definite, band
-   !> LU with partial pivoting. On return `info` is 0, or the equation at
+   !> A(i, j) += value for any entry in the band (i > j too): the matrix is
+   !> then not symmetric until the next zero, and is factored by band LU.
+   pure subroutine band_add_general(self, i, j, value)
+      class(band_matrix_type), intent(inout) :: self
+      integer, intent(in) :: i, j
+      real(dp), intent(in) :: value
+      integer :: kd
+      kd = self%kd
+      if (.not. allocated(self%asym)) allocate (self%asym(kd + 1, self%n), source=0.0_dp)
+      self%symmetric = .false.
+      if (i <= j) then
+         self%a(kd + 1 + i - j, j) = self%a(kd + 1 + i - j, j) + value
+         ! The lower mirror A(j, i) stays.
+         if (i < j) self%asym(kd + 1 + i - j, j) = self%asym(kd + 1 + i - j, j) - value
+      else
+         self%asym(kd + 1 + j - i, i) = self%asym(kd + 1 + j - i, i) + value
+      end if
+   end subroutine band_add_general
+
+   !> A(i, j) for i > j: the upper's mirror, plus asym when not symmetric.
+   pure real(dp) function lower_entry(self, i, j) result(aij)
+      type(band_matrix_type), intent(in) :: self
+      integer, intent(in) :: i, j
+      aij = self%a(self%kd + 1 + j - i, i)
+      if (.not. self%symmetric) aij = aij + self%asym(self%kd + 1 + j - i, i)
+   end function lower_entry
+
+   !> Factor the matrix: Cholesky first; if it is not positive definite (or not
+   !> symmetric: at once), band LU with partial pivoting. On return `info` is 0, or the equation at
    !> which the matrix is singular (LU pivot zero).
    pure subroutine band_factor(self, info)
       class(band_matrix_type), intent(inout) :: self
@@ -142,14 +181,16 @@ contains
          return
       end if
       self%is_lu = .false.
-      if (kd <= narrow_band) then
-         call band_ldlt(self%a, self%f, self%n, kd, self%top, info, self%recip)
-      else
-         self%f(1:kd + 1, :) = self%a
-         call dpbtrf('U', self%n, kd, self%f, ld, info)
+      if (self%symmetric) then
+         if (kd <= narrow_band) then
+            call band_ldlt(self%a, self%f, self%n, kd, self%top, info, self%recip)
+         else
+            self%f(1:kd + 1, :) = self%a
+            call dpbtrf('U', self%n, kd, self%f, ld, info)
+         end if
+         if (info == 0) return
       end if
-      if (info == 0) return
-      ! Not positive definite: expand to general band storage, rows kd+1:3kd+1.
+      ! Not positive definite (or not symmetric): expand to general band storage, rows kd+1:3kd+1.
       self%is_lu = .true.
       self%f = 0
       do j = 1, self%n
@@ -157,7 +198,7 @@ contains
             if (i <= j) then
                self%f(2*kd + 1 + i - j, j) = self%a(kd + 1 + i - j, j)
             else
-               self%f(2*kd + 1 + i - j, j) = self%a(kd + 1 + j - i, i)
+               self%f(2*kd + 1 + i - j, j) = lower_entry(self, i, j)
             end if
          end do
       end do
@@ -177,6 +218,7 @@ contains
          do i = max(1, j - kd), j
             self%fd(i, j) = self%a(kd + 1 + i - j, j)
             self%fd(j, i) = self%a(kd + 1 + i - j, j)
+            if (.not. self%symmetric) self%fd(j, i) = self%fd(j, i) + self%asym(kd + 1 + i - j, j)
          end do
       end do
       call dgetrf(self%n, self%n, self%fd, self%n, self%ipiv, info)
@@ -338,6 +380,8 @@ contains
    !> every kind of factor this type makes; A is symmetric, so A^-T = A^-1):
    !> usually 4 or 5 solves. 0 when the factor has a zero pivot. Unlike the
    !> pivot ratio it tracks the smallest singular value (within a small factor).
+   !> For a matrix made non-symmetric by add_general (dynamics, which does not
+   !> ask for it) it is rougher: the norm of the upper triangle's mirror, A^-1 for A^-T.
    subroutine band_rcond(self, rcond)
       class(band_matrix_type), intent(inout) :: self
       real(dp), intent(out) :: rcond

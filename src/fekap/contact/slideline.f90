@@ -23,7 +23,7 @@ module fekap_contact_slideline
    public :: slide_geometry, slide_force, slide_second_derivative
    public :: slide_tie_offset, slide_tie_force, slide_tie_second_derivative
    public :: slide_locate, default_penalty
-   public :: slide_energy, slide_tie_energy, slide_gap_gradient
+   public :: slide_energy, slide_tie_energy, slide_gap_gradient, slide_dashpot
 
    !> Status of `slide_locate`: the slave stays on its master element.
    integer, parameter, public :: slide_on_element = 0
@@ -175,7 +175,7 @@ contains
    end function slide_energy
 
    !> The gap's gradient N_s = grad g (61) over the contact dofs (67): the gap
-   !> rate is N_s . v, and a dashpot c on it applies -c (N_s . v) N_s.
+   !> rate is N_s . v.
    pure function slide_gap_gradient(xs, x1, x2) result(ns)
       real(dp), intent(in) :: xs(2), x1(2), x2(2)
       real(dp) :: ns(6)
@@ -183,6 +183,33 @@ contains
       call master_frame(xs, x1, x2, fr)
       ns = fr%ns
    end function slide_gap_gradient
+
+   !> A dashpot c on the gap rate g' = N_s . v (N_s = grad g (61) at the
+   !> current positions): f = c g' N_s over the contact dofs (67), the force
+   !> it resists with (the equations of motion add f, the joint applies -f),
+   !> and, if asked, the iteration matrix's share
+   !> k = df/dd + c1 df/dv = c (N_s (H v)^T + g' H) + c1 c N_s N_s^T
+   !> (v moving with d at the rate c1; H the gap's Hessian, see the header),
+   !> not symmetric where the master moves.
+   pure subroutine slide_dashpot(xs, x1, x2, c, v, f, c1, k)
+      !> Current positions of the slave node and the master element's nodes.
+      real(dp), intent(in) :: xs(2), x1(2), x2(2)
+      !> The dashpot (force per gap rate) and the contact dofs' velocities (67).
+      real(dp), intent(in) :: c, v(6)
+      real(dp), intent(out) :: f(6)
+      real(dp), intent(in), optional :: c1
+      real(dp), intent(out), optional :: k(6, 6)
+      type(frame_type) :: fr
+      real(dp) :: rate, r, h(6, 6)
+      call master_frame(xs, x1, x2, fr)
+      rate = dot_product(fr%ns, v)
+      f = c*rate*fr%ns
+      if (.not. present(k)) return
+      r = fr%g/fr%s1
+      h = -(outer(fr%ts, fr%nm) + outer(fr%nm, fr%ts) + r*outer(fr%nm, fr%nm))/fr%s1
+      k = c*(outer(fr%ns, matmul(h, v)) + rate*h)
+      if (present(c1)) k = k + c1*c*outer(fr%ns, fr%ns)
+   end subroutine slide_dashpot
 
    !> Offset c0 of the rotational tie of a prismatic joint, chosen so that the tie
    !> is free in the given (initial) configuration: c0 = phi_master - theta_s.

@@ -22,7 +22,7 @@ module fekap_effects_dynamic_stepper
    use fekap_model_results, only: step_result_type, has_note
    use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed
    use fekap_assembly_tracking, only: relocate
-   use fekap_assembly_assemble, only: scatter_element, gather
+   use fekap_assembly_assemble, only: scatter_element
    use fekap_solver_stepper, only: clock_seconds, phase_timed
    use fekap_solver_fem_setup, only: fem_base_type, new_fem_base, start_configuration, mesh_plan_line
    use fekap_solver_linear_system, only: assemble_system, factor_system, &
@@ -34,8 +34,8 @@ module fekap_effects_dynamic_stepper
    use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
       & alpha_update
    use fekap_effects_dynamic_system, only: dynamic_system_type, new_dynamic_system, external_forces, &
-      & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6, &
-      & has_slide_damping, update_slide_damping, slide_damping_work, penalty_energy
+      & assemble_dynamics, kinetic_energy, strain_energy, momentum, has_damping, times6, &
+      & has_slide_damping, damping_work, element_damping_force, slide_damping_force, penalty_energy
    use fekap_effects_energy_momentum, only: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, &
       & solve_em, em_free_velocities, massless_dofs, em_increments
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
@@ -164,8 +164,6 @@ contains
          if (allocated(error)) return
          call drive_motion(self, state%t, state%q, state%v, state%acc)
          call start_velocities(self, info)
-         if (has_damping(self%dynamics)) call update_damping(self%dynamics, mesh, state%q)
-         if (self%slide_damped) call update_slide_damping(self%dynamics, mesh, state%q, state%seg)
          call start_accelerations(self, error)
          if (allocated(error)) return
          state%a = state%acc
@@ -381,8 +379,6 @@ contains
       character(len=300) :: msg
       em = self%model%analysis%integrator == integrator_energy_momentum
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
-         if (self%damped) call update_damping(dyn, mesh, state%q)
-         if (self%slide_damped) call update_slide_damping(dyn, mesh, state%q, state%seg)
          if (em) then
             call em_newton(self, t_new, iterations, residual, error)
          else
@@ -416,12 +412,12 @@ contains
          end do
          dissipated = 0
          if (self%damped .and. em) then
-            ! Energy-momentum: the damping acts on the step's mean rate.
-            call damping_work(dyn, mesh, z/(t_new - state%t), z/(t_new - state%t), z, dissipated)
-         else if (self%damped) then
-            call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
+            ! Energy-momentum: the damping acts on the step's mean rate z/h (exactly this work).
+            dissipated = damping_work(dyn, mesh, state%q, z/(t_new - state%t), self%qt, z/(t_new - state%t), state%seg, &
+               & t_new - state%t, z)
+         else if (self%damped .or. self%slide_damped) then
+            dissipated = damping_work(dyn, mesh, state%q, state%v, self%qt, self%vt, state%seg, t_new - state%t)
          end if
-         if (self%slide_damped) dissipated = dissipated + slide_damping_work(dyn, state%v, self%vt, self%qt - state%q)
          kinetic = kinetic_energy(dyn, mesh, self%vt)
          strain = strain_energy(mesh, self%qt)
          ! The springs of the step's own segments (those its forces used).
@@ -691,24 +687,6 @@ contains
       call analysis_error(error, trim(msg))
    end subroutine singular_matrix
 
-   !> The energy the damping dissipated over a step: the trapezoidal rule of
-   !> C v on the displacement dq (C of the step).
-   pure subroutine damping_work(dyn, mesh, v0, v1, dq, dissipated)
-      type(dynamic_system_type), intent(in) :: dyn
-      type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: v0(:), v1(:), dq(:)
-      real(dp), intent(inout) :: dissipated
-      real(dp) :: ve(6), de(6)
-      integer :: e, i
-      do e = 1, size(mesh%elements)
-         do i = 1, 6
-            ve(i) = v0(mesh%edof(i, e)) + v1(mesh%edof(i, e))
-            de(i) = dq(mesh%edof(i, e))
-         end do
-         dissipated = dissipated + 0.5_dp*dot_product(de, times6(dyn%ce, e, ve))
-      end do
-   end subroutine damping_work
-
    !> The result of the accepted state: nodes and links, reactions, energy;
    !> only its time when the step's rows are not written (at fine steps most
    !> are not, and the reactions and momenta cost a tenth of a step).
@@ -765,27 +743,29 @@ contains
          end do
       end associate
    contains
-      !> force -= (C_s v) on the slave's translations (slideline i's dashpot).
+      !> force -= the dashpot's force on the slave's translations (slideline i's).
       subroutine add_dashpot(i, force)
          integer, intent(in) :: i
          real(dp), intent(inout) :: force(2)
-         force = force - matmul(self%dynamics%cs(1:2, :, i), gather(self%state%v, self%dynamics%slide_dofs(:, i)))
+         real(dp) :: f(6)
+         integer :: dofs(6)
+         call slide_damping_force(self%dynamics, self%mesh, i, self%state%q, self%state%v, self%state%seg(i), f, dofs)
+         force = force - f(1:2)
       end subroutine add_dashpot
       subroutine end_forces(e, fe)
          integer, intent(in) :: e
          real(dp), intent(out) :: fe(6)
-         real(dp) :: xe(6), ae(6), ve(6), weight(6)
+         real(dp) :: xe(6), ae(6), weight(6)
          integer :: i
          do i = 1, 6
             xe(i) = self%state%q(self%mesh%edof(i, e))
             ae(i) = self%state%acc(self%mesh%edof(i, e))
-            ve(i) = self%state%v(self%mesh%edof(i, e))
          end do
          call element_force(self%mesh, e, xe, fe)
          ! The element's own weight (point masses belong to the pins).
          weight = element_weight(self%model, self%mesh, e)
          fe = fe + times6(self%dynamics%me, e, ae) - weight
-         if (self%damped) fe = fe + times6(self%dynamics%ce, e, ve)
+         if (self%damped) fe = fe + element_damping_force(self%dynamics, self%mesh, e, self%state%q, self%state%v)
       end subroutine end_forces
    end subroutine fill_reactions
 

@@ -1,38 +1,40 @@
 !> The equations of motion of the finite element mesh and their iteration
 !> matrix (docs/dynamics.md):
-!>   R(q, qd, qdd, t) = M qdd + C qd + P(q) - F^c(q) - g(t) = 0 on the free dofs,
-!> M the consistent mass (fekap_element_inertia) with the point masses, C the
-!> Rayleigh damping alpha M + beta K_m of each element's section (K_m the
-!> material tangent, taken at the configuration of the step's start so that
-!> C is constant over a step), P the beams' internal forces, F^c the
-!> slidelines' penalty forces, g the weights and the loads at time t. A
-!> slideline with `damping=` adds its dashpot c N_s N_s^T (N_s the gap's
-!> gradient at the step's start, so constant over the step as Rayleigh's) to C.
-!> With
-!> qd and qdd functions of q through the integrator (qd' = c1, qdd' = c2),
-!> the iteration matrix is dR/dq = K + c1 C + c2 M, in the FEM's band storage.
-!> On the constrained dofs R is what the supports and drives apply.
+!>   R(q, qd, qdd, t) = M qdd + D(q, qd) + P(q) - F^c(q) - g(t) = 0 on the free dofs,
+!> M the consistent mass (fekap_element_inertia) with the point masses, D the
+!> damping force: Rayleigh's alpha M qd + beta K_m(q) qd of each element's
+!> section (the beta part objective: the viscous stresses of the material
+!> strain rates at q, fekap_element_beam_damping) and the slidelines'
+!> dashpots c (N_s(q) . qd) N_s(q) (`damping=`, at the gap's gradient at q),
+!> P the beams' internal forces, F^c the slidelines' penalty forces, g the
+!> weights and the loads at time t. With qd and qdd functions of q through
+!> the integrator (qd' = c1, qdd' = c2), the iteration matrix is
+!> dR/dq = K + dD/dq + c1 dD/dqd + c2 M, in the FEM's band storage; the
+!> damping's dD/dq is not symmetric (the band then holds both triangles and
+!> is factored by LU). On the constrained dofs R is what the supports and
+!> drives apply.
 module fekap_effects_dynamic_system
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, dof_rot, joint_prismatic
    use fekap_model_work, only: work_counts_type
    use fekap_assembly_mesh, only: mesh_type, point_masses
-   use fekap_element_beam, only: beam_residual, beam_strain_energy
+   use fekap_element_beam, only: beam_strain_energy
+   use fekap_element_beam_damping, only: beam_damping_force, beam_strain_change
    use fekap_element_inertia, only: beam_mass_matrix, beam_gravity_force
    use fekap_solver_linear_system, only: linear_system_type, assemble_system, assemble_system_residual
    use fekap_assembly_tracking, only: slide_position
-   use fekap_assembly_assemble, only: scatter, scatter_element, gather
-   use fekap_contact_slideline, only: slide_energy, slide_tie_energy, slide_gap_gradient
+   use fekap_assembly_assemble, only: scatter, scatter_element, gather, subtract
+   use fekap_contact_slideline, only: slide_energy, slide_tie_energy, slide_dashpot, slide_geometry
    implicit none
    private
 
-   public :: dynamic_system_type, new_dynamic_system, external_forces, assemble_dynamics, update_damping
+   public :: dynamic_system_type, new_dynamic_system, external_forces, assemble_dynamics
    public :: kinetic_energy, strain_energy, momentum, has_damping, times6
-   public :: has_slide_damping, update_slide_damping, slide_damping_work, penalty_energy
+   public :: has_slide_damping, penalty_energy, element_damping_force, slide_damping_force, damping_work
 
    type :: dynamic_system_type
-      !> (6, 6, nelem): each element's consistent mass and damping matrices.
-      real(dp), allocatable :: me(:, :, :), ce(:, :, :)
+      !> (6, 6, nelem): each element's consistent mass matrix.
+      real(dp), allocatable :: me(:, :, :)
       !> (nelem): Rayleigh coefficients of each element's section.
       real(dp), allocatable :: alpha(:), beta(:)
       !> (ndof): point masses on translations, rotary inertias on rotations.
@@ -41,11 +43,8 @@ module fekap_effects_dynamic_system
       real(dp), allocatable :: weight(:)
       !> (ndof) work.
       real(dp), allocatable :: work(:)
-      !> (nslide): each slideline's dashpot on its gap rate; (6, 6, nslide):
-      !> its damping matrix c N_s N_s^T of the step, on the dofs slide_dofs
-      !> (6, nslide) (0: a ground guide's point).
-      real(dp), allocatable :: slide_c(:), cs(:, :, :)
-      integer, allocatable :: slide_dofs(:, :)
+      !> (nslide): each slideline's dashpot on its gap rate.
+      real(dp), allocatable :: slide_c(:)
    end type dynamic_system_type
 
 contains
@@ -57,11 +56,10 @@ contains
       type(mesh_type), intent(in) :: mesh
       integer :: e, i, ne
       ne = size(mesh%elements)
-      allocate (self%me(6, 6, ne), self%ce(6, 6, ne), source=0.0_dp)
+      allocate (self%me(6, 6, ne), source=0.0_dp)
       allocate (self%alpha(ne), self%beta(ne), source=0.0_dp)
       allocate (self%point_mass(mesh%ndof), self%weight(mesh%ndof), self%work(mesh%ndof), source=0.0_dp)
-      allocate (self%slide_c(size(mesh%slides)), self%cs(6, 6, size(mesh%slides)), source=0.0_dp)
-      allocate (self%slide_dofs(6, size(mesh%slides)), source=0)
+      allocate (self%slide_c(size(mesh%slides)), source=0.0_dp)
       do i = 1, size(mesh%slides)
          self%slide_c(i) = model%slidelines(i)%damping
       end do
@@ -96,39 +94,97 @@ contains
       has_slide_damping = any(self%slide_c /= 0)
    end function has_slide_damping
 
-   !> Each damped slideline's matrix c N_s N_s^T at q (its master segment
-   !> seg): the dashpot for the step that starts at q.
-   pure subroutine update_slide_damping(self, mesh, q, seg)
-      type(dynamic_system_type), intent(inout) :: self
-      type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:)
-      integer, intent(in) :: seg(:)
-      real(dp) :: xs(2), x1(2), x2(2), ns(6)
-      integer :: i, j
-      do i = 1, size(mesh%slides)
-         if (self%slide_c(i) == 0) cycle
-         call slide_position(mesh, mesh%slides(i), seg(i), q, xs, x1, x2, self%slide_dofs(:, i))
-         ns = slide_gap_gradient(xs, x1, x2)
-         do j = 1, 6
-            self%cs(:, j, i) = self%slide_c(i)*ns*ns(j)
-         end do
-      end do
-   end subroutine update_slide_damping
-
-   !> The energy the slidelines' dashpots dissipated over a step: the
-   !> trapezoidal rule of C_s v on the displacement dq (C_s of the step).
-   pure real(dp) function slide_damping_work(self, v0, v1, dq) result(work)
+   !> The damping force of element e at (q, v) over its dofs (edof):
+   !> alpha M_e v_e + beta K_m(q_e) v_e (beam_damping_force) and, if asked,
+   !> the iteration matrix's share k = dD_e/dq_e + c1 dD_e/dv_e (not symmetric).
+   pure subroutine element_damping(self, mesh, e, q, v, fe, c1, ke)
       type(dynamic_system_type), intent(in) :: self
-      real(dp), intent(in) :: v0(:), v1(:), dq(:)
-      integer :: i
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: e
+      real(dp), intent(in) :: q(:), v(:)
+      real(dp), intent(out) :: fe(6)
+      real(dp), intent(in), optional :: c1
+      real(dp), intent(out), optional :: ke(6, 6)
+      real(dp) :: ve(6), fb(6)
+      ve = gather(v, mesh%edof(:, e))
+      fe = self%alpha(e)*times6(self%me, e, ve)
+      if (present(ke)) ke = c1*self%alpha(e)*self%me(:, :, e)
+      if (self%beta(e) == 0) return
+      if (present(ke)) then
+         call beam_damping_force(mesh%elements(e), gather(q, mesh%edof(:, e)), ve, self%beta(e), fb, c1, ke)
+         ke = ke + c1*self%alpha(e)*self%me(:, :, e)
+      else
+         call beam_damping_force(mesh%elements(e), gather(q, mesh%edof(:, e)), ve, self%beta(e), fb)
+      end if
+      fe = fe + fb
+   end subroutine element_damping
+
+   !> Element e's damping force at (q, v) over its dofs (element_damping).
+   pure function element_damping_force(self, mesh, e, q, v) result(fe)
+      type(dynamic_system_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: e
+      real(dp), intent(in) :: q(:), v(:)
+      real(dp) :: fe(6)
+      call element_damping(self, mesh, e, q, v, fe)
+   end function element_damping_force
+
+   !> Slideline i's dashpot at (q, v) on its master segment seg: the force
+   !> c (N_s . v) N_s it resists with (slide_dashpot) on the dofs `dofs`
+   !> (0: a ground guide's point) and, if asked, its iteration matrix's share.
+   pure subroutine slide_damping_force(self, mesh, i, q, v, seg, f, dofs, c1, k)
+      type(dynamic_system_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: i, seg
+      real(dp), intent(in) :: q(:), v(:)
+      real(dp), intent(out) :: f(6)
+      integer, intent(out) :: dofs(6)
+      real(dp), intent(in), optional :: c1
+      real(dp), intent(out), optional :: k(6, 6)
+      real(dp) :: xs(2), x1(2), x2(2)
+      call slide_position(mesh, mesh%slides(i), seg, q, xs, x1, x2, dofs)
+      call slide_dashpot(xs, x1, x2, self%slide_c(i), gather(v, dofs), f, c1, k)
+   end subroutine slide_damping_force
+
+   !> The energy the damping dissipated over a step of length h from (q0, v0)
+   !> to (q1, v1) (seg: the step's master segments): alpha/2 dq^T M_e (v0 + v1),
+   !> the trapezoidal rule as the loads' work, and beta/h L |Delta eps|_D^2 per
+   !> element and c Delta g^2 / h per dashpot, the work of the viscous forces at
+   !> the strain and gap rates Delta eps/h and Delta g/h: objective (no work in a
+   !> rigid step), never negative, and equal to the trapezoidal rule of the
+   !> forces on dq for a linear system under the trapezoidal integrator. The
+   !> energy-momentum step's damping does exactly this work with v0 = v1 = z/h
+   !> and its increments z (Cayley's on rotations) as dq.
+   pure real(dp) function damping_work(self, mesh, q0, v0, q1, v1, seg, h, z) result(work)
+      type(dynamic_system_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q0(:), v0(:), q1(:), v1(:), h
+      integer, intent(in) :: seg(:)
+      !> The step's increments, if not q1 - q0.
+      real(dp), intent(in), optional :: z(:)
+      real(dp) :: x0(6), x1(6), dq(6), xs(2, 2), xa(2, 2), xb(2, 2), g(2), alpha, s1
+      integer :: e, i, k, dofs(6)
       work = 0
+      do e = 1, size(mesh%elements)
+         if (self%alpha(e) == 0 .and. self%beta(e) == 0) cycle
+         x0 = gather(q0, mesh%edof(:, e))
+         x1 = gather(q1, mesh%edof(:, e))
+         dq = x1 - x0
+         if (present(z)) dq = gather(z, mesh%edof(:, e))
+         work = work + 0.5_dp*self%alpha(e)*dot_product(dq, times6(self%me, e, gather(v0, mesh%edof(:, e)) + &
+            & gather(v1, mesh%edof(:, e))))
+         if (self%beta(e) /= 0) work = work + self%beta(e)*beam_strain_change(mesh%elements(e), x0, x1)/h
+      end do
       do i = 1, size(self%slide_c)
          if (self%slide_c(i) == 0) cycle
-         associate (dofs => self%slide_dofs(:, i))
-            work = work + 0.5_dp*dot_product(gather(dq, dofs), matmul(self%cs(:, :, i), gather(v0, dofs) + gather(v1, dofs)))
-         end associate
+         call slide_position(mesh, mesh%slides(i), seg(i), q0, xs(:, 1), xa(:, 1), xb(:, 1), dofs)
+         call slide_position(mesh, mesh%slides(i), seg(i), q1, xs(:, 2), xa(:, 2), xb(:, 2), dofs)
+         do k = 1, 2
+            call slide_geometry(xs(:, k), xa(:, k), xb(:, k), g(k), alpha, s1)
+         end do
+         work = work + self%slide_c(i)*(g(2) - g(1))**2/h
       end do
-   end function slide_damping_work
+   end function damping_work
 
    !> The slidelines' penalty energy at q: kp g^2/2 of each gap spring and
    !> kr e^2/2 of each prismatic tie (F^c is minus its gradient).
@@ -160,25 +216,9 @@ contains
       g = g + self%weight
    end subroutine external_forces
 
-   !> Each element's damping matrix alpha M + beta K_m at q (the material
-   !> tangent): C for the step that starts at q.
-   pure subroutine update_damping(self, mesh, q)
-      type(dynamic_system_type), intent(inout) :: self
-      type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:)
-      real(dp) :: pe(6), ke(6, 6)
-      integer :: e
-      do e = 1, size(mesh%elements)
-         self%ce(:, :, e) = self%alpha(e)*self%me(:, :, e)
-         if (self%beta(e) /= 0) then
-            call beam_residual(mesh%elements(e), q(mesh%edof(:, e)), pe, ke, geometric_above=huge(1.0_dp))
-            self%ce(:, :, e) = self%ce(:, :, e) + self%beta(e)*ke
-         end if
-      end do
-   end subroutine update_damping
-
-   !> The residual R over all dofs at time t into system%r, and with `c1`, `c2` the iteration matrix K + c1 C + c2 M into the
-   !> system's band (and free-driven block).
+   !> The residual R over all dofs at time t into system%r, and with `c1`, `c2`
+   !> the iteration matrix K + dD/dq + c1 dD/dqd + c2 M into the system's band
+   !> (and free-driven block): not symmetric with beta damping or dashpots.
    subroutine assemble_dynamics(self, system, mesh, q, v, acc, t, seg, counts, c1, c2)
       type(dynamic_system_type), intent(inout) :: self
       type(linear_system_type), intent(inout) :: system
@@ -188,12 +228,12 @@ contains
       integer, intent(in) :: seg(:)
       type(work_counts_type), intent(inout) :: counts
       real(dp), intent(in), optional :: c1, c2
-      real(dp) :: me(36), k, ae(6), ve(6), fe(6)
-      integer :: e, i, j
-      logical :: damped, slide_damped
+      real(dp) :: me(36), k, ae(6), fe(6), fd(6), ke(6, 6), coefficient
+      integer :: e, i, dofs(6)
+      logical :: damped, tangent
       damped = has_damping(self)
-      slide_damped = has_slide_damping(self)
-      if (present(c2)) then
+      tangent = present(c2)
+      if (tangent) then
          ! Full geometric stiffness: the motion strains the links.
          call assemble_system(system, mesh, q, t, seg, 0.0_dp, counts)
       else
@@ -205,34 +245,39 @@ contains
          do e = 1, size(mesh%elements)
             do i = 1, 6
                ae(i) = acc(mesh%edof(i, e))
-               ve(i) = v(mesh%edof(i, e))
             end do
             fe = times6(self%me, e, ae)
-            if (damped) fe = fe + times6(self%ce, e, ve)
+            if (damped .and. tangent) then
+               ! The damping at the iterate (q, v), and its share of the iteration matrix.
+               call element_damping(self, mesh, e, q, v, fd, c1, ke)
+               fe = fe + fd
+               if (self%beta(e) /= 0) call scatter(mesh, mesh%edof(:, e), ke, system%kff, system%kfd, general=.true.)
+            else if (damped) then
+               call element_damping(self, mesh, e, q, v, fd)
+               fe = fe + fd
+            end if
             do i = 1, 6
                r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + fe(i)
             end do
          end do
-         if (slide_damped) then
-            ! The slidelines' dashpots: C_s v on their dofs.
-            do i = 1, size(self%slide_c)
-               if (self%slide_c(i) == 0) cycle
-               fe = matmul(self%cs(:, :, i), gather(v, self%slide_dofs(:, i)))
-               do j = 1, 6
-                  if (self%slide_dofs(j, i) > 0) r(self%slide_dofs(j, i)) = r(self%slide_dofs(j, i)) + fe(j)
-               end do
-            end do
-         end if
-      end associate
-      if (.not. present(c2)) return
-      if (slide_damped) then
+         ! The slidelines' dashpots at (q, v).
          do i = 1, size(self%slide_c)
-            if (self%slide_c(i) /= 0) call scatter(mesh, self%slide_dofs(:, i), c1*self%cs(:, :, i), system%kff, &
-               & system%kfd)
+            if (self%slide_c(i) == 0) cycle
+            if (tangent) then
+               call slide_damping_force(self, mesh, i, q, v, seg(i), fe, dofs, c1, ke)
+               call scatter(mesh, dofs, ke, system%kff, system%kfd, general=.true.)
+            else
+               call slide_damping_force(self, mesh, i, q, v, seg(i), fe, dofs)
+            end if
+            call subtract(r, dofs, -fe)
          end do
-      end if
+      end associate
+      if (.not. tangent) return
       do e = 1, size(mesh%elements)
-         call combine(self%me(:, :, e), self%ce(:, :, e), c1, c2, me)
+         ! c2 M_e, and c1 alpha M_e unless element_damping's share (with beta's) is in the band already.
+         coefficient = c2
+         if (self%beta(e) == 0) coefficient = c2 + c1*self%alpha(e)
+         call scaled(self%me(:, :, e), coefficient, me)
          call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), mesh%scatter_count(2, e), me, &
             & system%kff%a, system%kfd)
       end do
@@ -242,12 +287,12 @@ contains
       end do
    end subroutine assemble_dynamics
 
-   !> c2 m + c1 c, as 36 numbers in memory order.
-   pure subroutine combine(m, c, c1, c2, mc)
-      real(dp), intent(in) :: m(36), c(36), c1, c2
+   !> c m, as 36 numbers in memory order.
+   pure subroutine scaled(m, c, mc)
+      real(dp), intent(in) :: m(36), c
       real(dp), intent(out) :: mc(36)
-      mc = c2*m + c1*c
-   end subroutine combine
+      mc = c*m
+   end subroutine scaled
 
    !> y = m(:, :, e) x for element e's 6 x 6 matrix of m (6, 6, nelem),
    !> without a copy of it (m is contiguous, so its slice is passed in place).

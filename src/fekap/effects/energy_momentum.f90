@@ -5,17 +5,19 @@
 !> The step's increments z are Delta q on translations and psi = 2 tan(Delta theta/2)
 !> on rotations (theta1 = theta0 + 2 atan(psi/2), em_increments), and
 !>   v1 = 2 z/h - v0,                                          (z = h (v0 + v1)/2)
-!>   R = M (v1 - v0)/h + C z/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
+!>   R = M (v1 - v0)/h + alpha M z/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
 !> on the free dofs, p the elements' discrete gradients, conjugate to z
-!> (fekap_element_discrete_gradient), and the pin-in-slot slidelines' (the
-!> penalty springs' on the step's segments, fekap_contact_slide_gradient). Contracted with z the free rows
-!> give the energy balance of the step exactly:
-!>   T1 - T0 + W1 - W0 + V1 - V0 = work of loads and drives (on z) - h |z/h|_C^2
-!>     - chi/2 sum L |Delta eps|_D^2,
+!> (fekap_element_discrete_gradient), Rayleigh's beta in them as the stress
+!> beta/h D Delta eps (the dissipation chi + 2 beta/h), and the pin-in-slot
+!> slidelines' (the penalty springs' on the step's segments,
+!> fekap_contact_slide_gradient). Contracted with z the free rows give the
+!> energy balance of the step exactly:
+!>   T1 - T0 + W1 - W0 + V1 - V0 = work of loads and drives (on z) - h alpha |z/h|_M^2
+!>     - sum (beta/h + chi/2) L |Delta eps|_D^2,
 !> (V the gravity potential, on translations only): chi = 0 conserves the
 !> energy, chi > 0 makes it decay. p has no net force and no net moment about
 !> the mean configuration, so without loads linear and angular momentum are
-!> kept exactly. The iteration matrix dR/dq1 = dp/dq1 + (C/h + 2 M/h^2) dz/dq1
+!> kept exactly. The iteration matrix dR/dq1 = dp/dq1 + (alpha M/h + 2 M/h^2) dz/dq1
 !> is not symmetric: it is factored by LAPACK's band LU (dgbtrf) in its own storage.
 module fekap_effects_energy_momentum
    use fekap_kinds, only: dp
@@ -61,7 +63,7 @@ contains
 
    !> The residual R of the step from (q0, v0) to q1 over all dofs into r
    !> (v1 given for every dof: on the constrained ones the prescribed motion;
-   !> the damping acts on the mean rate z/h), g0 and g1 the external forces
+   !> alpha M damps the mean rate z/h), g0 and g1 the external forces
    !> at the step's ends; with `tangent`, the iteration matrix into self
    !> (v1 = 2 z/h - v0 on the dofs with mass).
    subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, seg, r, tangent)
@@ -75,7 +77,7 @@ contains
       integer, intent(in) :: seg(:)
       real(dp), contiguous, intent(out) :: r(:)
       logical, intent(in) :: tangent
-      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2, z(size(q0)), dz(size(q0))
+      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2, chi_e, z(size(q0)), dz(size(q0))
       integer :: e, i, j, ei, ej, d, dofs(6)
       c1 = 1/h
       c2 = 2/h**2
@@ -90,18 +92,21 @@ contains
             am(i) = (v1(d) - v0(d))/h
             vm(i) = z(d)/h
          end do
+         ! Rayleigh's beta damps the strain rate Delta eps / h: a stress beta/h D Delta eps in the
+         ! discrete gradient, objective (zero for a rigid step) and of work beta/h L |Delta eps|_D^2.
+         chi_e = chi
+         if (damped) chi_e = chi + 2*dyn%beta(e)/h
          if (tangent) then
-            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe, ke)
+            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi_e, pe, ke)
             do j = 1, 6
-               ! dv1/dq1 = 2/h dz/dq1: M and C act on the columns' Cayley rates.
-               ke(:, j) = ke(:, j) + c2*dz(mesh%edof(j, e))*dyn%me(:, j, e)
-               if (damped) ke(:, j) = ke(:, j) + c1*dz(mesh%edof(j, e))*dyn%ce(:, j, e)
+               ! dv1/dq1 = 2/h dz/dq1: M and alpha M act on the columns' Cayley rates.
+               ke(:, j) = ke(:, j) + (c2 + c1*dyn%alpha(e))*dz(mesh%edof(j, e))*dyn%me(:, j, e)
             end do
          else
-            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe)
+            call beam_discrete_gradient(mesh%elements(e), x0, x1, chi_e, pe)
          end if
          pe = pe + times6(dyn%me, e, am)
-         if (damped) pe = pe + times6(dyn%ce, e, vm)
+         if (damped) pe = pe + dyn%alpha(e)*times6(dyn%me, e, vm)
          do i = 1, 6
             d = mesh%edof(i, e)
             r(d) = r(d) + pe(i)

@@ -17,6 +17,9 @@ module fekap_element_beam
 
    public :: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain, beam_resultants
    public :: beam_strain_energy
+   !> The quadrature and the strains at a Gauss point, for the element's
+   !> damping (fekap_element_beam_damping).
+   public :: gauss_point, point_strain
 
    !> Most Gauss points of an element (see beam_type%ngauss).
    integer, parameter, public :: max_gauss = 2
