@@ -58,7 +58,9 @@ def test_spinning_beam_with_beta_damping_keeps_its_speed(tmp_path: Path) -> None
     axial transient), and the damping dissipates less than 2e-4 of the kinetic
     energy (0.48 J of 7200 J measured: the start's axial vibration).
     Energy-momentum (rho_inf 1): the angular momentum stays 2400.036 to 1e-9
-    relative, the balance closes to 1e-7 J, the tip's rate ends within 1e-3 of
+    relative, the balance closes to 2e-6 J (8.7e-7 measured with the Cayley update,
+    2.8e-10 of the kinetic energy: the work of the residual Newton leaves at its
+    round-off floor, about 4e-7 N here, 500 steps), the tip's rate ends within 1e-3 of
     6 rad/s (5.99926 measured: the stretched beam's larger inertia) and its
     radius at the centrifugal stretch to 1e-3 relative (2e-4 measured)."""
     undamped, _ = spinning(tmp_path, "undamped", 0.0, "generalized-alpha")
@@ -72,7 +74,7 @@ def test_spinning_beam_with_beta_damping_keeps_its_speed(tmp_path: Path) -> None
     angular = [float(row["angular"]) for row in energy]
     check(max(angular) - min(angular) < 1e-9 * angular[0], f"angular momentum {min(angular)!r}..{max(angular)!r}")
     worst = max(abs(float(row["balance"])) for row in energy)
-    check(worst < 1e-7, f"energy balance {worst!r} J")
+    check(worst < 2e-6, f"energy balance {worst!r} J")
     check(float(energy[-1]["dissipated"]) > 0, "nothing dissipated")
     rate = tip_rate(points[-1])
     check(abs(rate - 6) < 1e-3, f"tip rate {rate!r}")
