@@ -21,7 +21,11 @@ same mesh and step. Printed: per code the peak deflection and its time, the
 value at t = 15 s, the largest magnitude after it, the mean axial stretch over
 20-30 s, and the largest difference between the two codes' deflections.
 `--store` writes Exudyn's run of the deck's case (10 elements, dt 0.01) every
-0.05 s to test/app/data/spin-up-exudyn.csv.
+0.05 s to test/app/data/spin-up-exudyn.csv. `--beta B` damps both: FEKAP's
+section gets Rayleigh beta=B, Exudyn's elements the damping of their strain
+rates beta EA, beta GA, beta EI (objective: zero for a rigid motion), the
+same model once FEKAP's stiffness-proportional damping acts on the material
+strain rates.
 
 Exudyn runs in build/venv-exudyn (made on the first run, pinned in
 fekap_bench.EXUDYN_PACKAGES); FEKAP is build/local/bin/fekap (scripts/build).
@@ -44,8 +48,10 @@ L, EA, GA, EI, RHOA, RHOI = 10.0, 2.8e7, 1.0e7, 1.4e4, 1.2, 6e-4
 T_END = 30.0
 
 
-def run_exudyn(elements: int, dt: float, rho_inf: float, t_end: float = T_END) -> dict:
-    """Times, the hub's angle and the tip's position of Exudyn's run, and its CPU seconds."""
+def run_exudyn(elements: int, dt: float, rho_inf: float, t_end: float = T_END, beta: float = 0.0) -> dict:
+    """Times, the hub's angle and the tip's position of Exudyn's run, and its CPU seconds;
+    `beta`: stiffness-proportional damping of the strain rates (Exudyn's axial, shear and
+    bending damping beta EA, beta GA, beta EI: the material strain rates, objective)."""
     import exudyn as exu
     from exudyn.itemInterface import (MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
                                       ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, SensorNode)
@@ -59,7 +65,8 @@ def run_exudyn(elements: int, dt: float, rho_inf: float, t_end: float = T_END) -
     for a, b in zip(nodes, nodes[1:]):
         mbs.AddObject(ObjectBeamGeometricallyExact2D(
             nodeNumbers=[a, b], length=L / elements, massPerLength=RHOA, crossSectionInertia=RHOI,
-            bendingStiffness=EI, axialStiffness=EA, shearStiffness=GA))
+            bendingStiffness=EI, axialStiffness=EA, shearStiffness=GA,
+            bendingDamping=beta * EI, axialDamping=beta * EA, shearDamping=beta * GA))
 
     def coordinate(node: int, k: int) -> int:
         return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=k))
@@ -90,14 +97,17 @@ def run_exudyn(elements: int, dt: float, rho_inf: float, t_end: float = T_END) -
     return {"t": h[:, 0], "angle": h[:, 3], "x": p[:, 1], "y": p[:, 2], "cpu": cpu}
 
 
-def run_fekap(elements: int, dt: float, rho_inf: float, t_end: float = T_END) -> dict:
-    """The same from FEKAP's run of the deck (element count, dt and rho_inf changed)."""
+def run_fekap(elements: int, dt: float, rho_inf: float, t_end: float = T_END, beta: float = 0.0) -> dict:
+    """The same from FEKAP's run of the deck (element count, dt, rho_inf and the
+    section's Rayleigh beta changed)."""
     import dynamics_checks as dc
 
     text = DECK.read_text()
     if "OT  O  T  beam  10" not in text:
         sys.exit(f"{DECK}: its link line changed; this script sets the element count on it")
     text = text.replace("OT  O  T  beam  10", f"OT  O  T  beam  {elements}")
+    if beta:
+        text = text.replace("rhoI=6e-4", f"rhoI=6e-4  beta={beta!r}")
     work = fb.scratch_dir("fekap-spin-up-")
     deck = work / "spin-up.deck"
     deck.write_text(fb.with_settings(text, {"integrator": f"generalized-alpha {rho_inf!r}"}))
@@ -113,6 +123,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", default="10:0.01,40:0.0025", help="elements:dt pairs, comma-separated")
     parser.add_argument("--rho-inf", type=float, default=0.8)
+    parser.add_argument("--beta", type=float, default=0.0,
+                        help="stiffness-proportional damping in both codes (FEKAP: the section's beta=)")
     parser.add_argument("--store", action="store_true", help=f"write {STORED.relative_to(fb.ROOT)}")
     args = parser.parse_args()
     fb.in_exudyn_venv(__file__, sys.argv[1:])
@@ -120,14 +132,15 @@ def main() -> int:
 
     import dynamics_checks as dc
 
-    print(f"spin-up beam, generalized-alpha rho_inf {args.rho_inf:g}, 0-{T_END:g} s; tip in the hub's frame")
+    print(f"spin-up beam, generalized-alpha rho_inf {args.rho_inf:g}, 0-{T_END:g} s, beta {args.beta:g}; "
+          "tip in the hub's frame")
     print("| code | elements | dt (s) | peak | t of peak (s) | at t = 15 s | largest after 15 s "
           "| mean stretch 20-30 s | largest difference Exudyn - FEKAP (after 15 s) | time (s) |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     cases = [(int(e), float(d)) for e, d in (c.split(":") for c in args.cases.split(","))]
     for elements, dt in cases:
-        runs = {name: run(elements, dt, args.rho_inf) for name, run in (("Exudyn 1.13.6", run_exudyn),
-                                                                        ("FEKAP", run_fekap))}
+        runs = {name: run(elements, dt, args.rho_inf, beta=args.beta)
+                for name, run in (("Exudyn 1.13.6", run_exudyn), ("FEKAP", run_fekap))}
         tips = {name: dc.hub_frame(r["t"], r["x"], r["y"], r["angle"]) for name, r in runs.items()}
         t_ex, _, v_ex = tips["Exudyn 1.13.6"]
         t_fe, _, v_fe = tips["FEKAP"]
@@ -138,7 +151,7 @@ def main() -> int:
             column = f"{diff.max():.2e} ({diff[t_ex >= 15].max():.2e})" if name == "FEKAP" else ""
             print(f"| {name} | {elements} | {dt:g} | {f['peak']:.5f} | {f['t_peak']:.4f} | {f['at15']:.3e} | "
                   f"{f['residual']:.3e} | {stretch:.5e} | {column} | {runs[name]['cpu']:.2f} |")
-        if args.store and (elements, dt) == (10, 0.01):
+        if args.store and (elements, dt) == (10, 0.01) and not args.beta:
             # Exudyn's steps end within 1e-5 s of multiples of dt (its own time bookkeeping; the
             # hub's angle is the table's at those times): interpolated to the 0.05 s grid.
             t, along, across = tips["Exudyn 1.13.6"]
