@@ -21,7 +21,8 @@ same mesh and step. Printed: per code the peak deflection and its time, the
 value at t = 15 s, the largest magnitude after it, the mean axial stretch over
 20-30 s, and the largest difference between the two codes' deflections.
 `--store` writes Exudyn's run of the deck's case (10 elements, dt 0.01) every
-0.05 s to test/app/data/spin-up-exudyn.csv. `--beta B` damps both: FEKAP's
+0.05 s to test/app/data/spin-up-exudyn.csv (with --beta B:
+spin-up-exudyn-betaB.csv). `--beta B` damps both: FEKAP's
 section gets Rayleigh beta=B, Exudyn's elements the damping of their strain
 rates beta EA, beta GA, beta EI (objective: zero for a rigid motion), the
 same model once FEKAP's stiffness-proportional damping acts on the material
@@ -43,7 +44,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import fekap_bench as fb  # noqa: E402
 
 DECK = fb.ROOT / "decks" / "dynamics" / "spin-up.deck"
-STORED = fb.ROOT / "test" / "app" / "data" / "spin-up-exudyn.csv"
+DATA = fb.ROOT / "test" / "app" / "data"
+
+
+def stored(beta: float) -> Path:
+    """Where --store writes Exudyn's run of the deck's case (with damping beta)."""
+    return DATA / ("spin-up-exudyn.csv" if not beta else f"spin-up-exudyn-beta{beta:g}.csv")
 L, EA, GA, EI, RHOA, RHOI = 10.0, 2.8e7, 1.0e7, 1.4e4, 1.2, 6e-4
 T_END = 30.0
 
@@ -125,7 +131,8 @@ def main() -> int:
     parser.add_argument("--rho-inf", type=float, default=0.8)
     parser.add_argument("--beta", type=float, default=0.0,
                         help="stiffness-proportional damping in both codes (FEKAP: the section's beta=)")
-    parser.add_argument("--store", action="store_true", help=f"write {STORED.relative_to(fb.ROOT)}")
+    parser.add_argument("--store", action="store_true",
+                        help="write Exudyn's run of 10:0.01 to test/app/data/spin-up-exudyn[-betaB].csv")
     args = parser.parse_args()
     fb.in_exudyn_venv(__file__, sys.argv[1:])
     import numpy as np
@@ -151,20 +158,21 @@ def main() -> int:
             column = f"{diff.max():.2e} ({diff[t_ex >= 15].max():.2e})" if name == "FEKAP" else ""
             print(f"| {name} | {elements} | {dt:g} | {f['peak']:.5f} | {f['t_peak']:.4f} | {f['at15']:.3e} | "
                   f"{f['residual']:.3e} | {stretch:.5e} | {column} | {runs[name]['cpu']:.2f} |")
-        if args.store and (elements, dt) == (10, 0.01) and not args.beta:
+        if args.store and (elements, dt) == (10, 0.01):
             # Exudyn's steps end within 1e-5 s of multiples of dt (its own time bookkeeping; the
             # hub's angle is the table's at those times): interpolated to the 0.05 s grid.
             t, along, across = tips["Exudyn 1.13.6"]
             grid = np.round(np.arange(0, T_END + 1e-9, 0.05), 2)
-            STORED.parent.mkdir(parents=True, exist_ok=True)
-            with open(STORED, "w") as handle:
-                handle.write("# The spin-up beam in Exudyn 1.13.6 (scripts/exudyn_spin_up.py --store): 10\n"
-                             f"# ObjectBeamGeometricallyExact2D elements, dt 0.01, generalized-alpha {args.rho_inf:g};\n"
+            path = stored(args.beta)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with open(path, "w") as handle:
+                handle.write(f"# The spin-up beam in Exudyn 1.13.6 (scripts/exudyn_spin_up.py --store --beta {args.beta:g}):\n"
+                             f"# 10 ObjectBeamGeometricallyExact2D elements, dt 0.01, generalized-alpha {args.rho_inf:g};\n"
                              "# the tip's axial stretch and transverse deflection in the hub's frame every 0.05 s.\n")
                 handle.write("t,along,across\n")
                 for g, a, c in zip(grid, np.interp(grid, t, along), np.interp(grid, t, across)):
                     handle.write(f"{g:.2f},{a:.9e},{c:.9e}\n")
-            print(f"wrote {STORED.relative_to(fb.ROOT)}")
+            print(f"wrote {path.relative_to(fb.ROOT)}")
     return 0
 
 
