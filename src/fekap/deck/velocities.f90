@@ -9,20 +9,12 @@ module fekap_deck_velocities
    implicit none
    private
 
-   public :: read_velocities, link_point_velocity
+   public :: read_velocities
 
    !> Largest magnitude of a velocity value.
    real(dp), parameter :: max_value = 1.0e15_dp
 
 contains
-
-   !> The velocity at point x of the link's rigid motion `sv`, its first node at x1.
-   pure function link_point_velocity(sv, x1, x) result(v)
-      type(start_velocity_type), intent(in) :: sv
-      real(dp), intent(in) :: x1(2), x(2)
-      real(dp) :: v(2)
-      v = sv%v + sv%omega*[-(x(2) - x1(2)), x(1) - x1(1)]
-   end function link_point_velocity
 
    subroutine read_velocities(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
@@ -70,8 +62,8 @@ contains
                node = model%links(link)%node(a)
                do b = 1, 2
                   if (model%links(list(j)%link)%node(b) /= node) cycle
-                  va = link_point_velocity(list(n), model%nodes(model%links(link)%node(1))%x, model%nodes(node)%x)
-                  vb = link_point_velocity(list(j), model%nodes(model%links(list(j)%link)%node(1))%x, &
+                  va = list(n)%velocity_at(model%nodes(model%links(link)%node(1))%x, model%nodes(node)%x)
+                  vb = list(j)%velocity_at(model%nodes(model%links(list(j)%link)%node(1))%x, &
                      & model%nodes(node)%x)
                   if (norm2(va - vb) > 1.0e-9_dp*max(1.0_dp, norm2(va), norm2(vb))) then
                      call ctx%error(iline, 1, 'links '//model%links(list(j)%link)%name//' and '// &

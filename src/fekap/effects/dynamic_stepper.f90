@@ -41,7 +41,6 @@ module fekap_effects_dynamic_stepper
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
    use fekap_output_format, only: es_text
-   use fekap_deck_velocities, only: link_point_velocity
    implicit none
    private
 
@@ -233,7 +232,7 @@ contains
                do e = 1, size(mesh%elements)
                   if (mesh%elink(e) /= l) cycle
                   do a = 0, 1
-                     self%v_start(mesh%edof(3*a + 1:3*a + 2, e)) = link_point_velocity(sv, x1, &
+                     self%v_start(mesh%edof(3*a + 1:3*a + 2, e)) = sv%velocity_at(x1, &
                         & mesh%q0(mesh%edof(3*a + 1:3*a + 2, e)))
                      self%v_start(mesh%edof(3*a + 3, e)) = sv%omega
                   end do

@@ -159,6 +159,8 @@ module fekap_model
       real(dp) :: v(2) = 0
       real(dp) :: omega = 0
       type(source_loc_type) :: loc
+   contains
+      procedure :: velocity_at => start_velocity_at
    end type start_velocity_type
 
    !> A sliding joint: a slave node kept on a master line by a penalty spring.
@@ -317,5 +319,12 @@ contains
       if (size_ <= 0) size_ = 1
    end function model_size
 
+   !> The velocity at point x of the link's rigid motion, its first node at x1.
+   pure function start_velocity_at(self, x1, x) result(v)
+      class(start_velocity_type), intent(in) :: self
+      real(dp), intent(in) :: x1(2), x(2)
+      real(dp) :: v(2)
+      v = self%v + self%omega*[-(x(2) - x1(2)), x(1) - x1(1)]
+   end function start_velocity_at
 
 end module fekap_model

@@ -17,9 +17,14 @@ module fekap_output_csv
    private
 
    public :: write_points_header, write_points_rows, write_links_header, write_links_rows
-   public :: write_steps_header, write_steps_row, write_mesh_csv, new_row_prefix
-   public :: write_nodes_header, write_nodes_row, write_mechanism_csv, write_reactions_header, write_reactions_rows
-   public :: write_energy_header, write_energy_row, write_deflection_header, write_deflection_rows
+   public :: write_header, write_steps_row, write_mesh_csv, new_row_prefix
+   public :: write_nodes_header, write_nodes_row, write_mechanism_csv, write_reactions_rows
+   public :: write_energy_row, write_deflection_rows
+
+   !> The fixed headers (write_header) of steps.csv, reactions.csv and
+   !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.
+   character(*), parameter, public :: steps_header = 'step,t,iterations,residual,cuts', &
+      & reactions_header = 'step,t,kind,link,node,fx,fy,m', deflection_header = 'step,t,node,ux,uy'
 
    !> Longest text of a real (es25.16e3 without its leading blank) and of an
    !> integer, and of the prefix `step,t,` of a row.
@@ -165,12 +170,13 @@ contains
       n = n + 1
    end subroutine append_char
 
-   subroutine write_steps_header(out)
+   !> A table's header line `header` (steps_header, ...).
+   subroutine write_header(out, header)
       type(text_buffer_type), intent(inout) :: out
-      character(*), parameter :: header = 'step,t,iterations,residual,cuts'
+      character(*), intent(in) :: header
       call reserve_text(out, len(header) + 1)
       call append_text(out%text, out%n, header//new_line('a'))
-   end subroutine write_steps_header
+   end subroutine write_header
 
    !> `step,t,iterations,residual,cuts`.
    subroutine write_steps_row(out, result, prefix)
@@ -316,13 +322,6 @@ contains
       end do
    end function squeeze
 
-   subroutine write_reactions_header(out)
-      type(text_buffer_type), intent(inout) :: out
-      character(*), parameter :: header = 'step,t,kind,link,node,fx,fy,m'
-      call reserve_text(out, len(header) + 1)
-      call append_text(out%text, out%n, header//new_line('a'))
-   end subroutine write_reactions_header
-
    !> `step,t,kind,link,node,fx,fy,m` for every reaction row of a kinetostatics
    !> or statics step, in the order and with the labels of fekap_model_reactions:
    !> `drive` rows (the force or torque of each drive, in its component),
@@ -368,14 +367,6 @@ contains
 
    end subroutine write_reactions_rows
 
-   !> `step,t,` and the columns `names` of energy.csv (dynamics).
-   subroutine write_energy_header(out, names)
-      type(text_buffer_type), intent(inout) :: out
-      character(*), intent(in) :: names
-      call reserve_text(out, len(names) + 8)
-      call append_text(out%text, out%n, 'step,t,'//names//new_line('a'))
-   end subroutine write_energy_header
-
    !> One row of energy.csv: the step's energies, work and momenta.
    subroutine write_energy_row(out, result, prefix)
       type(text_buffer_type), intent(inout) :: out
@@ -387,14 +378,6 @@ contains
       call append_values(out%text, out%n, result%energy)
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_energy_row
-
-   !> `step,t,node,ux,uy`: kinetostatics' elastic deflection (OUTPut deflection on).
-   subroutine write_deflection_header(out)
-      type(text_buffer_type), intent(inout) :: out
-      character(*), parameter :: header = 'step,t,node,ux,uy'
-      call reserve_text(out, len(header) + 1)
-      call append_text(out%text, out%n, header//new_line('a'))
-   end subroutine write_deflection_header
 
    !> `step,t,node,ux,uy` for every node of a kinetostatics step: the elastic
    !> deflection of the loaded configuration from the kinematic one (empty at
