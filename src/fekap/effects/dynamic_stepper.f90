@@ -37,7 +37,7 @@ module fekap_effects_dynamic_stepper
       & assemble_dynamics, update_damping, kinetic_energy, strain_energy, momentum, has_damping, times6, &
       & has_slide_damping, update_slide_damping, slide_damping_work, penalty_energy
    use fekap_effects_energy_momentum, only: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, &
-      & solve_em, em_free_velocities, massless_dofs
+      & solve_em, em_free_velocities, massless_dofs, em_increments
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
    use fekap_output_format, only: es_text
@@ -365,6 +365,7 @@ contains
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: work_loads, work_drives, dissipated, kinetic, strain, penalty, energy, created
+      real(dp) :: z(self%mesh%ndof)
       integer :: d
       integer :: seg(size(self%state%seg))
       logical :: moved, em
@@ -384,11 +385,17 @@ contains
             return
          end if
          ! Work over the step: the trapezoidal rule of the forces on the
-         ! displacement (exact for the trapezoidal integrator of a linear system).
+         ! displacement (exact for the trapezoidal integrator of a linear system);
+         ! energy-momentum: on its increments z (Cayley's psi on rotations).
+         if (em) then
+            call em_increments(mesh, state%q, self%qt, z)
+         else
+            z = self%qt - state%q
+         end if
          work_loads = 0
          work_drives = 0
          do d = 1, mesh%ndof
-            associate (dq => self%qt(d) - state%q(d))
+            associate (dq => z(d))
                work_loads = work_loads + 0.5_dp*(state%g(d) + self%gt(d) - 2*dyn%weight(d))*dq
                ! Energy-momentum: the residual is the step's reaction.
                if (mesh%status(d) == dof_driven .and. em) then
@@ -401,8 +408,7 @@ contains
          dissipated = 0
          if (self%damped .and. em) then
             ! Energy-momentum: the damping acts on the step's mean rate.
-            call damping_work(dyn, mesh, (self%qt - state%q)/(t_new - state%t), (self%qt - state%q)/(t_new - state%t), &
-               & self%qt - state%q, dissipated)
+            call damping_work(dyn, mesh, z/(t_new - state%t), z/(t_new - state%t), z, dissipated)
          else if (self%damped) then
             call damping_work(dyn, mesh, state%v, self%vt, self%qt - state%q, dissipated)
          end if
@@ -561,8 +567,9 @@ contains
             end if
          end do
          self%acct = (self%vt - state%v)/h
-         ! The step's mean rates, for the next step's massless dofs.
-         self%at = (self%qt - state%q)/h
+         ! The step's mean rates z/h, for the next step's massless dofs.
+         call em_increments(mesh, state%q, self%qt, self%at)
+         self%at = self%at/h
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
       end associate
    end subroutine em_newton

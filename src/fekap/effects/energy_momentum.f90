@@ -1,27 +1,33 @@
 !> One step of the energy-momentum integrator (docs/dynamics.md): the
 !> midpoint rule with the beams' discrete gradient (Simo & Tarnow, ZAMP 43,
-!> 1992; Gonzalez, J. Nonlinear Sci. 6, 1996), unknown q1 = q_n+1,
-!>   v1 = 2 (q1 - q0)/h - v0,                                 (q1 - q0 = h (v0 + v1)/2)
-!>   R = M (v1 - v0)/h + C (q1 - q0)/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
-!> on the free dofs, p the elements' discrete gradients
-!> (fekap_element_discrete_gradient). Contracted with q1 - q0 the free rows
+!> 1992; Gonzalez, J. Nonlinear Sci. 6, 1996) and rotations updated by the
+!> Cayley map (Simo, Tarnow & Doblare, IJNME 38, 1995), unknown q1 = q_n+1.
+!> The step's increments z are Delta q on translations and psi = 2 tan(Delta theta/2)
+!> on rotations (theta1 = theta0 + 2 atan(psi/2), em_increments), and
+!>   v1 = 2 z/h - v0,                                          (z = h (v0 + v1)/2)
+!>   R = M (v1 - v0)/h + C z/h + p(q0, q1) - (g(t_n) + g(t_n+1))/2 = 0,
+!> on the free dofs, p the elements' discrete gradients, conjugate to z
+!> (fekap_element_discrete_gradient). Contracted with z the free rows
 !> give the energy balance of the step exactly:
-!>   T1 - T0 + W1 - W0 + V1 - V0 = work of loads and drives - h |v_mid|_C^2
+!>   T1 - T0 + W1 - W0 + V1 - V0 = work of loads and drives (on z) - h |z/h|_C^2
 !>     - chi/2 sum L |Delta eps|_D^2,
-!> (V the gravity potential): chi = 0 conserves the energy, chi > 0 makes it
-!> decay. The iteration matrix dR/dq1 = dp/dq1 + C/h + 2 M/h^2 is not
-!> symmetric: it is factored by LAPACK's band LU (dgbtrf) in its own storage.
+!> (V the gravity potential, on translations only): chi = 0 conserves the
+!> energy, chi > 0 makes it decay. p has no net force and no net moment about
+!> the mean configuration, so without loads linear and angular momentum are
+!> kept exactly. The iteration matrix dR/dq1 = dp/dq1 + (C/h + 2 M/h^2) dz/dq1
+!> is not symmetric: it is factored by LAPACK's band LU (dgbtrf) in its own storage.
 module fekap_effects_energy_momentum
    use fekap_kinds, only: dp
+   use fekap_model, only: dof_rot
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_lapack, only: band_lu_factor, band_lu_solve
-   use fekap_element_discrete_gradient, only: beam_discrete_gradient
+   use fekap_element_discrete_gradient, only: beam_discrete_gradient, cayley_increment
    use fekap_effects_dynamic_system, only: dynamic_system_type, times6
    implicit none
    private
 
    public :: em_system_type, new_em_system, em_dissipation, assemble_em, factor_em, solve_em
-   public :: em_free_velocities, massless_dofs
+   public :: em_free_velocities, massless_dofs, em_increments
 
    !> The band LU storage of the free equations' iteration matrix.
    type :: em_system_type
@@ -52,8 +58,9 @@ contains
 
    !> The residual R of the step from (q0, v0) to q1 over all dofs into r
    !> (v1 given for every dof: on the constrained ones the prescribed motion;
-   !> the damping acts on the mean rate (q1 - q0)/h), g0 and g1 the external forces
-   !> at the step's ends; with `tangent`, the iteration matrix into self.
+   !> the damping acts on the mean rate z/h), g0 and g1 the external forces
+   !> at the step's ends; with `tangent`, the iteration matrix into self
+   !> (v1 = 2 z/h - v0 on the dofs with mass).
    subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, r, tangent)
       type(em_system_type), intent(inout) :: self
       type(dynamic_system_type), intent(in) :: dyn
@@ -63,10 +70,11 @@ contains
       logical, intent(in) :: damped
       real(dp), contiguous, intent(out) :: r(:)
       logical, intent(in) :: tangent
-      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2
+      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2, z(size(q0)), dz(size(q0))
       integer :: e, i, j, ei, ej, d
       c1 = 1/h
       c2 = 2/h**2
+      call em_increments(mesh, q0, q1, z, dz)
       r = dyn%point_mass*(v1 - v0)/h - 0.5_dp*(g0 + g1)
       if (tangent) self%ab = 0
       do e = 1, size(mesh%elements)
@@ -75,12 +83,15 @@ contains
             x0(i) = q0(d)
             x1(i) = q1(d)
             am(i) = (v1(d) - v0(d))/h
-            vm(i) = (x1(i) - x0(i))/h
+            vm(i) = z(d)/h
          end do
          if (tangent) then
             call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe, ke)
-            ke = ke + c2*dyn%me(:, :, e)
-            if (damped) ke = ke + c1*dyn%ce(:, :, e)
+            do j = 1, 6
+               ! dv1/dq1 = 2/h dz/dq1: M and C act on the columns' Cayley rates.
+               ke(:, j) = ke(:, j) + c2*dz(mesh%edof(j, e))*dyn%me(:, j, e)
+               if (damped) ke(:, j) = ke(:, j) + c1*dz(mesh%edof(j, e))*dyn%ce(:, j, e)
+            end do
          else
             call beam_discrete_gradient(mesh%elements(e), x0, x1, chi, pe)
          end if
@@ -104,9 +115,26 @@ contains
       if (.not. tangent) return
       do i = 1, mesh%nfree
          d = mesh%eq_dof(i)
-         self%ab(2*self%kd + 1, i) = self%ab(2*self%kd + 1, i) + c2*dyn%point_mass(d)
+         self%ab(2*self%kd + 1, i) = self%ab(2*self%kd + 1, i) + c2*dz(d)*dyn%point_mass(d)
       end do
    end subroutine assemble_em
+
+   !> The step's increments z over all dofs: q1 - q0 on translations, the
+   !> Cayley form psi = 2 tan((q1 - q0)/2) on rotations; dz = dz/dq1.
+   pure subroutine em_increments(mesh, q0, q1, z, dz)
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q0(:), q1(:)
+      real(dp), intent(out) :: z(:)
+      real(dp), intent(out), optional :: dz(:)
+      real(dp) :: dpsi
+      integer :: d
+      do d = 1, size(q0)
+         z(d) = q1(d) - q0(d)
+         dpsi = 1
+         if (mesh%dof_kind(d) == dof_rot) call cayley_increment(q1(d) - q0(d), z(d), dpsi)
+         if (present(dz)) dz(d) = dpsi
+      end do
+   end subroutine em_increments
 
    !> LU factor of the assembled iteration matrix; info > 0: singular there.
    subroutine factor_em(self, info)
@@ -124,23 +152,24 @@ contains
    end subroutine solve_em
 
    !> The velocities v1 of the free dofs from the iterate q1 over a step of
-   !> length h: v1 = 2 (q1 - q0)/h - v0 (the midpoint rule, which the energy
-   !> balance needs on every dof with mass). A dof without mass has no
-   !> equation for its velocity, and that recursion would carry any error of
-   !> it on undamped (v1 + v0 = 2 vm); its velocity is the linear
-   !> extrapolation of the last two steps' mean rates vm (vm_prev of the step
-   !> of length h_prev before) to t_n+1 (second order), or 2 vm - v0 at the
-   !> first step (h_prev = 0).
+   !> length h: v1 = 2 z/h - v0 (the midpoint rule on the increments z of
+   !> em_increments, which the energy balance needs on every dof with mass).
+   !> A dof without mass has no equation for its velocity, and that recursion
+   !> would carry any error of it on undamped (v1 + v0 = 2 vm); its velocity
+   !> is the linear extrapolation of the last two steps' mean rates vm = z/h
+   !> (vm_prev of the step of length h_prev before) to t_n+1 (second order),
+   !> or 2 vm - v0 at the first step (h_prev = 0).
    pure subroutine em_free_velocities(mesh, massless, h, h_prev, q0, v0, vm_prev, q1, v1)
       type(mesh_type), intent(in) :: mesh
       logical, intent(in) :: massless(:)
       real(dp), intent(in) :: h, h_prev, q0(:), v0(:), vm_prev(:), q1(:)
       real(dp), intent(inout) :: v1(:)
-      real(dp) :: vm
+      real(dp) :: vm, z(size(q0))
       integer :: k, d
+      call em_increments(mesh, q0, q1, z)
       do k = 1, mesh%nfree
          d = mesh%eq_dof(k)
-         vm = (q1(d) - q0(d))/h
+         vm = z(d)/h
          if (massless(d) .and. h_prev > 0) then
             v1(d) = vm + (vm - vm_prev(d))*h/(h + h_prev)
          else
