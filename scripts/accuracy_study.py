@@ -25,10 +25,12 @@ Studies (deck, what is swept, the exact answer):
              before the first change point (t <= 0.7 s: the integrator's
              error, with its observed order) and over the 4 s (with the
              change points, where the elastic bars take a kick), generalized-alpha (GA) and energy-momentum (EM) with
-             rho_inf 1, 0.9, 0.8, 0.5, dt 8e-3 ... 2.5e-4, the observed order
-             against the next larger dt, and with bars 100 x stiffer (the
-             elastic model's share of the error); Newton iterations and
-             microseconds (analysis) per step
+             rho_inf 1, 0.9, 0.8, 0.5, dt 8e-3 ... 2.5e-4 (energy-momentum 1
+             and 0.8 down to 6.25e-5), the observed order against the next
+             larger dt; and the bars' stiffness swept from
+             EA = 1e8 to 1e12 at dt 5e-4 and 2.5e-4 (the elastic model's share
+             of the error: the plateau over the change points falls as the
+             bars stiffen); Newton iterations and microseconds (analysis) per step
 
 Errors are the largest distance between a tracked point and its exact position
 over every written step (positions), and for Example 1 also the largest
@@ -49,7 +51,6 @@ Usage: python3 scripts/accuracy_study.py [--short] [--dynamics] [--bin FEKAP] [-
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import re
@@ -64,7 +65,7 @@ import fekap_bench as fb  # noqa: E402
 
 sys.path.insert(0, str(fb.ROOT / "test" / "app"))
 from test_examples import fourbar_exact  # noqa: E402  (hyper-dual closed form of Example 1)
-import a02_exact  # noqa: E402  (the A02 chain's exact motion)
+import dynamics_checks as dc  # noqa: E402  (the benchmarks' answers from a run's CSV files)
 import numpy as np  # noqa: E402
 
 
@@ -230,46 +231,20 @@ def measure(binary: str, work: Path, item: tuple, repeat: int) -> dict:
     return record(study, case, setting, result, errors)
 
 
-BOTTOM_TIME, BOTTOM_SPEED = 0.591960487, 4.429446918
-
-
 def pendulum_errors(outdir: Path) -> dict:
-    """Errors of the first bottom pass: time (cubic Hermite interpolant of x) and speed."""
-    rows = fb.points(outdir, "B")
-    for a, b in zip(rows, rows[1:]):
-        if a["x"] > 0 >= b["x"]:
-            h = b["t"] - a["t"]
-            x0, x1, v0, v1 = a["x"], b["x"], a["vx"] * h, b["vx"] * h
-            u = x0 / (x0 - x1)
-            for _ in range(30):
-                f = (2*u**3 - 3*u**2 + 1)*x0 + (u**3 - 2*u**2 + u)*v0 + (-2*u**3 + 3*u**2)*x1 + (u**3 - u**2)*v1
-                df = (6*u**2 - 6*u)*x0 + (3*u**2 - 4*u + 1)*v0 + (-6*u**2 + 6*u)*x1 + (3*u**2 - 2*u)*v1
-                u -= f / df
-            speed = (1 - u) * math.hypot(a["vx"], a["vy"]) + u * math.hypot(b["vx"], b["vy"])
-            return {"error": abs(a["t"] + u * h - BOTTOM_TIME), "second": abs(speed - BOTTOM_SPEED)}
-    return {"error": float("nan"), "second": float("nan")}
-
-
-#: The A02 chain (N = 2) reaches its first change point (every bar flat) at t = 0.7148 s.
-A02_FIRST_CHANGE = 0.70
+    """Errors of the first bottom pass: time and speed (dynamics_checks.bottom_pass)."""
+    t, speed = dc.bottom_pass(outdir)
+    return {"error": abs(t - dc.BOTTOM_TIME), "second": abs(speed - dc.BOTTOM_SPEED)}
 
 
 def a02_errors(outdir: Path, n: int = 2) -> dict:
     """Largest errors of the first crank's angle (rad) and rate (rad/s)
-    against the exact motion (scripts/a02_exact.py: the energy integral's
-    quadrature): at the steps before the first change point (the integrator's
-    error: error, second) and at every step of the run (angle_all, rate_all:
-    with the change points, where the elastic bars' stiff modes take a kick
-    that the rigid answer has not)."""
-    with open(outdir / "links.csv", newline="") as handle:
-        rows = list(csv.DictReader(handle))
-    times = np.array([float(row["t"]) for row in rows])
-    theta, omega = a02_exact.exact(n, times)
-    angle = np.abs(np.array([float(row["angle"]) for row in rows]) - theta)
-    rate = np.abs(np.array([float(row["omega"]) for row in rows]) - omega)
-    before = times <= A02_FIRST_CHANGE
-    return {"error": float(angle[before].max()), "second": float(rate[before].max()),
-            "angle_all": float(angle.max()), "rate_all": float(rate.max())}
+    against the exact motion (dynamics_checks.a02_errors): before the first
+    change point (the integrator's error: error, second) and over the run
+    (angle_all, rate_all: with the change points, where the elastic bars'
+    stiff modes take a kick that the rigid answer has not)."""
+    e = dc.a02_errors(outdir, n)
+    return {"error": e["angle_before"], "second": e["rate_before"], "angle_all": e["angle"], "rate_all": e["rate"]}
 
 
 #: Integrators of the dynamics table: (ANALysis integrator line, label).
@@ -289,19 +264,26 @@ def dynamics_studies(short: bool) -> list[tuple]:
                         f"generalized-alpha {rho!r}", 0.62, None))
     integrators = (INTEGRATORS[0], INTEGRATORS[2], INTEGRATORS[4], INTEGRATORS[6]) if short else INTEGRATORS
     for line, _ in integrators:
-        for dt in ((4e-3, 2e-3) if short else (8e-3, 4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4)):
+        steps = (4e-3, 2e-3) if short else (8e-3, 4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4)
+        if not short and line in ("energy-momentum 1", "energy-momentum 0.8"):
+            steps += (1.25e-4, 6.25e-5)  # does the plateau over 4 s fall with dt? (it does not)
+        for dt in steps:
             out.append((A02_CASE, "dynamics/a02-n2.deck", dt, line, 4.0, None))
-    if not short:
-        # The elastic model's share: bars 100 times stiffer.
-        for line in ("generalized-alpha 0.8", "energy-momentum 0.8"):
-            for dt in (1e-3, 5e-4, 2.5e-4):
-                out.append((A02_CASE + ", bars 100 x stiffer", "dynamics/a02-n2.deck", dt, line, 4.0, stiffer))
+    # The elastic model's share: the bars' stiffness swept at a fixed small dt.
+    for factor in ((1e-2, 1e2) if short else (1e-2, 1e-1, 1e0, 1e1, 1e2)):
+        for line in ("energy-momentum 0.8", "generalized-alpha 0.8"):
+            for dt in ((5e-4,) if short else (5e-4, 2.5e-4)):
+                out.append((f"A02 N = 2, bars EA = {1e10 * factor:.0e} (EI = EA/100)", "dynamics/a02-n2.deck", dt, line,
+                            4.0, lambda text, f=factor: stiffness(text, f)))
     return out
 
 
-def stiffer(text: str) -> str:
-    """The A02 bars 100 times stiffer (EA = kGA = 1e12, EI = 1e10)."""
-    return text.replace("EA=1e10  kGA=1e10  EI=1e8", "EA=1e12  kGA=1e12  EI=1e10")
+def stiffness(text: str, factor: float) -> str:
+    """The A02 bars `factor` times as stiff as the deck's (EA = kGA = 1e10, EI = 1e8)."""
+    if "EA=1e10  kGA=1e10  EI=1e8" not in text:
+        raise SystemExit("decks/dynamics/a02-n2.deck's section line changed; the stiffness study edits it")
+    return text.replace("EA=1e10  kGA=1e10  EI=1e8",
+                        f"EA={1e10 * factor:g}  kGA={1e10 * factor:g}  EI={1e8 * factor:g}")
 
 
 def measure_dynamics(binary: str, work: Path, item: tuple, repeat: int) -> dict:
@@ -340,6 +322,33 @@ def dynamics_table(rows: list[dict]) -> str:
         lines.append(f"| {r['case']} | {r['integrator']} | {r['dt']:g} | {r['rc']} | {fmt(r['error'])} | "
                      f"{order(r.get('order_error'))} | {fmt(r['second'])} | {order(r.get('order_second'))} | "
                      f"{whole} | {r['iterations_per_step']:.2f} | {r['us_per_step']:.1f} |")
+    return "\n".join(lines)
+
+
+def stiffness_summary(rows: list[dict]) -> str:
+    """What the stiffness sweep says: per integrator and dt, the slope of
+    log(error) against log(EA), fitted over the swept EA, for the angle error
+    before the first change point and over the 4 s. A plateau made by the
+    elastic bars falls as they stiffen (negative slope over 4 s); an error of
+    the integrator on stiff bars grows with them."""
+    groups: dict[tuple, list[tuple[float, dict]]] = {}
+    for r in rows:
+        match = re.search(r"bars EA = (\S+)", r["case"])
+        if match and r["rc"] == 0:
+            groups.setdefault((r["integrator"], r["dt"]), []).append((float(match.group(1)), r))
+    lines = []
+    for (integrator, dt), sel in groups.items():
+        if len(sel) < 2:
+            continue
+        ea = np.log10([e for e, _ in sel])
+        slopes = {key: np.polyfit(ea, np.log10([max(r[key], 1e-300) for _, r in sel]), 1)[0]
+                  for key in ("error", "angle_all")}
+        spread = ", ".join(f"{fmt(r['angle_all'])}" for _, r in sel)
+        lines.append(f"- {integrator}, dt {dt:g}: over 4 s the angle error goes {spread} for EA = "
+                     f"{', '.join(f'{e:.0e}' for e, _ in sel)}: slope {slopes['angle_all']:+.2f} per decade of EA "
+                     f"({'falls as the bars stiffen: the elastic bars' if slopes['angle_all'] < -0.2 else 'does not fall'}); "
+                     f"before the first change point slope {slopes['error']:+.2f}"
+                     f"{' (grows with the stiffness: the integrator)' if slopes['error'] > 0.5 else ''}")
     return "\n".join(lines)
 
 
@@ -409,6 +418,9 @@ def main(argv: list[str] | None = None) -> int:
     text = table(rows)
     print(text)
     dynamics_text = dynamics_table(dynamics)
+    summary = stiffness_summary(dynamics)
+    if summary:
+        dynamics_text += "\n\nThe bars' stiffness at a fixed dt (the plateau over the change points):\n\n" + summary
     print("\nDynamics: error against the exact answers by dt and integrator\n")
     print(dynamics_text)
     if args.dynamics and not args.short:

@@ -13,64 +13,28 @@ m L^2 / 12 about the centre), ObjectJointRevolute2D pins (index 3,
 generalized-alpha with rho_inf 0.8, its default Newton tolerances). It is one
 pendulum of inertia I = (N+1)/3 + N about the pivots and gravity moment
 G cos(theta), G = ((N+1)/2 + N) g, so omega^2 = 1 + 2 G/I (1 - sin theta)
-and theta(t) by RK4 give the exact motion. The rigid chain's constraints
+and theta(t) by its quadrature (scripts/a02_exact.py) give the exact motion. The rigid chain's constraints
 (3N + 1 pins of 2 equations: 3 (2N + 1) - 1 equations on 3 (2N + 1)
 coordinates) are redundant where every bar is horizontal (the change points),
 which a constraint-based code must pass; FEKAP's elastic bars (EA = 1e10) pass
 them without constraints. CPU time: Exudyn's time.process_time() around
 SolveDynamic; FEKAP's process (start-up and the CSV output of every step
-included). Exudyn runs in build/venv-exudyn (made by
-scripts/exudyn_slider_crank.py); FEKAP is build/local/bin/fekap.
+included). Exudyn runs in build/venv-exudyn (made on the first run, fekap_bench.EXUDYN_PACKAGES); FEKAP is build/local/bin/fekap
+(fekap_bench.run_deck). Errors: dynamics_checks.a02_crank_errors, as the tests.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import math
-import os
 import resource
-import subprocess
+import shutil
 import sys
-import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-VENV_PYTHON = ROOT / "build" / "venv-exudyn" / "bin" / "python"
-
-
-def exact(n: int, times: list[float]) -> list[tuple[float, float]]:
-    """The crank's angle and rate at `times` (increasing, from 0) by RK4 of
-    I theta'' = -G cos(theta), 50 substeps per interval."""
-    inertia, moment = (n + 1) / 3 + n, ((n + 1) / 2 + n) * 9.81
-    y = [math.pi / 2, -1.0]
-
-    def f(y):
-        return [y[1], -moment / inertia * math.cos(y[0])]
-
-    out, previous = [], 0.0
-    for t in times:
-        h = (t - previous) / 50
-        for _ in range(50 if t > previous else 0):
-            k1 = f(y)
-            k2 = f([y[i] + h / 2 * k1[i] for i in range(2)])
-            k3 = f([y[i] + h / 2 * k2[i] for i in range(2)])
-            k4 = f([y[i] + h * k3[i] for i in range(2)])
-            y = [y[i] + h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]) for i in range(2)]
-        previous = t
-        out.append((y[0], y[1]))
-    return out
-
-
-def errors(n: int, times, angles, rates) -> tuple[float, float]:
-    """Worst rate error against the energy integral (more than 0.15 rad from
-    the change points, as test_dynamics.py) and worst angle error against RK4."""
-    inertia, moment = (n + 1) / 3 + n, ((n + 1) / 2 + n) * 9.81
-    worst_rate = max((abs(w + math.sqrt(max(0.0, 1 + 2 * moment / inertia * (1 - math.sin(a)))))
-                      for a, w in zip(angles, rates) if abs(math.sin(a)) > 0.15), default=math.nan)
-    worst_angle = max(abs(a - e[0]) for a, e in zip(angles, exact(n, times)))
-    return worst_rate, worst_angle
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import fekap_bench as fb  # noqa: E402
 
 
 def run_exudyn(n: int, dt: float, t_end: float) -> dict:
@@ -129,19 +93,19 @@ def run_exudyn(n: int, dt: float, t_end: float) -> dict:
 
 
 def run_fekap(n: int, dt: float, t_end: float) -> dict:
-    deck = ROOT / "decks" / "dynamics" / f"a02-n{n}.deck"
-    with tempfile.TemporaryDirectory() as work:
-        usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-        done = subprocess.run([str(ROOT / "build" / "local" / "bin" / "fekap"), "-q", str(deck), "-o", work,
-                               "--set", f"dt={dt!r}", "--set", f"t_end={t_end!r}"], capture_output=True, text=True)
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = after.ru_utime + after.ru_stime - usage.ru_utime - usage.ru_stime
-        rows = list(csv.DictReader(open(Path(work) / "links.csv", newline="")))
-        listing = (Path(work) / f"a02-n{n}.lis").read_text()
-    iterations = next(float(line.split()[-1]) for line in listing.splitlines() if "Newton iterations" in line)
-    return {"ok": done.returncode == 0, "cpu": cpu, "steps": len(rows) - 1, "iterations": iterations,
-            "times": [float(r["t"]) for r in rows], "angles": [float(r["angle"]) for r in rows],
-            "rates": [float(r["omega"]) for r in rows]}
+    import dynamics_checks as dc
+
+    deck = fb.ROOT / "decks" / "dynamics" / f"a02-n{n}.deck"
+    work = fb.scratch_dir("fekap-a02-")
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    result = fb.run_deck(fb.fekap_binary(), deck, work, "--set", f"dt={dt!r}", "--set", f"t_end={t_end!r}")
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime + after.ru_stime - usage.ru_utime - usage.ru_stime
+    links = dc.columns(work / "links.csv")
+    shutil.rmtree(work, ignore_errors=True)
+    return {"ok": result["rc"] == 0, "cpu": cpu, "steps": len(links["t"]) - 1,
+            "iterations": result["summary"].get("Newton iterations", 0.0),
+            "times": list(links["t"]), "angles": list(links["angle"]), "rates": list(links["omega"])}
 
 
 def main() -> int:
@@ -150,17 +114,14 @@ def main() -> int:
     parser.add_argument("--dt", type=float, default=0.002)
     parser.add_argument("--t-end", type=float, default=5.0)
     args = parser.parse_args()
-    try:
-        import exudyn  # noqa: F401
-    except ImportError:
-        if not VENV_PYTHON.is_file():
-            sys.exit("build/venv-exudyn is missing: run scripts/exudyn_slider_crank.py once to make it")
-        os.execv(str(VENV_PYTHON), [str(VENV_PYTHON), __file__, *sys.argv[1:]])
+    fb.in_exudyn_venv(__file__, sys.argv[1:])
+    import dynamics_checks as dc
     print(f"A02 N = {args.n}, dt {args.dt:g}, {args.t_end:g} s, rho_inf 0.8; first crank against the energy integral")
     for name, run in (("Exudyn 1.13.6, rigid bars", run_exudyn), ("FEKAP, elastic bars (the deck)", run_fekap)):
         r = run(args.n, args.dt, args.t_end)
         steps = max(1, round(r["times"][-1] / args.dt)) if r["times"] else 1
-        rate, angle = errors(args.n, r["times"], r["angles"], r["rates"]) if r["times"] else (math.nan, math.nan)
+        e = dc.a02_crank_errors(args.n, r["times"], r["angles"], r["rates"]) if r["times"] else {}
+        rate, angle = e.get("energy", math.nan), e.get("angle", math.nan)
         print(f"  {name}: {'finished' if r['ok'] else 'FAILED'} at t = {r['times'][-1] if r['times'] else 0:.4g}; "
               f"rate error {rate:.3e} rad/s, angle error {angle:.3e} rad; {r['steps']} steps, "
               f"{r['iterations'] / max(1, r['steps']):.2f} Newton iterations per step, "

@@ -44,7 +44,6 @@ import argparse
 import csv
 import json
 import math
-import os
 import resource
 import subprocess
 import sys
@@ -52,10 +51,10 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-VENV = ROOT / "build" / "venv-exudyn"
-EXUDYN = "exudyn==1.13.6"
-NUMPY = "numpy==2.4.6"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import fekap_bench as fb  # noqa: E402  (the Exudyn environment, shared with the other exudyn_*.py)
+
+ROOT = fb.ROOT
 
 D = 0.006
 E, G, RHO = 2.0e11, 7.7e10, 7870.0
@@ -65,18 +64,8 @@ CRANK, ROD, OMEGA = 0.15, 0.30, 150.0
 
 
 def ensure_exudyn() -> None:
-    """Run this script in build/venv-exudyn (made and filled on the first run)."""
-    try:
-        import exudyn  # noqa: F401
-        return
-    except ImportError:
-        pass
-    python = VENV / "bin" / "python"
-    if not python.is_file():
-        print(f"making {VENV} with {EXUDYN} from PyPI ...", file=sys.stderr)
-        subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
-        subprocess.run([str(python), "-m", "pip", "install", "-q", EXUDYN, NUMPY], check=True)
-    os.execv(str(python), [str(python), __file__, *sys.argv[1:]])
+    """Run this script in build/venv-exudyn (made and filled on the first run: fekap_bench)."""
+    fb.in_exudyn_venv(__file__, sys.argv[1:])
 
 
 def deflection(a, m, b) -> float:

@@ -13,6 +13,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RELEASE_BIN = ROOT / "build" / "local" / "bin" / "fekap"
+#: The comparison scripts' own environment with Exudyn (scripts/exudyn_*.py).
+EXUDYN_VENV = ROOT / "build" / "venv-exudyn"
+EXUDYN_PACKAGES = ("exudyn==1.13.6", "numpy==2.4.6")
 
 
 def fekap_binary(explicit: str | None = None) -> str:
@@ -21,6 +24,23 @@ def fekap_binary(explicit: str | None = None) -> str:
         if candidate and Path(candidate).is_file():
             return str(Path(candidate).resolve())
     raise SystemExit("no fekap executable: run scripts/build first (or set FEKAP_BIN)")
+
+
+def in_exudyn_venv(script: str, argv: list[str]) -> None:
+    """Return if Exudyn imports; else run `script` again in build/venv-exudyn,
+    making it with EXUDYN_PACKAGES from PyPI on the first call (does not return)."""
+    try:
+        import exudyn  # noqa: F401
+        return
+    except ImportError:
+        pass
+    python = EXUDYN_VENV / "bin" / "python"
+    if not python.is_file():
+        import sys
+        print(f"making {EXUDYN_VENV} with {', '.join(EXUDYN_PACKAGES)} from PyPI ...", file=sys.stderr)
+        subprocess.run([sys.executable, "-m", "venv", str(EXUDYN_VENV)], check=True)
+        subprocess.run([str(python), "-m", "pip", "install", "-q", *EXUDYN_PACKAGES], check=True)
+    os.execv(str(python), [str(python), script, *argv])
 
 
 def scratch_dir(prefix: str) -> Path:

@@ -357,24 +357,32 @@ def even_steps(first: int, last: int, count: int, endpoint: bool = True) -> list
     return sorted(set(np.linspace(first, last, count, endpoint=endpoint).round().astype(int).tolist()))
 
 
-@_twice
-def read_steps(path: Path, buckets: int = MAX_BUCKETS, slow: bool = False) -> Reduced | None:
-    """steps.csv decimated (iterations, residual, cuts), or None when absent or empty."""
+def _read_table(path: Path, name: str, wanted: tuple[str, ...], required: tuple[str, ...],
+                buckets: int, slow: bool) -> Reduced | None:
+    """A wide table of one row per step (steps.csv, energy.csv) decimated: the ``wanted`` columns
+    it has (every ``required`` one must be there), or None when absent or empty."""
     if not path.is_file():
         return None
     header = _header(path)
-    if "iterations" not in header or "step" not in header:
-        raise UsageError(f"{path}: missing column(s) step or iterations")
+    missing = [c for c in ("step", "t", *required) if c not in header]
+    if missing:
+        raise UsageError(f"{path}: missing column(s) {', '.join(missing)}")
     try:
         first, last = step_range(path)
     except UsageError:
         return None
-    quantities = tuple(q for q in ("iterations", "residual", "cuts") if q in header)
+    quantities = tuple(q for q in wanted if q in header)
     reducer = Reducer(first, last, len(quantities), buckets)
     for _, numbers, columns in _blocks(path, None, slow):
         reducer.feed(numbers[:, [columns.index(c) for c in ("step", "t", *quantities)]])
     rows, masks = reducer.finish()
-    return Reduced("steps", quantities, rows, masks)
+    return Reduced(name, quantities, rows, masks)
+
+
+@_twice
+def read_steps(path: Path, buckets: int = MAX_BUCKETS, slow: bool = False) -> Reduced | None:
+    """steps.csv decimated (iterations, residual, cuts), or None when absent or empty."""
+    return _read_table(path, "steps", ("iterations", "residual", "cuts"), ("iterations",), buckets, slow)
 
 
 #: The columns of energy.csv (dynamics runs) after step, t.
@@ -382,20 +390,7 @@ ENERGY_COLUMNS = ("kinetic", "strain", "penalty", "gravity", "work_loads", "work
                   "balance", "px", "py", "angular")
 
 
+@_twice
 def read_energy(path: Path, buckets: int = MAX_BUCKETS, slow: bool = False) -> Reduced | None:
     """energy.csv of a dynamics run decimated, or None when absent or empty."""
-    if not path.is_file():
-        return None
-    header = _header(path)
-    missing = [c for c in ("step", "t", *ENERGY_COLUMNS) if c not in header]
-    if missing:
-        raise UsageError(f"{path}: missing column(s) {', '.join(missing)}")
-    try:
-        first, last = step_range(path)
-    except UsageError:
-        return None
-    reducer = Reducer(first, last, len(ENERGY_COLUMNS), buckets)
-    for _, numbers, columns in _blocks(path, None, slow):
-        reducer.feed(numbers[:, [columns.index(c) for c in ("step", "t", *ENERGY_COLUMNS)]])
-    rows, masks = reducer.finish()
-    return Reduced("energy", ENERGY_COLUMNS, rows, masks)
+    return _read_table(path, "energy", ENERGY_COLUMNS, ENERGY_COLUMNS, buckets, slow)

@@ -28,8 +28,6 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import re
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -37,6 +35,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
 import a02  # noqa: E402
+import fekap_bench as fb  # noqa: E402
 
 BEGIN = "<!-- hard-cases table: begin (written by scripts/hard_cases.py; do not edit by hand) -->"
 END = "<!-- hard-cases table: end -->"
@@ -54,9 +53,8 @@ def run(fekap: str, deck: Path, out: Path, options: list[str]) -> tuple[int, Pat
     best = math.inf
     code = 0
     for _ in range(REPEAT):
-        p = subprocess.run([fekap, "-q", "-o", str(out), *options, str(deck)], capture_output=True, text=True,
-                           timeout=1800)
-        code = p.returncode
+        result = fb.run_deck(fekap, deck, out, *options, timeout=1800)
+        code = result["rc"]
         best = min(best, analysis_seconds(out))
     if out.is_dir():
         (out / "best-seconds.txt").write_text(repr(best))
@@ -64,10 +62,11 @@ def run(fekap: str, deck: Path, out: Path, options: list[str]) -> tuple[int, Pat
 
 
 def analysis_seconds(out: Path) -> float:
+    """The listing's analysis time of the run in out (inf without one)."""
     for lis in out.glob("*.lis"):
-        m = re.search(r"time in analysis \(s\)\s+([0-9.eE+-]+)", lis.read_text())
-        if m:
-            return float(m.group(1))
+        seconds = fb.read_listing(lis)["summary"].get("time in analysis (s)")
+        if seconds is not None:
+            return seconds
     return math.inf
 
 

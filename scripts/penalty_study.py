@@ -20,13 +20,16 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-FEKAP = ROOT / "build" / "local" / "bin" / "fekap"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import fekap_bench as fb  # noqa: E402
+
+ROOT = fb.ROOT
+FEKAP = fb.RELEASE_BIN
 
 
 def run(deck: Path, outdir: Path) -> tuple[int, str]:
-    result = subprocess.run([str(FEKAP), "-q", "-o", str(outdir), str(deck)], capture_output=True, text=True)
-    return result.returncode, result.stderr.strip()
+    result = fb.run_deck(str(FEKAP), deck, outdir)
+    return result["rc"], result["stderr"].strip()
 
 
 def default_penalties(listing: str) -> dict[str, float]:

@@ -19,19 +19,18 @@ FEKAP is the release binary of scripts/build (build/local/bin/fekap).
 from __future__ import annotations
 
 import argparse
-import csv
-import math
-import subprocess
+import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import dynamics_checks as dc  # noqa: E402
+import fekap_bench as fb  # noqa: E402
 import spin_up_reference as reference  # noqa: E402
 
+ROOT = fb.ROOT
 DECK = ROOT / "decks" / "dynamics" / "spin-up.deck"
 
 
@@ -40,19 +39,15 @@ def run(elements: int, dt: float, beta: float = 0.0) -> tuple[np.ndarray, np.nda
     text = DECK.read_text().replace("OT  O  T  beam  10", f"OT  O  T  beam  {elements}")
     if beta:
         text = text.replace("rhoI=6e-4", f"rhoI=6e-4  beta={beta:g}")
-    with tempfile.TemporaryDirectory() as work:
-        deck = Path(work) / "spin-up.deck"
-        deck.write_text(text)
-        out = Path(work) / "out"
-        done = subprocess.run([str(ROOT / "build" / "local" / "bin" / "fekap"), "-q", str(deck), "-o", str(out),
-                               "--set", f"dt={dt!r}"], capture_output=True, text=True)
-        if done.returncode != 0:
-            sys.exit(f"fekap failed ({elements} elements, dt {dt}): {done.stderr}")
-        with open(out / "points.csv", newline="") as p, open(out / "links.csv", newline="") as l:
-            rows = [(float(a["t"]), float(a["x"]), float(a["y"]), float(b["angle"]))
-                    for a, b in zip(csv.DictReader(p), csv.DictReader(l))]
-    t, x, y, angle = (np.array(c) for c in zip(*rows))
-    return t, -x * np.sin(angle) + y * np.cos(angle)
+    work = fb.scratch_dir("fekap-spin-up-")
+    deck = work / "spin-up.deck"
+    deck.write_text(text)
+    result = fb.run_deck(fb.fekap_binary(), deck, work / "out", "--set", f"dt={dt!r}")
+    if result["rc"] != 0:
+        sys.exit(f"fekap failed ({elements} elements, dt {dt}): {result['stderr']}")
+    t, _, across = dc.spin_up_tip(work / "out")
+    shutil.rmtree(work, ignore_errors=True)
+    return t, across
 
 
 def main() -> int:
@@ -61,8 +56,8 @@ def main() -> int:
     parser.add_argument("--beta", type=float, help="also a run with Rayleigh damping beta= on the section")
     args = parser.parse_args()
     model_t, model_v = reference.simulate(n_modes=6, dt=1e-3, t_end=30.0, law="table")
-    model = reference.features(model_t, model_v)
-    exact = reference.features(*reference.simulate(n_modes=6, dt=1e-3, t_end=30.0, law="exact"))
+    model = dc.spin_up_features(model_t, model_v)
+    exact = dc.spin_up_features(*reference.simulate(n_modes=6, dt=1e-3, t_end=30.0, law="exact"))
     print("| model | elements | dt (s) | peak | t of peak (s) | at t = 15 s | largest after 15 s | "
           "largest difference from the model (after 15 s) |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
@@ -74,13 +69,13 @@ def main() -> int:
         for dt in (0.01, 0.005, 0.0025):
             t, v = run(elements, dt)
             series[elements, dt] = (t, v)
-            f = reference.features(t, v)
+            f = dc.spin_up_features(t, v)
             diff = np.abs(v - np.interp(t, model_t, model_v))
             print(f"| FEKAP | {elements} | {dt:g} | {f['peak']:.5f} | {f['t_peak']:.4f} | {f['at15']:.3e} | "
                   f"{f['residual']:.3e} | {diff.max():.2e} ({diff[t >= 15].max():.2e}) |")
     if args.beta:
         damped_t, damped_v = run(10, 0.01, beta=args.beta)
-        f = reference.features(damped_t, damped_v)
+        f = dc.spin_up_features(damped_t, damped_v)
         late = np.abs(damped_v[damped_t >= 25]).max()
         print(f"| FEKAP, beta = {args.beta:g} | 10 | 0.01 | {f['peak']:.5f} | {f['t_peak']:.4f} | {f['at15']:.3e} | "
               f"{f['residual']:.3e} (after 25 s: {late:.2e}) | |")

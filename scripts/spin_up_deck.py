@@ -44,10 +44,31 @@ def spline_value(ts, vs, ms, t):
     return x * vs[i] + y * vs[i + 1] + ((x ** 3 - x) * ms[i] + (y ** 3 - y) * ms[i + 1]) * h * h / 6
 
 
-def main() -> None:
+def knots() -> tuple[list[float], list[float], np.ndarray]:
+    """The drive table's times and angles (every 0.25 s up to 15 s, every
+    second after) and its natural spline's second derivatives."""
     ts = [0.25 * k for k in range(61)] + [float(t) for t in range(16, 41)]
     vs = [hub(t) for t in ts]
-    ms = natural_spline(ts, vs)
+    return ts, vs, natural_spline(ts, vs)
+
+
+def table_motion(t: float) -> tuple[float, float, float]:
+    """Angle, rate and angular acceleration of the deck's drive (the natural
+    cubic spline through the knots) at time t."""
+    ts, vs, ms = _KNOTS
+    i = min(max(int(np.searchsorted(ts, t)) - 1, 0), len(ts) - 2)
+    h = ts[i + 1] - ts[i]
+    x, y = (ts[i + 1] - t) / h, (t - ts[i]) / h
+    angle = x * vs[i] + y * vs[i + 1] + ((x ** 3 - x) * ms[i] + (y ** 3 - y) * ms[i + 1]) * h * h / 6
+    rate = (vs[i + 1] - vs[i]) / h + ((1 - 3 * x * x) * ms[i] + (3 * y * y - 1) * ms[i + 1]) * h / 6
+    return float(angle), float(rate), float(x * ms[i] + y * ms[i + 1])
+
+
+_KNOTS = knots()
+
+
+def main() -> None:
+    ts, vs, ms = knots()
     worst = max(abs(spline_value(ts, vs, ms, t) - hub(t)) for t in np.linspace(0, 15, 3001))
     print(f"largest difference of the table from the hub law up to 15 s: {worst:.3g} rad", file=sys.stderr)
     table = " ".join(f"{t:g} {v:.12g}" for t, v in zip(ts, vs))

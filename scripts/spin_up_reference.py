@@ -40,6 +40,9 @@ import math
 
 import numpy as np
 
+import spin_up_deck
+from dynamics_checks import spin_up_features as features
+
 L, EI, RHOA = 10.0, 1.4e4, 1.2
 T_SPIN, OMEGA = 15.0, 6.0
 
@@ -52,23 +55,10 @@ def hub_rates(t: float) -> tuple[float, float]:
     return OMEGA / T_SPIN * (t - math.sin(c * t) / c), OMEGA / T_SPIN * (1 - math.cos(c * t))
 
 
-def table_rates():
+def table_rates(t: float) -> tuple[float, float]:
     """Angular velocity and acceleration of the deck's drive: the natural
-    cubic spline through the law's values (scripts/spin_up_deck.py's knots)."""
-    import spin_up_deck  # noqa: PLC0415 (the deck writer, beside this script)
-
-    ts = np.array([0.25 * k for k in range(61)] + [float(t) for t in range(16, 41)])
-    vs = np.array([spin_up_deck.hub(t) for t in ts])
-    ms = spin_up_deck.natural_spline(list(ts), list(vs))
-
-    def rates(t: float) -> tuple[float, float]:
-        i = min(max(int(np.searchsorted(ts, t)) - 1, 0), len(ts) - 2)
-        h = ts[i + 1] - ts[i]
-        x, y = (ts[i + 1] - t) / h, (t - ts[i]) / h
-        w = (vs[i + 1] - vs[i]) / h + ((1 - 3 * x * x) * ms[i] + (3 * y * y - 1) * ms[i + 1]) * h / 6
-        return w, x * ms[i] + y * ms[i + 1]
-
-    return rates
+    cubic spline through the law's values (scripts/spin_up_deck.py's table)."""
+    return spin_up_deck.table_motion(t)[1:]
 
 
 def cantilever_betas(n: int) -> np.ndarray:
@@ -123,7 +113,7 @@ def simulate(n_modes: int = 6, dt: float = 1e-3, t_end: float = 30.0, law: str =
     """Times and transverse tip deflections (every `every` steps) from rest."""
     mass, stiff, geometric, force, tip = ritz_matrices(n_modes)
     minv = np.linalg.inv(mass)
-    rates = hub_rates if law == "exact" else table_rates()
+    rates = hub_rates if law == "exact" else table_rates
 
     def deriv(t: float, y: np.ndarray) -> np.ndarray:
         w, a = rates(t)
@@ -145,23 +135,6 @@ def simulate(n_modes: int = 6, dt: float = 1e-3, t_end: float = 30.0, law: str =
             times.append((k + 1) * dt)
             values.append(float(tip @ y[:n_modes]))
     return np.array(times), np.array(values)
-
-
-def features(times, values) -> dict[str, float]:
-    """Peak (most negative) deflection and its time, the value at t = 15 and
-    the largest magnitude after t = 15 (the residual vibration)."""
-    times, values = np.asarray(times), np.asarray(values)
-    k = int(np.argmin(values))
-    if 0 < k < len(values) - 1:  # the parabola through the three samples around the peak
-        y0, y1, y2 = values[k - 1:k + 2]
-        h = times[k + 1] - times[k]
-        s = 0.5 * (y0 - y2) / (y0 - 2 * y1 + y2)
-        peak, t_peak = y1 - 0.25 * (y0 - y2) * s, times[k] + s * h
-    else:
-        peak, t_peak = values[k], times[k]
-    at15 = float(np.interp(T_SPIN, times, values))
-    after = np.abs(values[times >= T_SPIN])
-    return {"peak": float(peak), "t_peak": float(t_peak), "at15": at15, "residual": float(after.max())}
 
 
 def main() -> None:
