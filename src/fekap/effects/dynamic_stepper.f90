@@ -480,7 +480,7 @@ contains
       type(alpha_coefficients_type) :: c
       real(dp) :: correction, r0, moved, previous
       integer :: info, k, d
-      logical :: converged, factored, reuse, full_before
+      logical :: converged, factored, reuse, full_before, contracted
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
          call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
@@ -529,10 +529,13 @@ contains
             iterations = iterations + 1
             self%counts%iterations = self%counts%iterations + 1
             call measure_kappa(self, reuse, full_before, previous, correction, moved)
+            ! A kept factor's small correction tells convergence only when it
+            ! contracted as bounded (else the error left may be near the correction).
+            contracted = .not. reuse .or. correction <= reuse_contraction*previous
             previous = correction
             full_before = .not. reuse
             moved = moved + correction
-            if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
+            if (contracted .and. correction <= 10*self%model%analysis%length_tol*self%model_length) then
                ! The residual at the converged iterate: the reactions.
                call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
                residual = residual_norm(system, mesh)
