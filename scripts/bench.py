@@ -229,7 +229,7 @@ EXUDYN_STUDY = fb.ROOT / "docs" / "dynamics" / "exudyn-slider-crank.json"
 
 def exudyn_case(quick: bool, repeat: int) -> dict | None:
     """Exudyn's CPU microseconds and Newton iterations per step on the
-    slider-crank at the deck's dt (least of `repeat` runs); None without
+    slider-crank at the deck's dt (median of `repeat` runs, as FEKAP's); None without
     build/venv-exudyn (made by the first run of scripts/exudyn_slider_crank.py)."""
     if not EXUDYN_PYTHON.is_file():
         return None

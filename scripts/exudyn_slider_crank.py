@@ -9,21 +9,26 @@ and the time per step of both. A comparison script, not a test.
     scripts/exudyn_slider_crank.py --cost [--dt DT] [--t-end T] [--repeat R]
 
 --cost prints one JSON line: Exudyn's CPU microseconds and Newton iterations
-per step at DT (the least of R runs), for scripts/bench's dynamics line.
+per step at DT (the median of R runs, as scripts/bench takes FEKAP's), for
+scripts/bench's dynamics line.
 
 --study compares the two at equal accuracy (docs/dynamics.md uses --t-end 0.05:
 later the rod's large vibration makes the deflection sensitive to every
-digit, and dt = 1 ms / 2^8 is not converged to 1e-4 m at 0.1 s): each code's
-midpoint deflection at dt = 1 ms / 2^k (k = 0..6) against its own converged
-run (Richardson's extrapolation of its runs at 1 ms / 2^7 and 2^8; the two
-codes' converged runs are compared too), at the instants every millisecond
-(FEKAP writes every millisecond, `every` in OUTPut; Exudyn keeps its three
-sensors in memory every step), and the process CPU time of each run (FEKAP:
-the child process's user + system time less that of a one-step run, the
-start-up; Exudyn: time.process_time() around SolveDynamic), the least of R
-runs. It prints the error and CPU time per step and per simulated second of
-each, and the speed ratio at equal error (log-log interpolation of each
-code's error against its CPU time).
+digit): each code's midpoint deflection at dt = 1 ms / 2^k (k = 0..6) against
+its own converged run (Richardson's extrapolation of its runs at 1 ms / 2^9
+and 2^10; the run at 2^8 gives the observed order, which says whether these
+are in the asymptotic range; the two codes' converged runs are compared too),
+at the instants every millisecond. Both codes are treated alike: both store
+their output every millisecond only (FEKAP `every` in OUTPut, Exudyn's
+sensors' writePeriod; where Exudyn cuts steps, at the coarsest dt, its
+sensors then leave the milliseconds and it stores every step, said in the
+table), both have the CPU time of a one-step run subtracted
+(FEKAP: the child process's user + system time, its reading, set-up, start
+and output files; Exudyn: time.process_time() around SolveDynamic, its
+solver set-up and start accelerations), and both take the median of R runs.
+It prints the error and CPU time per step and per simulated second of each,
+and the speed ratio at equal error (log-log interpolation of each code's
+error against its CPU time).
 
 Exudyn comes from PyPI (exudyn==1.13.6, with numpy) into its own virtual environment,
 build/venv-exudyn, made on the first run; the script then runs itself there. FEKAP is the
@@ -44,7 +49,9 @@ import argparse
 import csv
 import json
 import math
+import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -74,10 +81,11 @@ def deflection(a, m, b) -> float:
     return ((m[0] - a[0]) * dy - (m[1] - a[1]) * dx) / (dx * dx + dy * dy) ** 0.5
 
 
-def run_exudyn(n: int, dt: float, t_end: float, rho_inf: float,
-               details: dict | None = None) -> tuple[list[float], list[float], float, int]:
+def run_exudyn(n: int, dt: float, t_end: float, rho_inf: float, details: dict | None = None,
+               write_period: float | None = None) -> tuple[list[float], list[float], float, int]:
     """Times, midpoint deflections, CPU seconds (time.process_time() around
-    SolveDynamic) and steps of Exudyn's run (its default Newton tolerances:
+    SolveDynamic) and steps of Exudyn's run, its sensors stored every
+    `write_period` (default: every step) (its default Newton tolerances:
     relative 1e-8; a relative 1e-10 is below its round-off at fine steps,
     where it then cuts steps for nothing); `details` receives the solver's
     steps taken, Newton iterations and Jacobians."""
@@ -129,7 +137,7 @@ def run_exudyn(n: int, dt: float, t_end: float, rho_inf: float,
     settings.timeIntegration.endTime = t_end
     settings.timeIntegration.generalizedAlpha.spectralRadius = rho_inf
     settings.timeIntegration.verboseMode = 0
-    settings.solution.sensors.writePeriod = dt
+    settings.solution.sensors.writePeriod = write_period or dt
     settings.solution.file.write = False
     start = time.process_time()
     mbs.SolveDynamic(settings, storeSolver=True)
@@ -198,9 +206,10 @@ def run_fekap(n: int, dt: float, t_end: float, rho_inf: float, details: dict | N
             summary.get("time in analysis (s)", seconds), len(order) - 1)
 
 
-#: The study's steps: dt = 1 ms / 2^k, k = 0..6, and the converged runs at 1 ms / 2^8.
+#: The study's steps: dt = 1 ms / 2^k, k = 0..6; the converged runs from 1 ms / 2^9 and 2^10
+#: (2^8 too for the observed order).
 STUDY_DTS = [1e-3 / 2 ** k for k in range(7)]
-STUDY_REFERENCE = 1e-3 / 2 ** 8
+REFERENCE_LEVELS = (9, 10)
 SAMPLE = 1e-3  # the instants compared: every millisecond
 
 
@@ -241,56 +250,80 @@ def cpu_at_error(points: list[tuple[float, float]], error: float) -> float:
     return math.nan
 
 
+def on_samples(times: list[float]) -> bool:
+    """Whether the stored instants lie on the milliseconds (so that a
+    series is not interpolated between samples a millisecond apart)."""
+    return all(abs(t / SAMPLE - round(t / SAMPLE)) <= 1e-6 for t in times)
+
+
 def study(n: int, t_end: float, rho_inf: float, repeat: int, json_path: Path | None) -> int:
     """Error against the converged run and CPU time of both codes by dt; the
-    speed ratio at equal error."""
-    def fekap(dt: float) -> dict:
-        best = None
-        for _ in range(repeat):
-            details: dict = {}
-            times, values, _, _ = run_fekap(n, dt, t_end, rho_inf, details, every=max(1, round(SAMPLE / dt)))
-            if best is None or details["cpu"] < best["cpu"]:
-                best = dict(details, series=sampled(times, values))
-        return best
-
-    def exudyn(dt: float, reps: int = repeat) -> dict:
-        best = None
+    speed ratio at equal error. Both codes alike: output every millisecond,
+    the CPU time of a one-step run subtracted, the median of `repeat` runs."""
+    def fekap(dt: float, reps: int = repeat) -> dict:
+        runs = []
         for _ in range(reps):
             details: dict = {}
-            times, values, cpu, _ = run_exudyn(n, dt, t_end, rho_inf, details)
-            if best is None or cpu < best["cpu"]:
-                best = dict(details, cpu=cpu, series=sampled(times, values))
-        return best
+            times, values, _, _ = run_fekap(n, dt, t_end, rho_inf, details, every=max(1, round(SAMPLE / dt)))
+            if not on_samples(times):
+                sys.exit(f"FEKAP at dt {dt:g}: stored instants off the milliseconds")
+            runs.append(dict(details, series=sampled(times, values)))
+        return dict(runs[0], cpu=statistics.median(r["cpu"] for r in runs), written="every ms")
 
-    startup = min(fekap_startup(n, rho_inf) for _ in range(repeat))
+    def exudyn(dt: float, reps: int = repeat) -> dict:
+        # Where Exudyn cuts steps its sensors' instants leave the milliseconds:
+        # then it stores every step, and the series is interpolated (`sampled`).
+        for period, written in ((SAMPLE, "every ms"), (dt, "every step")):
+            runs = []
+            for _ in range(reps):
+                details: dict = {}
+                times, values, cpu, _ = run_exudyn(n, dt, t_end, rho_inf, details, write_period=period)
+                if period == SAMPLE and not on_samples(times):
+                    break
+                runs.append(dict(details, cpu=cpu, series=sampled(times, values)))
+            else:
+                return dict(runs[0], cpu=statistics.median(r["cpu"] for r in runs), written=written)
+        sys.exit(f"Exudyn at dt {dt:g}: stored instants off the milliseconds")
+
+    startup = {"FEKAP": statistics.median(fekap_startup(n, rho_inf) for _ in range(repeat)),
+               "Exudyn": statistics.median(exudyn_startup(n, rho_inf) for _ in range(repeat))}
     print(f"flexible slider-crank, {n} elements per 0.15 m, t_end {t_end:g} s, rho_inf {rho_inf:g}; "
-          f"least of {repeat} runs; FEKAP's start-up (a one-step run) {1e3 * startup:.2f} ms CPU, subtracted")
-    fine_f, fine_e = fekap(STUDY_REFERENCE), exudyn(STUDY_REFERENCE, 1)
-    half_f, half_e = fekap(2 * STUDY_REFERENCE), exudyn(2 * STUDY_REFERENCE, 1)
-    # Richardson: second order, so the finest run's error is a third of its difference from the next.
-    ref_f = {"series": {k: v + (v - half_f["series"][k]) / 3 for k, v in fine_f["series"].items()}}
-    ref_e = {"series": {k: v + (v - half_e["series"][k]) / 3 for k, v in fine_e["series"].items()}}
-    peak = max(abs(v) for v in ref_e["series"].values())
-    between = worst_difference(ref_f["series"], ref_e["series"])
-    print(f"converged runs: peak midpoint deflection {peak:.6e} m; FEKAP - Exudyn {between:.3e} m; "
-          f"dt = {STUDY_REFERENCE:.4g} against {2 * STUDY_REFERENCE:.4g}: FEKAP "
-          f"{worst_difference(fine_f['series'], half_f['series']):.3e} m, Exudyn "
-          f"{worst_difference(fine_e['series'], half_e['series']):.3e} m")
+          f"median of {repeat} runs; output every {1e3 * SAMPLE:g} ms by both; start-up (a one-step run, "
+          f"subtracted): FEKAP {1e3 * startup['FEKAP']:.2f} ms CPU, Exudyn {1e3 * startup['Exudyn']:.2f} ms CPU")
+    # The converged runs: Richardson's extrapolation (second order) of the two
+    # finest; the observed order from the three finest says whether they are
+    # in the asymptotic range.
+    levels = [REFERENCE_LEVELS[0] - 1, *REFERENCE_LEVELS]
+    fine = {code: [run(1e-3 / 2 ** k, 1)["series"] for k in levels]
+            for code, run in (("FEKAP", fekap), ("Exudyn", exudyn))}
+    reference, order = {}, {}
+    for code, (coarse, half, finest) in fine.items():
+        reference[code] = {k: v + (v - half[k]) / 3 for k, v in finest.items()}
+        d1, d2 = worst_difference(coarse, half), worst_difference(half, finest)
+        order[code] = {"dt": [1e-3 / 2 ** k for k in levels], "differences": [d1, d2],
+                       "order": math.log2(d1 / d2), "finest_error": d2 / 3}
+        print(f"{code}: dt 1 ms / 2^{levels[0]} - 2^{levels[1]}: {d1:.3e} m, 2^{levels[1]} - 2^{levels[2]}: "
+              f"{d2:.3e} m, observed order {order[code]['order']:.2f}; the finest run's error "
+              f"(Richardson) {d2 / 3:.2e} m")
+    peak = max(abs(v) for v in reference["Exudyn"].values())
+    between = worst_difference(reference["FEKAP"], reference["Exudyn"])
+    print(f"converged runs: peak midpoint deflection {peak:.6e} m; FEKAP - Exudyn {between:.3e} m")
     rows = []
-    print("| dt (s) | code | steps (taken) | Newton its/step | error (m) | CPU us/step | CPU s per simulated s |")
-    print("| ---: | --- | ---: | ---: | ---: | ---: | ---: |")
+    print("| dt (s) | code | steps (taken) | output | Newton its/step | error (m) | CPU us/step | CPU s per simulated s |")
+    print("| ---: | --- | ---: | --- | ---: | ---: | ---: | ---: |")
     for dt in STUDY_DTS:
         steps = round(t_end / dt)
         f, e = fekap(dt), exudyn(dt)
-        for code, run, ref in (("FEKAP", f, ref_f), ("Exudyn", e, ref_e)):
-            cpu = max(run["cpu"] - (startup if code == "FEKAP" else 0.0), 1e-9)
+        for code, run in (("FEKAP", f), ("Exudyn", e)):
+            cpu = max(run["cpu"] - startup[code], 1e-9)
             its = run.get("Newton iterations", math.nan) / steps
             taken = run.get("configurations solved", run.get("steps taken", math.nan))
-            row = {"dt": dt, "code": code, "steps": steps, "taken": taken, "iterations_per_step": its,
-                   "error": worst_difference(run["series"], ref["series"]), "cpu": cpu,
+            row = {"dt": dt, "code": code, "steps": steps, "taken": taken, "output": run["written"],
+                   "iterations_per_step": its,
+                   "error": worst_difference(run["series"], reference[code]), "cpu": cpu,
                    "us_per_step": 1e6 * cpu / steps, "cpu_per_simulated_second": cpu / t_end}
             rows.append(row)
-            print(f"| {dt:.4g} | {code} | {steps} ({taken:.0f}) | {its:.2f} | {row['error']:.3e} | {row['us_per_step']:.1f} | "
+            print(f"| {dt:.4g} | {code} | {steps} ({taken:.0f}) | {run['written']} | {its:.2f} | {row['error']:.3e} | {row['us_per_step']:.1f} | "
                   f"{row['cpu_per_simulated_second']:.3g} |")
     curves = {code: [(r["error"], r["cpu_per_simulated_second"]) for r in rows if r["code"] == code]
               for code in ("FEKAP", "Exudyn")}
@@ -306,8 +339,9 @@ def study(n: int, t_end: float, rho_inf: float, repeat: int, json_path: Path | N
         print(f"| {error:.0e} | {cf:.3g} | {ce:.3g} | {ce / cf:.1f} |")
     if json_path is not None:
         json_path.write_text(json.dumps({"elements": n, "t_end": t_end, "rho_inf": rho_inf, "repeat": repeat,
-                                         "peak": peak, "converged_difference": between, "rows": rows,
-                                         "equal_error": ratios}, indent=1) + "\n")
+                                         "statistic": "median", "output_every": SAMPLE, "startup": startup,
+                                         "reference": order, "peak": peak, "converged_difference": between,
+                                         "rows": rows, "equal_error": ratios}, indent=1) + "\n")
     return 0
 
 
@@ -318,6 +352,11 @@ def fekap_startup(n: int, rho_inf: float) -> float:
     return details["cpu"]
 
 
+def exudyn_startup(n: int, rho_inf: float) -> float:
+    """CPU seconds of a one-step SolveDynamic: the solver's set-up and start accelerations."""
+    return run_exudyn(n, 1e-5, 1e-5, rho_inf)[2]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--elements", type=int, default=4, help="elements per 0.15 m (default 4)")
@@ -325,7 +364,7 @@ def main() -> int:
     parser.add_argument("--t-end", type=float, default=0.1)
     parser.add_argument("--rho-inf", type=float, default=0.8)
     parser.add_argument("--study", action="store_true", help="error and CPU time by dt of both codes")
-    parser.add_argument("--repeat", type=int, default=3, help="runs per point of the study (the least CPU time)")
+    parser.add_argument("--repeat", type=int, default=3, help="runs per point of the study (the median CPU time)")
     parser.add_argument("--json", type=Path, help="write the study's numbers to this file")
     parser.add_argument("--cost", action="store_true", help="Exudyn's CPU time per step only, as JSON")
     args = parser.parse_args()
@@ -338,7 +377,8 @@ def main() -> int:
             details: dict = {}
             _, _, cpu, steps = run_exudyn(args.elements, args.dt, args.t_end, args.rho_inf, details)
             runs.append((cpu, details["Newton iterations"] / steps, steps))
-        cpu, its, steps = min(runs)
+        cpu = statistics.median(r[0] for r in runs)
+        _, its, steps = runs[0]
         print(json.dumps({"us_per_step": 1e6 * cpu / steps, "iterations_per_step": its, "steps": steps}))
         return 0
     te, de, se, ne = run_exudyn(args.elements, args.dt, args.t_end, args.rho_inf)
