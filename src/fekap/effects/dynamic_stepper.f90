@@ -55,7 +55,7 @@ module fekap_effects_dynamic_stepper
    real(dp), parameter :: max_created = 0.05_dp
    !> Generalized-alpha's Newton keeps a factor while its iteration is
    !> bound to contract by at least this (see alpha_newton).
-   real(dp), parameter :: reuse_contraction = 1.0e-3_dp
+   real(dp), parameter :: default_reuse_contraction = 1.0e-3_dp
 
    !> The accepted state: time, configuration, velocity, acceleration, the
    !> integrator's acceleration variable a, the external forces, the residual
@@ -98,6 +98,9 @@ module fekap_effects_dynamic_stepper
       !> Newton's quadratic constant as last measured (1 / length), for
       !> keeping a factor (see alpha_newton); unknown (0) at first.
       real(dp) :: newton_kappa = 0
+      !> The contraction a kept factor must be bound to (alpha_newton); 0:
+      !> every iteration factors afresh (tests compare the two).
+      real(dp) :: reuse_contraction = default_reuse_contraction
       !> Newton iterations of the last step generalized-alpha converged: from
       !> that many on, an iterate's residual is assembled alone first (see alpha_newton).
       integer :: converged_after = 1
@@ -498,7 +501,7 @@ contains
             ! A signal ends the step here (a slow step would delay the stop).
             call interrupt_error(error)
             if (allocated(error)) return
-            reuse = factored .and. self%newton_kappa > 0 .and. 2*self%newton_kappa*moved <= reuse_contraction
+            reuse = factored .and. self%newton_kappa > 0 .and. 2*self%newton_kappa*moved <= self%reuse_contraction
             if (reuse .or. iterations >= self%converged_after) then
                call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
                residual = residual_norm(system, mesh)
@@ -531,7 +534,7 @@ contains
             call measure_kappa(self, reuse, full_before, previous, correction, moved)
             ! A kept factor's small correction tells convergence only when it
             ! contracted as bounded (else the error left may be near the correction).
-            contracted = .not. reuse .or. correction <= reuse_contraction*previous
+            contracted = .not. reuse .or. correction <= self%reuse_contraction*previous
             previous = correction
             full_before = .not. reuse
             moved = moved + correction
@@ -560,7 +563,7 @@ contains
       if (previous <= least .or. correction <= least) return
       if (.not. reuse .and. full_before) then
          self%newton_kappa = correction/previous**2
-      else if (reuse .and. correction > reuse_contraction*previous) then
+      else if (reuse .and. correction > self%reuse_contraction*previous) then
          self%newton_kappa = max(self%newton_kappa, correction/(2*previous*moved))
       end if
    end subroutine measure_kappa
