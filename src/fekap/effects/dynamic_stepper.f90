@@ -595,7 +595,7 @@ contains
             call interrupt_error(error)
             if (allocated(error)) return
             call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
-               & self%damped, state%seg, system%r, tangent=.true.)
+               & state%seg, system%r, tangent=.true.)
             self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
             residual = residual_norm(system, mesh)
             call residual_test(self, residual, iterations, r0, converged, error)
@@ -619,7 +619,7 @@ contains
             if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
                ! The residual at the converged iterate: the step's reactions.
                call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
-                  & self%damped, state%seg, system%r, tangent=.false.)
+                  & state%seg, system%r, tangent=.false.)
                self%counts%residual_assemblies = self%counts%residual_assemblies + 1
                residual = residual_norm(system, mesh)
                exit

@@ -66,19 +66,18 @@ contains
    !> alpha M damps the mean rate z/h), g0 and g1 the external forces
    !> at the step's ends; with `tangent`, the iteration matrix into self
    !> (v1 = 2 z/h - v0 on the dofs with mass).
-   subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, seg, r, tangent)
+   subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, seg, r, tangent)
       type(em_system_type), intent(inout) :: self
       type(dynamic_system_type), intent(in) :: dyn
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: q0(:), q1(:), v0(:), v1(:), g0(:), g1(:)
       real(dp), intent(in) :: h, chi
-      logical, intent(in) :: damped
       !> The slidelines' master segments of the step.
       integer, intent(in) :: seg(:)
       real(dp), contiguous, intent(out) :: r(:)
       logical, intent(in) :: tangent
       real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2, chi_e, z(size(q0)), dz(size(q0))
-      integer :: e, i, j, ei, ej, d, dofs(6)
+      integer :: e, i, j, d, dofs(6)
       c1 = 1/h
       c2 = 2/h**2
       call em_increments(mesh, q0, q1, z, dz)
@@ -94,8 +93,7 @@ contains
          end do
          ! Rayleigh's beta damps the strain rate Delta eps / h: a stress beta/h D Delta eps in the
          ! discrete gradient, objective (zero for a rigid step) and of work beta/h L |Delta eps|_D^2.
-         chi_e = chi
-         if (damped) chi_e = chi + 2*dyn%beta(e)/h
+         chi_e = chi + 2*dyn%beta(e)/h
          if (tangent) then
             call beam_discrete_gradient(mesh%elements(e), x0, x1, chi_e, pe, ke)
             do j = 1, 6
@@ -106,7 +104,7 @@ contains
             call beam_discrete_gradient(mesh%elements(e), x0, x1, chi_e, pe)
          end if
          pe = pe + times6(dyn%me, e, am)
-         if (damped) pe = pe + dyn%alpha(e)*times6(dyn%me, e, vm)
+         if (dyn%alpha(e) /= 0) pe = pe + dyn%alpha(e)*times6(dyn%me, e, vm)
          do i = 1, 6
             d = mesh%edof(i, e)
             r(d) = r(d) + pe(i)
