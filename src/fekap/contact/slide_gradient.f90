@@ -17,6 +17,23 @@ module fekap_contact_slide_gradient
 
    public :: slide_discrete_gradient
 
+   ! grad A and grad Q are affine in q (gradients): their Hessians are these
+   ! constants (symmetric, so either order of reshape's columns).
+   real(dp), parameter :: ha(6, 6) = reshape(real([ &
+      & 0, 0, 0, 1, 0, -1, &
+      & 0, 0, -1, 0, 1, 0, &
+      & 0, -1, 0, 0, 0, 1, &
+      & 1, 0, 0, 0, -1, 0, &
+      & 0, 1, 0, -1, 0, 0, &
+      & -1, 0, 1, 0, 0, 0], dp), [6, 6])
+   real(dp), parameter :: hq(6, 6) = reshape(real([ &
+      & 0, 0, 0, 0, 0, 0, &
+      & 0, 0, 0, 0, 0, 0, &
+      & 0, 0, 2, 0, -2, 0, &
+      & 0, 0, 0, 2, 0, -2, &
+      & 0, 0, -2, 0, 2, 0, &
+      & 0, 0, 0, -2, 0, 2], dp), [6, 6])
+
 contains
 
    !> p(q0, q1) and, if asked, k = dp/dq1 (not symmetric), q = (xs, x1, x2).
@@ -24,7 +41,7 @@ contains
       real(dp), intent(in) :: q0(6), q1(6), kp
       real(dp), intent(out) :: p(6)
       real(dp), intent(out), optional :: k(6, 6)
-      real(dp) :: qm(6), ga(6), gq(6), ga1(6), gq1(6), gb(6), ha(6, 6), hq(6, 6), e(6)
+      real(dp) :: qm(6), ga(6), gq(6), ga1(6), gq1(6), gb(6)
       real(dp) :: a0, a1, s0, s1, ab, al, ga_, gbar, den, dg1(6), dal(6), dga(6), ds1(6)
       integer :: j
       qm = 0.5_dp*(q0 + q1)
@@ -39,15 +56,6 @@ contains
       gbar = 0.5_dp*(a0/s0 + a1/s1)
       p = kp*gbar*gb
       if (.not. present(k)) return
-      ! grad A, grad Q are affine: their Hessians from unit vectors, exactly.
-      call gradients([0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp], e, dg1)
-      do j = 1, 6
-         qm = 0
-         qm(j) = 1
-         call gradients(qm, ga1, gq1)
-         ha(:, j) = ga1 - e
-         hq(:, j) = gq1 - dg1
-      end do
       call gradients(q1, ga1, gq1)
       ! ds1/dq1 = grad Q1/(2 s1); d(g1)/dq1 = grad A1/s1 - A1 ds1/s1^2.
       ds1 = gq1/(2*s1)

@@ -117,14 +117,10 @@ contains
       !> Contact tangent df/dd (72), symmetric.
       real(dp), intent(out), optional :: k(6, 6)
       type(frame_type) :: fr
-      real(dp) :: c
       call master_frame(xs, x1, x2, fr)
       f = -kp*fr%g*fr%ns
-      if (present(k)) then
-         c = fr%g/fr%s1
-         k = -kp*(outer(fr%ns, fr%ns) &
-            & - c*(outer(fr%ts, fr%nm) + outer(fr%nm, fr%ts) + c*outer(fr%nm, fr%nm)))
-      end if
+      ! g H = -(g/s1) A (gap_hessian).
+      if (present(k)) k = -kp*(outer(fr%ns, fr%ns) - fr%g/fr%s1*gap_hessian(fr))
    end subroutine slide_force
 
    !> Exact second directional derivative d2f = d^2 f/dd^2 [v, v] of the contact
@@ -166,6 +162,14 @@ contains
       d2f = -kp*(gdd*fr%ns + 2*gd*nsd + fr%g*nsdd)
    end subroutine slide_second_derivative
 
+   !> A = T_s N_m^T + N_m T_s^T + (g/s1) N_m N_m^T, so that the gap's Hessian
+   !> is H = -A/s1 (the header): the tangents of slide_force and slide_dashpot.
+   pure function gap_hessian(fr) result(a)
+      type(frame_type), intent(in) :: fr
+      real(dp) :: a(6, 6)
+      a = outer(fr%ts, fr%nm) + outer(fr%nm, fr%ts) + fr%g/fr%s1*outer(fr%nm, fr%nm)
+   end function gap_hessian
+
    !> Energy E = kp g**2/2 of the gap spring at xs, x1, x2: f of slide_force is -dE/dd.
    pure real(dp) function slide_energy(xs, x1, x2, kp) result(energy)
       real(dp), intent(in) :: xs(2), x1(2), x2(2), kp
@@ -175,7 +179,8 @@ contains
    end function slide_energy
 
    !> The gap's gradient N_s = grad g (61) over the contact dofs (67): the gap
-   !> rate is N_s . v.
+   !> rate is N_s . v. The solver takes N_s from its frame; this is the tests'
+   !> reference for it (checked against finite differences of the gap).
    pure function slide_gap_gradient(xs, x1, x2) result(ns)
       real(dp), intent(in) :: xs(2), x1(2), x2(2)
       real(dp) :: ns(6)
@@ -200,13 +205,12 @@ contains
       real(dp), intent(in), optional :: c1
       real(dp), intent(out), optional :: k(6, 6)
       type(frame_type) :: fr
-      real(dp) :: rate, r, h(6, 6)
+      real(dp) :: rate, h(6, 6)
       call master_frame(xs, x1, x2, fr)
       rate = dot_product(fr%ns, v)
       f = c*rate*fr%ns
       if (.not. present(k)) return
-      r = fr%g/fr%s1
-      h = -(outer(fr%ts, fr%nm) + outer(fr%nm, fr%ts) + r*outer(fr%nm, fr%nm))/fr%s1
+      h = -gap_hessian(fr)/fr%s1
       k = c*(outer(fr%ns, matmul(h, v)) + rate*h)
       if (present(c1)) k = k + c1*c*outer(fr%ns, fr%ns)
    end subroutine slide_dashpot

@@ -81,6 +81,8 @@ module fekap_effects_dynamic_stepper
       type(em_system_type) :: em
       !> The iterate of a step.
       real(dp), allocatable :: qt(:), vt(:), acct(:), at(:), gt(:)
+      !> Energy-momentum: the iterate's increments z and dz/dq1 (em_increments).
+      real(dp), allocatable :: zt(:), dzt(:)
       !> Energy of the start (kinetic + strain + gravity), for the balance.
       real(dp) :: energy0 = 0
       !> Velocities at the start over all dofs, if given (tests, benchmarks);
@@ -132,7 +134,7 @@ contains
       n = self%mesh%ndof
       allocate (self%state%q(n), self%state%v(n), self%state%acc(n), self%state%a(n), self%state%g(n), &
          & self%state%r(n), source=0.0_dp)
-      allocate (self%qt(n), self%vt(n), self%acct(n), self%at(n), self%gt(n), source=0.0_dp)
+      allocate (self%qt(n), self%vt(n), self%acct(n), self%at(n), self%gt(n), self%zt(n), self%dzt(n), source=0.0_dp)
       allocate (self%state%seg(size(self%mesh%slides)), source=1)
    end subroutine new_dynamic_stepper
 
@@ -396,7 +398,7 @@ contains
          ! displacement (exact for the trapezoidal integrator of a linear system);
          ! energy-momentum: on its increments z (Cayley's psi on rotations).
          if (em) then
-            call em_increments(mesh, state%q, self%qt, z)
+            z = self%zt
          else
             z = self%qt - state%q
          end if
@@ -587,9 +589,9 @@ contains
          h = t_new - state%t
          chi = em_dissipation(self%model%analysis%rho_inf)
          self%qt = state%q + h*state%v + 0.5_dp*h**2*state%acc
-         call em_velocities(self, h)
          call hold_fixed(self)
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
+         call em_velocities(self, h)
          call external_forces(dyn, mesh, t_new, self%gt)
          iterations = 0
          r0 = 0
@@ -597,8 +599,8 @@ contains
          do
             call interrupt_error(error)
             if (allocated(error)) return
-            call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
-               & self%damped, state%seg, system%r, tangent=.true.)
+            call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, self%zt, self%dzt, &
+               & h, chi, state%seg, system%r, tangent=.true.)
             self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
             residual = residual_norm(system, mesh)
             call residual_test(self, residual, iterations, r0, converged, error)
@@ -621,8 +623,8 @@ contains
             self%counts%iterations = self%counts%iterations + 1
             if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
                ! The residual at the converged iterate: the step's reactions.
-               call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, h, chi, &
-                  & self%damped, state%seg, system%r, tangent=.false.)
+               call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, self%zt, &
+                  & self%dzt, h, chi, state%seg, system%r, tangent=.false.)
                self%counts%residual_assemblies = self%counts%residual_assemblies + 1
                residual = residual_norm(system, mesh)
                exit
@@ -630,18 +632,19 @@ contains
          end do
          self%acct = (self%vt - state%v)/h
          ! The step's mean rates z/h, for the next step's massless dofs.
-         call em_increments(mesh, state%q, self%qt, self%at)
-         self%at = self%at/h
+         self%at = self%zt/h
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
       end associate
    end subroutine em_newton
 
-   !> The free dofs' velocities of the iterate (em_free_velocities).
+   !> The iterate's increments zt, dzt (once per iterate: assemble_em, the
+   !> step's work and the next step's mean rates use them) and its free dofs'
+   !> velocities (em_free_velocities).
    subroutine em_velocities(self, h)
       type(dynamic_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: h
-      call em_free_velocities(self%mesh, self%massless, h, self%h_prev, self%state%q, self%state%v, self%state%a, &
-         & self%qt, self%vt)
+      call em_increments(self%mesh, self%state%q, self%qt, self%zt, self%dzt)
+      call em_free_velocities(self%mesh, self%massless, h, self%h_prev, self%state%v, self%state%a, self%zt, self%vt)
    end subroutine em_velocities
 
    !> Supported dofs stay put in the iterate.

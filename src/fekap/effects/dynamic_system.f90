@@ -96,7 +96,8 @@ contains
 
    !> The damping force of element e at (q, v) over its dofs (edof):
    !> alpha M_e v_e + beta K_m(q_e) v_e (beam_damping_force) and, if asked,
-   !> the iteration matrix's share k = dD_e/dq_e + c1 dD_e/dv_e (not symmetric).
+   !> beta's share of the iteration matrix k = dD_e/dq_e + c1 dD_e/dv_e (not
+   !> symmetric; zero when beta is; alpha's c1 alpha M_e goes with the mass).
    pure subroutine element_damping(self, mesh, e, q, v, fe, c1, ke)
       type(dynamic_system_type), intent(in) :: self
       type(mesh_type), intent(in) :: mesh
@@ -108,11 +109,10 @@ contains
       real(dp) :: ve(6), fb(6)
       ve = gather(v, mesh%edof(:, e))
       fe = self%alpha(e)*times6(self%me, e, ve)
-      if (present(ke)) ke = c1*self%alpha(e)*self%me(:, :, e)
+      if (present(ke)) ke = 0
       if (self%beta(e) == 0) return
       if (present(ke)) then
          call beam_damping_force(mesh%elements(e), gather(q, mesh%edof(:, e)), ve, self%beta(e), fb, c1, ke)
-         ke = ke + c1*self%alpha(e)*self%me(:, :, e)
       else
          call beam_damping_force(mesh%elements(e), gather(q, mesh%edof(:, e)), ve, self%beta(e), fb)
       end if
@@ -228,7 +228,7 @@ contains
       integer, intent(in) :: seg(:)
       type(work_counts_type), intent(inout) :: counts
       real(dp), intent(in), optional :: c1, c2
-      real(dp) :: me(36), k, ae(6), fe(6), fd(6), ke(6, 6), coefficient
+      real(dp) :: me(36), k, ae(6), fe(6), fd(6), ke(6, 6)
       integer :: e, i, dofs(6)
       logical :: damped, tangent
       damped = has_damping(self)
@@ -274,10 +274,8 @@ contains
       end associate
       if (.not. tangent) return
       do e = 1, size(mesh%elements)
-         ! c2 M_e, and c1 alpha M_e unless element_damping's share (with beta's) is in the band already.
-         coefficient = c2
-         if (self%beta(e) == 0) coefficient = c2 + c1*self%alpha(e)
-         call scaled(self%me(:, :, e), coefficient, me)
+         ! c2 M_e and alpha's c1 alpha M_e (beta's share went in with the damping force).
+         call scaled(self%me(:, :, e), c2 + c1*self%alpha(e), me)
          call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), mesh%scatter_count(2, e), me, &
             & system%kff%a, system%kfd)
       end do

@@ -64,24 +64,23 @@ contains
    !> The residual R of the step from (q0, v0) to q1 over all dofs into r
    !> (v1 given for every dof: on the constrained ones the prescribed motion;
    !> alpha M damps the mean rate z/h), g0 and g1 the external forces
-   !> at the step's ends; with `tangent`, the iteration matrix into self
+   !> at the step's ends, z and dz = dz/dq1 the step's increments
+   !> (em_increments at q1); with `tangent`, the iteration matrix into self
    !> (v1 = 2 z/h - v0 on the dofs with mass).
-   subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, h, chi, damped, seg, r, tangent)
+   subroutine assemble_em(self, dyn, mesh, q0, q1, v0, v1, g0, g1, z, dz, h, chi, seg, r, tangent)
       type(em_system_type), intent(inout) :: self
       type(dynamic_system_type), intent(in) :: dyn
       type(mesh_type), intent(in) :: mesh
-      real(dp), contiguous, intent(in) :: q0(:), q1(:), v0(:), v1(:), g0(:), g1(:)
+      real(dp), contiguous, intent(in) :: q0(:), q1(:), v0(:), v1(:), g0(:), g1(:), z(:), dz(:)
       real(dp), intent(in) :: h, chi
-      logical, intent(in) :: damped
       !> The slidelines' master segments of the step.
       integer, intent(in) :: seg(:)
       real(dp), contiguous, intent(out) :: r(:)
       logical, intent(in) :: tangent
-      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2, chi_e, z(size(q0)), dz(size(q0))
-      integer :: e, i, j, ei, ej, d, dofs(6)
+      real(dp) :: x0(6), x1(6), am(6), vm(6), pe(6), ke(6, 6), c1, c2, chi_e
+      integer :: e, i, j, d, dofs(6)
       c1 = 1/h
       c2 = 2/h**2
-      call em_increments(mesh, q0, q1, z, dz)
       r = dyn%point_mass*(v1 - v0)/h - 0.5_dp*(g0 + g1)
       if (tangent) self%ab = 0
       do e = 1, size(mesh%elements)
@@ -94,8 +93,7 @@ contains
          end do
          ! Rayleigh's beta damps the strain rate Delta eps / h: a stress beta/h D Delta eps in the
          ! discrete gradient, objective (zero for a rigid step) and of work beta/h L |Delta eps|_D^2.
-         chi_e = chi
-         if (damped) chi_e = chi + 2*dyn%beta(e)/h
+         chi_e = chi + 2*dyn%beta(e)/h
          if (tangent) then
             call beam_discrete_gradient(mesh%elements(e), x0, x1, chi_e, pe, ke)
             do j = 1, 6
@@ -106,7 +104,7 @@ contains
             call beam_discrete_gradient(mesh%elements(e), x0, x1, chi_e, pe)
          end if
          pe = pe + times6(dyn%me, e, am)
-         if (damped) pe = pe + dyn%alpha(e)*times6(dyn%me, e, vm)
+         if (dyn%alpha(e) /= 0) pe = pe + dyn%alpha(e)*times6(dyn%me, e, vm)
          do i = 1, 6
             d = mesh%edof(i, e)
             r(d) = r(d) + pe(i)
@@ -186,22 +184,21 @@ contains
       call band_lu_solve(self%ab, self%kd, self%kd, self%ipiv, b, info)
    end subroutine solve_em
 
-   !> The velocities v1 of the free dofs from the iterate q1 over a step of
-   !> length h: v1 = 2 z/h - v0 (the midpoint rule on the increments z of
-   !> em_increments, which the energy balance needs on every dof with mass).
+   !> The velocities v1 of the free dofs from the iterate's increments z
+   !> (em_increments) over a step of length h: v1 = 2 z/h - v0 (the midpoint
+   !> rule, which the energy balance needs on every dof with mass).
    !> A dof without mass has no equation for its velocity, and that recursion
    !> would carry any error of it on undamped (v1 + v0 = 2 vm); its velocity
    !> is the linear extrapolation of the last two steps' mean rates vm = z/h
    !> (vm_prev of the step of length h_prev before) to t_n+1 (second order),
    !> or 2 vm - v0 at the first step (h_prev = 0).
-   pure subroutine em_free_velocities(mesh, massless, h, h_prev, q0, v0, vm_prev, q1, v1)
+   pure subroutine em_free_velocities(mesh, massless, h, h_prev, v0, vm_prev, z, v1)
       type(mesh_type), intent(in) :: mesh
       logical, intent(in) :: massless(:)
-      real(dp), intent(in) :: h, h_prev, q0(:), v0(:), vm_prev(:), q1(:)
+      real(dp), intent(in) :: h, h_prev, v0(:), vm_prev(:), z(:)
       real(dp), intent(inout) :: v1(:)
-      real(dp) :: vm, z(size(q0))
+      real(dp) :: vm
       integer :: k, d
-      call em_increments(mesh, q0, q1, z)
       do k = 1, mesh%nfree
          d = mesh%eq_dof(k)
          vm = z(d)/h

@@ -28,7 +28,7 @@
 !> momentum exactly (docs/dynamics.md).
 module fekap_element_discrete_gradient
    use fekap_kinds, only: dp
-   use fekap_element_beam, only: beam_type
+   use fekap_element_beam, only: beam_type, gauss_point, point_strain
    implicit none
    private
 
@@ -55,7 +55,7 @@ contains
       real(dp), intent(in) :: chi
       real(dp), intent(out) :: p(6)
       real(dp), intent(out), optional :: k(6, 6)
-      real(dp) :: rl, len, t0(2), t1(2), a(2), u(2), g0(2), g1(2), phi0, phi1, pb, cb, sb, c1, s1
+      real(dp) :: rl, len, t0(2), t1(2), a(2), u(2), g0(2), g1(2), phi0, phi1, pb, cb, sb, c0, s0, c1, s1
       real(dp) :: kap0, kap1, sn, sv, sm, cg, sg, rs(2), rjs(2), f(2), gq, ha, hv, hm, xi, w, wl, n(2)
       real(dp) :: d(2), cd(2), sd(2), dd, sig(2), dsig(2), scd, dscd, ss, dss(2), ci(2), dci(2, 2)
       real(dp) :: df_dt(2, 2), df_dd(2), dg_dt(2), dg_dd, dsdt(2, 2), dsdphi(2), jtu(2)
@@ -94,21 +94,13 @@ contains
          k(3, 6) = -k(6, 6)
       end if
       do ig = 1, ngauss
-         if (ngauss == 1) then
-            xi = 0
-            w = 2
-         else
-            xi = merge(-1, 1, ig == 1)/sqrt(3.0_dp)
-            w = 1
-         end if
+         call gauss_point(ngauss, ig, xi, w)
          wl = w*len/2
          n = [(1 - xi)/2, (1 + xi)/2]
          phi0 = self%angle + n(1)*x0(3) + n(2)*x0(6)
          phi1 = self%angle + n(1)*x1(3) + n(2)*x1(6)
-         g0 = frame(phi0, t0) - [1.0_dp, 0.0_dp]
-         c1 = cos(phi1)
-         s1 = sin(phi1)
-         g1 = [c1*t1(1) + s1*t1(2) - 1, -s1*t1(1) + c1*t1(2)]
+         call point_strain(self, x0, n(1), n(2), rl, c0, s0, g0(1), g0(2))     ! (27)
+         call point_strain(self, x1, n(1), n(2), rl, c1, s1, g1(1), g1(2))
          pb = 0.5_dp*(phi0 + phi1)
          cb = cos(pb)
          sb = sin(pb)
@@ -163,13 +155,6 @@ contains
       end do
       if (present(k)) k(1:2, :) = -k(4:5, :)
    end subroutine beam_discrete_gradient
-
-   !> R(phi)^T v.
-   pure function frame(phi, v) result(w)
-      real(dp), intent(in) :: phi, v(2)
-      real(dp) :: w(2)
-      w = [cos(phi)*v(1) + sin(phi)*v(2), -sin(phi)*v(1) + cos(phi)*v(2)]
-   end function frame
 
    !> sigma = sin(n x)/sin(x) = n sinc(n x)/sinc(x) (n at x = 0) and its derivative.
    pure subroutine sine_ratio(n, x, sigma, dsigma)
