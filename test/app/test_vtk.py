@@ -172,9 +172,28 @@ class Run:
                       f"{file}: link {lrow['link']} does not run from {lrow['node1']} to {lrow['node2']}")
                 check(np.all(chain[1:, 0] == chain[:-1, 1]), f"{file}: cells of {lrow['link']} are not a chain")
 
+    def check_meshio(self) -> None:
+        """meshio, the Python ecosystem's usual mesh reader, reads every file as VTK does,
+        and the node names (field data, each name's bytes ended by a 0) are the model's nodes."""
+        import meshio
+
+        for (_, file), mesh in zip(self.collection, self.meshes):
+            got = meshio.read(self.out / file)
+            check(np.array_equal(got.points, mesh.reference), f"{file}: meshio's points differ from VTK's")
+            for name, values in mesh.point_data.items():
+                check(np.array_equal(got.point_data[name], values), f"{file}: meshio's {name} differs")
+            check(np.array_equal(got.cells[0].data, mesh.cells[0].data), f"{file}: meshio's cells differ")
+            for name, values in mesh.cell_data.items():
+                check(np.array_equal(got.cell_data[name][0], values[0]), f"{file}: meshio's cell {name} differs")
+            names = bytes(got.field_data["node_names"].astype(np.uint8)).split(b"\0")[:-1]
+            nnode = len(names)
+            check([n.decode() for n in names] == self.node_names[:nnode] and nnode >= 2,
+                  f"{file}: node_names {names[:4]}... are not the first points of points.csv")
+
     def check_all(self) -> "Run":
         self.check_files()
         self.check_fields()
+        self.check_meshio()
         return self
 
 

@@ -96,9 +96,11 @@ def test_reference_points_plus_displacement_are_the_nodes(tmp_path, deck, method
         want = row[2:].reshape(-1, 2)
         scale = max(1.0, float(np.abs(want).max()))
         assert np.abs(current - want).max() <= 1e-13 * scale, f"{file}: reference + displacement"
-        field = grid.GetFieldData().GetAbstractArray("node_names")
+        field = grid.GetFieldData().GetArray("node_names")
         assert field is not None, f"{file}: no node_names field data"
-        assert [field.GetValue(i) for i in range(field.GetNumberOfValues())] == names
+        # Each name's bytes ended by a 0, in a UInt8 array (meshio reads no string arrays).
+        codes = bytes(int(field.GetValue(i)) for i in range(field.GetNumberOfValues()))
+        assert [n.decode() for n in codes.split(b"\0")[:-1]] == names
         time_value = as_array(grid.GetFieldData().GetArray("TimeValue"))
         assert float(time_value[0]) == pytest.approx(t, abs=1e-15)
 

@@ -11,7 +11,8 @@
 !> computed at that step), the cell data `link` (1-based link index) and
 !> `N`, `V`, `M` (the stress resultants of each cell), and the field data
 !> `TimeValue` and `node_names` (the names of the model's nodes, which are
-!> the first points, in the deck's order).
+!> the first points, in the deck's order, as the bytes of each name ended by
+!> a 0 in a UInt8 array: VTK's String arrays are unreadable to meshio).
 module fekap_output_vtk
    use fekap_kinds, only: dp
    use fekap_model, only: model_type
@@ -140,8 +141,9 @@ contains
       call close_array(unit)
    end subroutine write_vectors
 
-   !> The names of the model's nodes as a VTK string array: each name as its
-   !> character codes, ended by a 0 (VTK's ASCII form of a vtkStringArray).
+   !> The names of the model's nodes as one UInt8 array: each name's bytes,
+   !> ended by a 0. A numeric array, not a vtkStringArray, because the
+   !> Python ecosystem's mesh reader (meshio) reads only numeric arrays.
    subroutine write_names(unit, name, model)
       integer, intent(in) :: unit
       character(*), intent(in) :: name
@@ -149,8 +151,9 @@ contains
       integer :: i, j
       character(len=4) :: code
       if (.not. allocated(model%nodes)) return
-      write (unit, '(a)') '      <Array type="String" Name="'//name//'" NumberOfTuples="'// &
-         & integer_text(size(model%nodes))//'" format="ascii">'
+      ! VTK reads a field-data array only with its length.
+      write (unit, '(a)') '      <DataArray type="UInt8" Name="'//name//'" NumberOfTuples="'// &
+         & integer_text(sum([(len(model%nodes(i)%name) + 1, i=1, size(model%nodes))]))//'" format="ascii">'
       do i = 1, size(model%nodes)
          write (unit, '(8x)', advance='no')
          do j = 1, len(model%nodes(i)%name)
@@ -159,7 +162,7 @@ contains
          end do
          write (unit, '(a)') '0'
       end do
-      write (unit, '(a)') '      </Array>'
+      write (unit, '(a)') '      </DataArray>'
    end subroutine write_names
 
    !> A Float64 array of scalars.
