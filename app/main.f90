@@ -18,7 +18,7 @@ program fekap_main
    use fekap_solver_interrupt, only: catch_interrupts
    use fekap_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
    use fekap_output_csv, only: write_mesh_csv, write_mechanism_csv
-   use fekap_output_format, only: es_text
+   use fekap_strings, only: es_text
    use fekap_output_directory, only: prepare_output_directory, make_directory
    use fekap_output_checked_file, only: close_checked
    use fekap_posix, only: os_ignore_sigpipe

@@ -22,7 +22,7 @@ module fekap_run
    use fekap_output_vtk, only: write_vtu
    use fekap_output_pvd, only: pvd_type, add_pvd_entry, pvd_due, write_pvd_text
    use fekap_output_buffer, only: text_buffer_type, new_text_buffer, flush_text_buffer
-   use fekap_output_format, only: es_text
+   use fekap_strings, only: es_text
    use fekap_output_checked_file, only: close_checked, replace_checked
    implicit none
    private

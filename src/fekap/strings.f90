@@ -5,7 +5,7 @@ module fekap_strings
    implicit none
    private
 
-   public :: lower, upper, same_name, is_word_of, word_index, int_text, short_real_text
+   public :: lower, upper, same_name, is_word_of, word_index, int_text, short_real_text, es_text
 
 contains
 
@@ -105,5 +105,26 @@ contains
          text = trim(adjustl(buf))
       end if
    end function short_real_text
+
+   !> x as esW.D writes it, except that an exponent of three digits keeps its
+   !> E (esW.D writes 1e300 as 1.00000+300): then the text is esW.De3's,
+   !> without its leading blank, and one character wider than W when it needs
+   !> to be, rather than asterisks.
+   pure function es_text(x, width, decimals) result(text)
+      real(dp), intent(in) :: x
+      integer, intent(in) :: width, decimals
+      character(:), allocatable :: text
+      character(len=80) :: buffer
+      character(len=24) :: form
+      write (form, '(a,i0,a,i0,a)') '(es', width, '.', decimals, ')'
+      write (buffer(1:width), form) x
+      text = buffer(1:width)
+      ! Not a finite number, or an exponent of two digits: the E is there.
+      if (.not. (x == x .and. abs(x) <= huge(x)) .or. index(text, 'E') > 0) return
+      write (form, '(a,i0,a,i0,a)') '(es', width + 1, '.', decimals, 'e3)'
+      write (buffer(1:width + 1), form) x
+      text = buffer(1:width + 1)
+      if (text(1:1) == ' ') text = text(2:)
+   end function es_text
 
 end module fekap_strings

@@ -40,7 +40,7 @@ module fekap_effects_dynamic_stepper
       & solve_em, em_free_velocities, massless_dofs, em_increments
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
-   use fekap_output_format, only: es_text
+   use fekap_strings, only: es_text
    implicit none
    private
 

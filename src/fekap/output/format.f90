@@ -25,10 +25,11 @@
 !> would have to be public.
 module fekap_output_format
    use fekap_kinds, only: dp
+   use fekap_strings, only: es_text
    implicit none
    private
 
-   public :: real_text, integer_text, append_real, append_integer, append_es, append_i, append_text, es_text
+   public :: real_text, integer_text, append_real, append_integer, append_es, append_i, append_text
 
    integer, parameter :: i8 = selected_int_kind(18), i16 = selected_int_kind(38)
    !> The exact path reads the significand and exponent from the bits of an
@@ -197,27 +198,6 @@ contains
          call append_text(line, n, es_text(x, width, decimals))
       end if
    end subroutine append_es
-
-   !> x as esW.D writes it, except that an exponent of three digits keeps its
-   !> E (esW.D writes 1e300 as 1.00000+300): then the text is esW.De3's,
-   !> without its leading blank, and one character wider than W when it needs
-   !> to be, rather than asterisks.
-   pure function es_text(x, width, decimals) result(text)
-      real(dp), intent(in) :: x
-      integer, intent(in) :: width, decimals
-      character(:), allocatable :: text
-      character(len=80) :: buffer
-      character(len=24) :: form
-      write (form, '(a,i0,a,i0,a)') '(es', width, '.', decimals, ')'
-      write (buffer(1:width), form) x
-      text = buffer(1:width)
-      ! Not a finite number, or an exponent of two digits: the E is there.
-      if (.not. (x == x .and. abs(x) <= huge(x)) .or. index(text, 'E') > 0) return
-      write (form, '(a,i0,a,i0,a)') '(es', width + 1, '.', decimals, 'e3)'
-      write (buffer(1:width + 1), form) x
-      text = buffer(1:width + 1)
-      if (text(1:1) == ' ') text = text(2:)
-   end function es_text
 
    !> Write i as the edit descriptor iW writes it after position n; advance n.
    pure subroutine append_i(line, n, i, width)

@@ -8,9 +8,9 @@ module fekap_output_listing
    use fekap_model_drive_law, only: law_type, law_rate, law_harmonic, law_polynomial, law_table
    use fekap_model_effects, only: effects_plan_type, plan_effects, effects_name
    use fekap_model_work, only: work_counts_type, phase_seconds
-   use fekap_output_format, only: append_es, append_i, append_integer, append_text, es_text
+   use fekap_output_format, only: append_es, append_i, append_integer, append_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
-   use fekap_strings, only: int_text
+   use fekap_strings, only: es_text, int_text
    implicit none
    private
 

@@ -18,7 +18,7 @@ module fekap_solver_fem_state
    use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_solver_step_control, only: step_cuts_type
-   use fekap_output_format, only: es_text
+   use fekap_strings, only: es_text
    implicit none
    private
 
