@@ -9,5 +9,5 @@ program fpm_test_pointer
       & 'Run every test with   scripts/test          (ends with "N passed, N failed")', &
       & 'or some of them with  scripts/test NAME     (pFUnit tests and pytest -k NAME)', &
       & 'from the top of the checkout; docs/testing.md says more.'
-   error stop 77
+   stop 77
 end program fpm_test_pointer
