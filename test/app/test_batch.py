@@ -534,3 +534,26 @@ method = ["fem", "cartesian", "angles", "fem"]
     finally:
         for process in reversed(processes):
             stop(process)
+
+
+def test_streamed_measures_equal_those_of_the_loaded_run(sweep20, monkeypatch):
+    """The workers' one-pass measures (batch.task.measures) against the same measures taken
+    from the whole run as fekap_csv loads it (results.Measure.value), every function on
+    points, links and steps of one case."""
+    directory, first = sweep20
+    assert first.returncode == 0, first.stderr
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    from batch import results, task
+    case = next((directory / "out" / "cases").glob("*/case.json")).parent
+    run = results.load(case)
+    texts = [f"{function}({source})" for function in ("max", "min", "range", "mean", "first", "final", "absmax")
+             for source in ("points.C.y", "points.B.vx", "links.BC.omega", "steps.iterations", "points.Q.x")]
+    measures = [results.parse_measure(text) for text in texts]
+    streamed = task.measures(case, [m.spec() for m in measures])
+    for measure in measures:
+        loaded = measure.value(run, None)
+        if measure.name == "Q":  # no such point: no value either way
+            assert loaded is None and streamed[measure.text] is None
+            continue
+        # Exact but for mean(), summed in another order: round-off of the values' size (<= 2 pi * 10).
+        assert streamed[measure.text] == pytest.approx(loaded, rel=1e-14, abs=1e-13), measure.text
