@@ -5,7 +5,7 @@ write summary.csv, a Markdown table and the comparison plots.
     fekap-batch [SWEEP.toml] [--deck DECK] [--param NAME=VALUES] [--option NAME=VALUES]
                 [--zip] [-o DIR] [--scheduler ADDRESS] [--workers N] [--timeout S]
                 [--retries N] [--measure EXPR] [--plot-point P] [--plot-quantity Q]
-                [--plot-parameter NAME] [--no-plots] [--fekap PATH] [-q]
+                [--plot-parameter NAME] [--no-plots] [--max-cases N] [--fekap PATH] [-q]
 
 Exit codes: 0 every case has an answer (fekap's exit code, 0, 2 or 3, is in the
 table) and at least one ended with exit 0, 1 some cases were lost (their workers
