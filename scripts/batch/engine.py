@@ -13,6 +13,7 @@ import signal
 import sys
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from . import task as task_module
 
@@ -105,10 +106,25 @@ def local_processes(client) -> list[int]:
     return sorted(pids)
 
 
+def descendants(pids: list[int]) -> list[int]:
+    """The processes and their descendants as they are now (Linux /proc; only the processes
+    themselves elsewhere): a worker that a nanny restarted since the start is found too."""
+    found, todo = [], list(pids)
+    while todo:
+        pid = todo.pop()
+        found.append(pid)
+        for task in Path(f"/proc/{pid}/task").glob("*"):
+            try:
+                todo += [int(child) for child in (task / "children").read_text().split()]
+            except (OSError, ValueError):
+                continue
+    return list(dict.fromkeys(found))
+
+
 def kill(pids: list[int]) -> None:
-    """SIGKILL to processes of our own LocalCluster (their fekap runs die with them:
-    task.py gives each run the parent-death signal)."""
-    for pid in pids:
+    """SIGKILL to the processes of our own LocalCluster and everything they started (their
+    fekap runs too, which task.py also gives the parent-death signal)."""
+    for pid in descendants(pids):
         try:
             os.kill(pid, signal.SIGKILL)
         except OSError:
