@@ -455,9 +455,12 @@ dt = 1e-4
 """)
     # A process group of its own, to which the SIGINT goes as a terminal's Ctrl-C does: to the
     # sweep and its Dask processes alike.
+    # SIGINT as a terminal's shell leaves it: a test run started in the background of a
+    # non-interactive shell inherits it ignored, and Python then never raises KeyboardInterrupt.
     process = subprocess.Popen(batch_command(fekap, str(sweep), "-o", "out"), cwd=tmp_path, env=batch_env(),
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               start_new_session=True)
+                               start_new_session=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     cases = tmp_path / "out" / "cases"
     try:
         wait_until(lambda: list(cases.glob("*/case.json")) if cases.is_dir() else [], 60, "a finished case")

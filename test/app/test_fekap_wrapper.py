@@ -19,9 +19,16 @@ from apptest import ROOT  # noqa: E402
 WRAPPER = ROOT / "scripts" / "fekap"
 
 
+def default_sigint() -> None:
+    """In the child: SIGINT as a terminal's shell leaves it. A test run started in the background
+    of a non-interactive shell inherits SIGINT ignored, and bash cannot trap a signal ignored on
+    entry (nor Python raise KeyboardInterrupt for it)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(*args: str) -> subprocess.Popen:
     return subprocess.Popen([str(WRAPPER), *args], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
+                            text=True, start_new_session=True, preexec_fn=default_sigint)
 
 
 @pytest.fixture(scope="module", autouse=True)
