@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Write FEKAP decks of the IFToMM A02 N-four-bar (a parallelogram chain with
 change points), and its exact motion.
 

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Write the IFToMM A02 N-four-bar deck for dynamics (decks/dynamics/a02-n<N>.deck).
 
 N + 1 vertical cranks (1 m, 1 kg) on pivots 1 m apart, N horizontal couplers

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """The exact motion of the IFToMM A02 N-four-bar in dynamics (decks/dynamics/a02-*.deck):
 with rigid bars the chain is one pendulum about the crank pivots, of inertia
 I = (N+1) m L^2/3 + N m L^2 and gravity moment G cos(theta), G = ((N+1)/2 + N) m g L

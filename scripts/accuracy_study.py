@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Accuracy against cost: FEKAP runs on decks with exact answers, sweeping one
 setting at a time, recording the largest error against the exact answer and
 the time the run took.

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """FEKAP's performance benchmarks (run through scripts/bench, which builds the
 release binary first).
 

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Two fekap executables on the same cases of Example 1, taking turns: a
 before/after comparison on a shared machine whose speed drifts over minutes
 (a slow spell then falls on both alike). Full kinematics at dt (default

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Throughput of fekap-batch: cases per second for N short cases (default 1,000:
 decks/sweeps/fourbar-crank.deck, one crank turn at dt = 0.05, 20 steps, each
 case its own crank length) run three ways:

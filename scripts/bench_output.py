@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """The cost of FEKAP's pictures against the number of steps: a benchmark script, not a test.
 
     python3 scripts/bench_output.py [--plot-steps N ...] [--vtk-steps N ...]

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Compare several FEKAP runs (or exact solutions) point by point.
 
     scripts/compare.py RUN1 RUN2 [RUN...] [--labels a,b,c] [--point P]

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """The IFToMM A02 N-four-bar (decks/dynamics/a02-n40.deck) in Exudyn, as rigid
 bodies, against its exact energy integral and against FEKAP's flexible run of
 the deck: the first crank's rate and angle errors and the CPU time per step of

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Compare FEKAP's flexible slider-crank (decks/dynamics/slider-crank.deck) with Exudyn's
 geometrically exact 2D beam (ObjectBeamGeometricallyExact2D) on the same model: the
 connecting rod's midpoint deflection (the distance of M from the line AB) over the run,

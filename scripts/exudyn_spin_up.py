@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """The spin-up beam (decks/dynamics/spin-up.deck, Simo & Vu-Quoc 1986) in
 Exudyn, an independent code, against FEKAP: the tip's transverse deflection
 and axial stretch in the hub's frame over 0-30 s. A comparison script, not a

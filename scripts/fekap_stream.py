@@ -225,7 +225,10 @@ def _blocks(path: Path, key: str | None, slow: bool):
     header = _header(path)
     numeric = [c for c in header if c != key]
     types = {c: (pa.string() if slow or c == key else pa.float64()) for c in header}
-    options = dict(read_options=pacsv.ReadOptions(column_names=header),
+    # use_threads=False: the parse runs on this thread, and Arrow's CPU thread pool is never
+    # started. A pool still alive when the interpreter exits aborts it at random (SIGABRT,
+    # "terminate called without an active exception"), after a usage error's message too.
+    options = dict(read_options=pacsv.ReadOptions(column_names=header, use_threads=False),
                    convert_options=pacsv.ConvertOptions(column_types=types, strings_can_be_null=False,
                                                         quoted_strings_can_be_null=False))
     try:

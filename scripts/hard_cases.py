@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Run FEKAP's hard cases of issue #16 and write their table into docs/hard-cases.md.
 
 One row per case: the mechanism and options, the exit code, the rows, the

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """The map of FEKAP's modules in docs/theory.md: one row per Fortran file of
 src/ and app/ (file, module, what it is: the first sentence of its header
 comment), between the markers of the section "Map of modules".

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Example 1 (the four-bar of decks/fourbar.deck) at dt = 0.025, 0.25 and 0.5
 with the three methods of FEKAP (fem, cartesian, angles), side by side with
 the paper's Tables 1-3 (Eischen, Sun & Marler; iterations per step).

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """What the slideline penalty does: Newton iterations, gap, accuracy and
 conditioning of the slider-crank and the quick-return mechanism for penalty
 parameters from 1e-2 to 1e8 times FEKAP's default.

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Plot the results of a FEKAP run.
 
     scripts/plot.py OUTDIR [--only KIND ...] [--animate [auto|mp4|gif]] [--instants N]

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Write a FEKAP deck for a scissor lift of N cells.
 
 Each cell is two bars of length 2 crossing at their midpoints and hinged there;

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Compare FEKAP's spin-up beam (decks/dynamics/spin-up.deck) with the
 independent linear rotating-beam model of scripts/spin_up_reference.py: the
 transverse tip deflection in the hub's frame over 0-30 s, for 10, 20, 40 and

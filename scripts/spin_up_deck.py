@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Write the spin-up beam deck (Simo & Vu-Quoc 1986) for dynamics:
 decks/dynamics/spin-up.deck.
 

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """An independent solution of the spin-up beam (decks/dynamics/spin-up.deck):
 the transverse tip deflection in the hub's frame by a linear rotating-beam
 model with centrifugal (geometric) stiffening, as in Kane, Ryan & Banerjee

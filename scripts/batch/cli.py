@@ -5,17 +5,20 @@ write summary.csv, a Markdown table and the comparison plots.
     fekap-batch [SWEEP.toml] [--deck DECK] [--param NAME=VALUES] [--option NAME=VALUES]
                 [--zip] [-o DIR] [--scheduler ADDRESS] [--workers N] [--timeout S]
                 [--retries N] [--measure EXPR] [--plot-point P] [--plot-quantity Q]
-                [--plot-parameter NAME] [--no-plots] [--fekap PATH] [-q]
+                [--plot-parameter NAME] [--no-plots] [--max-cases N] [--fekap PATH] [-q]
 
 Exit codes: 0 every case has an answer (fekap's exit code, 0, 2 or 3, is in the
-table), 1 some cases were lost (their workers died or they timed out on every
-attempt), 2 a bad sweep or command line (nothing ran), 130 interrupted (the
-finished cases are kept; run the same command again to resume).
+table) and at least one ended with exit 0, 1 some cases were lost (their workers
+died or they timed out on every attempt) or every case failed, 2 a bad sweep or
+command line (nothing ran: also a sweep of more cases than its limit, or an
+output that is no directory), 130 interrupted (the finished cases are kept; run
+the same command again to resume).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 import subprocess
@@ -23,8 +26,8 @@ import sys
 from pathlib import Path
 
 from . import engine, results
-from .sweep import (Place, Problems, Sweep, SweepError, expand, expand_decks, load_sweep, option_values,
-                    values_of)
+from .sweep import (MAX_CASES, Place, Problems, Sweep, SweepError, check_count, expand, expand_decks,
+                    load_sweep, option_values, values_of)
 
 ROOT = Path(__file__).resolve().parents[2]
 PROG = "fekap-batch"
@@ -54,19 +57,34 @@ def parse_args(argv):
     parser.add_argument("--plot-quantity", help="quantity of the history overlay (default y)")
     parser.add_argument("--plot-parameter", help="x axis of the measure plots")
     parser.add_argument("--no-plots", action="store_true", help="write no plots")
-    parser.add_argument("--fekap", help="the fekap executable (default build/local/bin/fekap)")
+    parser.add_argument("--max-cases", type=positive, metavar="N", help="most cases the sweep may have "
+                        f"(default: the sweep file's max_cases, else {MAX_CASES:,})")
+    parser.add_argument("--fekap", help="the fekap executable (default build/local/bin/fekap, built "
+                        "by scripts/build when needed)")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress, no table")
     return parser.parse_args(argv)
+
+
+def positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
 
 
 def command_line_sweep(args, sweep: Sweep | None) -> Sweep:
     """The sweep file's sweep with the command line's decks and values added."""
     places = {"decks": Place("command line --deck"), "combine": Place("command line --zip")}
-    problems = Problems(places, "command line")
     if sweep is None:
         sweep = Sweep(source="command line", decks=[], places={})
+        if args.max_cases is not None:
+            sweep.max_cases = args.max_cases
         if not args.deck:
             raise SweepError("command line: give a sweep file or --deck DECK")
+    problems = Problems(places, "command line", sweep.max_cases)
     sweep.places.update({k: v for k, v in places.items() if k not in sweep.places or args.deck})
     if args.deck:
         sweep.decks += expand_decks(args.deck, Path.cwd(), "decks", problems)
@@ -116,10 +134,47 @@ def fekap_version(fekap: str) -> str:
     return out.stdout.strip()
 
 
+def output_directory(args, sweep: Sweep, make: bool) -> Path:
+    """The sweep's output directory, made (``make``) with its cases/ directory; a SweepError
+    when it cannot be (a regular file of that name, no permission)."""
+    stem = Path(args.sweep).stem if args.sweep else "sweep"
+    output = Path(args.output or sweep.output or Path("out") / "batch" / stem)
+    where = "command line -o" if args.output else str(sweep.places.get("output") or sweep.source)
+    if output.exists() and not output.is_dir():
+        raise SweepError(f"{where}: output {str(output)!r} is not a directory: give another output")
+    if not make:
+        return output
+    try:
+        (output / "cases").mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SweepError(f"{where}: cannot make the output directory {str(output)!r}: "
+                         f"{exc.strerror or exc}") from None
+    return output
+
+
+def build() -> str:
+    """Build FEKAP (release, scripts/build: nothing to do when it is current); its path."""
+    fekap = str(ROOT / "build" / "local" / "bin" / "fekap")
+    if os.environ.get("FEKAP_BATCH_NO_BUILD"):
+        return fekap
+    done = subprocess.run([str(ROOT / "scripts" / "build")], stdout=sys.stderr)
+    if done.returncode != 0:
+        raise SweepError(f"scripts/build failed (exit {done.returncode}): see above")
+    return fekap
+
+
 def main(argv=None) -> int:
+    try:
+        return run(argv)
+    except KeyboardInterrupt:  # outside the sweep's runs (they stop on their own)
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+
+
+def run(argv=None) -> int:
     args = parse_args(argv)
     try:
-        sweep = load_sweep(Path(args.sweep)) if args.sweep else None
+        sweep = load_sweep(Path(args.sweep), args.max_cases) if args.sweep else None
         sweep = command_line_sweep(args, sweep)
         measures = []
         problems = Problems(sweep.places, sweep.source)
@@ -132,20 +187,29 @@ def main(argv=None) -> int:
         if any(m.function == "error" for m in measures) and not sweep.reference:
             raise SweepError(f"{sweep.places.get('measures', Place(sweep.source))}: measures: error(...) "
                              "needs a [reference] table (the values of the reference run)")
-        fekap = args.fekap or str(ROOT / "build" / "local" / "bin" / "fekap")
+        # Counted before anything is made or built: the list of cases, the output, FEKAP.
+        check_count(sweep)
+        output_directory(args, sweep, make=False)
+    except SweepError as exc:
+        print(f"{PROG}: {exc}", file=sys.stderr)
+        return 2
+    try:
+        fekap = args.fekap or build()
+    except SweepError as exc:
+        print(f"{PROG}: {exc}", file=sys.stderr)
+        return 1
+    try:
         if not Path(fekap).is_file():
             raise SweepError(f"{fekap}: no fekap executable (run scripts/build, or give --fekap)")
         fekap = str(Path(fekap).resolve())
         version = fekap_version(fekap)
         cases, references = expand(sweep, version)
+        output = output_directory(args, sweep, make=True)
     except SweepError as exc:
         print(f"{PROG}: {exc}", file=sys.stderr)
         return 2
 
-    stem = Path(args.sweep).stem if args.sweep else "sweep"
-    output = Path(args.output or sweep.output or Path("out") / "batch" / stem)
     cases_dir = output / "cases"
-    cases_dir.mkdir(parents=True, exist_ok=True)
     for stale in cases_dir.glob(".*.part-*"):  # attempts of an earlier, stopped sweep
         shutil.rmtree(stale, ignore_errors=True)
     timeout = args.timeout or sweep.timeout or 600.0
@@ -160,9 +224,12 @@ def main(argv=None) -> int:
         print(f"{PROG}: {len(cases)} cases ({len(every) - len(cases)} reference runs), "
               f"{len(every) - len(todo)} done before, {len(todo)} to run; results in {output}/",
               file=sys.stderr)
+    # The measures go with the cases: each worker computes its case's (but error(), which
+    # needs the reference run) and stores them in case.json.
+    specs = [m.spec() for m in measures if m.function != "error"]
     tasks = [{"name": case.name, "directory": str(directories[case.name].resolve()), "fekap": fekap,
               "arguments": [str(Path(a).resolve()) if a == str(case.deck) else a for a in case.arguments()],
-              "cwd": str(Path.cwd()), "timeout": timeout, "attempt": 1} for case in todo]
+              "cwd": str(Path.cwd()), "timeout": timeout, "attempt": 1, "measures": specs} for case in todo]
     outcome = engine.run_all(tasks, labels, args.scheduler, args.workers, retries, progress)
 
     rows = []
@@ -194,5 +261,17 @@ def main(argv=None) -> int:
         print(f"{PROG}: ran {ran} cases, {len(outcome.lost)} lost; wrote {output / 'summary.csv'}, "
               f"{output / 'summary.md'}" + "".join(f", {p}" for p in plots), file=sys.stderr)
     if outcome.interrupted:
+        # Counted on disk: a case finished on a worker whose answer had not reached us yet
+        # is finished too (its case.json is there), and a rerun will not run it again.
+        finished = sum((directories[case.name] / "case.json").is_file() for case in every)
+        print(f"{PROG}: interrupted: {finished} of {len(every)} cases finished "
+              f"({finished - (len(every) - len(todo))} in this run); run the same command again "
+              "to run the rest", file=sys.stderr)
         return 130
-    return 1 if outcome.lost else 0
+    if outcome.lost:
+        return 1
+    if not any(row["exit"] == "0" for row in rows):
+        print(f"{PROG}: every case failed: none of the {len(rows)} ended with exit 0 "
+              f"(their messages: {output / 'summary.csv'})", file=sys.stderr)
+        return 1
+    return 0

@@ -9,9 +9,11 @@ from __future__ import annotations
 import logging
 import operator
 import os
+import signal
 import sys
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from . import task as task_module
 
@@ -95,10 +97,46 @@ def start_client(scheduler: str | None, workers: int | None):
     return Client(cluster), cluster
 
 
+def local_processes(client) -> list[int]:
+    """The pids of a LocalCluster's worker processes and of their nannies."""
+    pids = set()
+    for call in (os.getpid, os.getppid):
+        pids.update(client.run(call).values())
+    pids.discard(os.getpid())
+    return sorted(pids)
+
+
+def descendants(pids: list[int]) -> list[int]:
+    """The processes and their descendants as they are now (Linux /proc; only the processes
+    themselves elsewhere): a worker that a nanny restarted since the start is found too."""
+    found, todo = [], list(pids)
+    while todo:
+        pid = todo.pop()
+        found.append(pid)
+        for task in Path(f"/proc/{pid}/task").glob("*"):
+            try:
+                todo += [int(child) for child in (task / "children").read_text().split()]
+            except (OSError, ValueError):
+                continue
+    return list(dict.fromkeys(found))
+
+
+def kill(pids: list[int]) -> None:
+    """SIGKILL to the processes of our own LocalCluster and everything they started (their
+    fekap runs too, which task.py also gives the parent-death signal)."""
+    for pid in descendants(pids):
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
+
+
 def run_all(tasks: list[dict], labels: dict[str, str], scheduler: str | None, workers: int | None,
             retries: int, progress: Progress) -> Outcome:
     """Run the tasks (run_case's arguments) on Dask and collect the outcome.
-    Ctrl-C stops the sweep: finished cases stay, the rest are cancelled."""
+    Ctrl-C stops the sweep within a few seconds: finished cases stay, the rest are
+    cancelled; a LocalCluster's workers, and the runs on them, are killed rather than
+    waited for (a run of minutes would hold a graceful close as long)."""
     import cloudpickle
     from dask.distributed import as_completed
     cloudpickle.register_pickle_by_value(task_module)
@@ -106,9 +144,12 @@ def run_all(tasks: list[dict], labels: dict[str, str], scheduler: str | None, wo
     if not tasks:
         return outcome
     client = cluster = None
+    pids: list[int] = []
     pending: dict[str, tuple[list[dict], object]] = {}
     try:
         client, cluster = start_client(scheduler, workers)
+        if cluster is not None:
+            pids = local_processes(client)
         nworkers = max(len(client.scheduler_info().get("workers", {})), 1)
         # The case code goes to each worker once, by value (cloudpickle: the
         # workers need not import scripts/), as data that every task calls
@@ -155,16 +196,25 @@ def run_all(tasks: list[dict], labels: dict[str, str], scheduler: str | None, wo
                 outcome.lost[name] = f"lost after {task['attempt']} attempts: {reason}"
                 progress.update(name, labels[name], None, running, error=outcome.lost[name])
     except KeyboardInterrupt:
+        # A second Ctrl-C while stopping would leave a traceback and the workers running.
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         outcome.interrupted = True
+        kill(pids)
         progress.note("fekap-batch: interrupted; finished cases are kept, the others cancelled")
     finally:
+        quick = 2 if outcome.interrupted else 10
         if client is not None:
             try:
-                if pending:
+                if pending and not pids:
                     client.cancel([f for _, f in pending.values()], force=True)
+                client.close(timeout=quick)
             except Exception:  # shutting down: nothing more to save
                 pass
-            client.close(timeout=10)
         if cluster is not None:
-            cluster.close(timeout=10)
+            try:
+                cluster.close(timeout=quick)
+            except Exception:  # its processes are gone already
+                pass
+        if outcome.interrupted:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
     return outcome

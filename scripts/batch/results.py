@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +18,7 @@ import numpy as np
 import compare
 import fekap_csv as fc
 
+from . import task
 from .sweep import Case, format_value
 
 FUNCTIONS = ("max", "min", "range", "mean", "first", "final", "absmax", "error")
@@ -36,6 +38,10 @@ class Measure:
     source: str
     name: str
     quantity: str | None
+
+    def spec(self) -> list:
+        """The measure as batch.task.measures takes it (on a worker: plain data)."""
+        return [self.text, self.function, self.source, self.name, self.quantity]
 
     def value(self, run: fc.Run, reference: fc.Run | None) -> float | None:
         series = self._series(run)
@@ -124,13 +130,51 @@ def case_row(case: Case, directory: Path, record: dict | None, lost: str | None,
         if key in stats:
             row[key] = form.format(stats[key])
     if measures:
-        run = load(directory)
-        reference = load(reference_dir) if reference_dir is not None else None
+        values = measure_values(directory, record, measures, reference_dir)
         for measure in measures:
-            value = measure.value(run, reference) if run is not None else None
+            value = values.get(stored_key(measure, reference_dir))
             row[measure.text] = "" if value is None or not math.isfinite(value) else repr(value)
     row["seconds"] = f"{record['seconds']:.3f}"
     return row
+
+
+def stored_key(measure: Measure, reference_dir: Path | None) -> str:
+    """The name of a measure's value in case.json: its text, and for error() the reference run."""
+    if measure.function == "error":
+        return f"{measure.text} against {reference_dir.name if reference_dir is not None else '-'}"
+    return measure.text
+
+
+def measure_values(directory: Path, record: dict, measures: list[Measure], reference_dir: Path | None
+                   ) -> dict[str, float | None]:
+    """The case's measures as case.json holds them (the worker computed them with the case);
+    those it lacks (a measure added on a rerun; error(), which needs the reference run) are
+    computed here once and stored beside it in measures.json (case.json stays the worker's
+    record), so that the next rerun reads them back."""
+    later = directory / "measures.json"
+    try:
+        added = json.loads(later.read_text()) if later.is_file() else {}
+    except (OSError, json.JSONDecodeError):
+        added = {}
+    stored = dict(record.get("measures", {}), **added)
+    missing = [m for m in measures if stored_key(m, reference_dir) not in stored]
+    if not missing:
+        return stored
+    streamed = [m.spec() for m in missing if m.function != "error"]
+    if streamed:
+        added.update(task.measures(directory, streamed))
+    errors = [m for m in missing if m.function == "error"]
+    if errors:
+        run = load(directory)
+        reference = load(reference_dir) if reference_dir is not None else None
+        for measure in errors:
+            value = measure.value(run, reference) if run is not None and reference is not None else None
+            added[stored_key(measure, reference_dir)] = value if value is None or math.isfinite(value) else None
+    if (directory / "case.json").is_file():
+        temporary = directory / "measures.json.tmp"
+        temporary.write_text(json.dumps(added, indent=1))
+        os.replace(temporary, later)
+    return dict(stored, **added)
 
 
 def columns_of(rows: list[dict], measures: list[Measure]) -> list[str]:

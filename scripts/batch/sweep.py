@@ -19,7 +19,10 @@ from . import deckinfo
 
 #: Keys of a sweep file, by table ("" is the top level).
 TOP_KEYS = {"decks", "combine", "output", "timeout", "retries", "measures", "parameters",
-            "options", "reference", "plot"}
+            "options", "reference", "plot", "max_cases"}
+#: Most cases a sweep may have unless it says otherwise (max_cases, --max-cases): a grid of
+#: 1000 x 1000 x 1000 values is refused before its cases are listed, not after eating memory.
+MAX_CASES = 100_000
 #: fekap options a case may set, and the kind of their values.
 OPTIONS = {"method": str, "dt": float, "tol": float, "predictor": str, "compute": str}
 OPTION_CHOICES = {"method": ("fem", "cartesian", "angles"),
@@ -59,6 +62,7 @@ class Sweep:
     reference: dict[str, dict] = field(default_factory=dict)
     plot: dict[str, str] = field(default_factory=dict)
     places: dict[str, Place] = field(default_factory=dict)
+    max_cases: int = MAX_CASES
 
 
 @dataclass(frozen=True)
@@ -131,10 +135,12 @@ def key_places(text: str, file: str) -> dict[str, Place]:
 class Problems:
     """Collects the problems of a sweep; raises them all together."""
 
-    def __init__(self, places: dict[str, Place], file: str):
+    def __init__(self, places: dict[str, Place], file: str, limit: int = MAX_CASES):
         self.places = places
         self.file = file
         self.items: list[str] = []
+        #: Most values a list may have (the sweep's case limit): checked before it is made.
+        self.limit = limit
 
     def add(self, key: str, message: str) -> None:
         place = self.places.get(key) or self.places.get(key.split(".")[0]) or Place(self.file)
@@ -159,6 +165,9 @@ def values_of(spec, key: str, problems: Problems, kind=float) -> list:
             if count < 1:
                 problems.add(key, f"empty range: linspace of {count} values")
                 return []
+            if count > problems.limit:
+                problems.add(key, too_many(count, problems.limit, "values"))
+                return []
             if count == 1:
                 return [first]
             return [tidy(first + (last - first) * i / (count - 1)) for i in range(count)]
@@ -172,6 +181,9 @@ def values_of(spec, key: str, problems: Problems, kind=float) -> list:
                 problems.add(key, f"empty range: from {start:g} to {stop:g} in steps of {step:g}")
                 return []
             count = int(math.floor((stop - start) / step + 1e-9)) + 1
+            if count > problems.limit:
+                problems.add(key, too_many(count, problems.limit, "values"))
+                return []
             return [tidy(start + i * step) for i in range(count)]
         problems.add(key, "expected a value, a list, {linspace = [first, last, count]} or "
                      "{range = [start, stop, step]}; got keys " + ", ".join(sorted(spec)))
@@ -195,6 +207,30 @@ def values_of(spec, key: str, problems: Problems, kind=float) -> list:
     return out
 
 
+def too_many(count: int, limit: int, what: str) -> str:
+    return (f"{count:,} {what}, more than the limit of {limit:,} cases (max_cases = N in the sweep "
+            "file or --max-cases N raises it)")
+
+
+def case_count(sweep: Sweep) -> int:
+    """How many cases the sweep makes, counted without making them."""
+    lengths = [len(v) for v in list(sweep.parameters.values()) + list(sweep.options.values())]
+    if sweep.combine == "grid":
+        rows = math.prod(lengths)
+    else:
+        rows = max(lengths, default=1)
+    return rows * len(sweep.decks)
+
+
+def check_count(sweep: Sweep) -> int:
+    """The sweep's number of cases; a SweepError when it is over its limit."""
+    count = case_count(sweep)
+    if count > sweep.max_cases:
+        where = sweep.places.get("max_cases") or Place(sweep.source)
+        raise SweepError(f"{where}: the sweep has {too_many(count, sweep.max_cases, 'cases')}")
+    return count
+
+
 def tidy(value: float) -> float:
     """A computed grid value without its last-digit noise (1.7, not 1.7000000000000002)."""
     return float(f"{value:.12g}")
@@ -204,8 +240,9 @@ def is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def load_sweep(path: Path) -> Sweep:
-    """Read and check a sweep file (decks, values, keys); raise SweepError."""
+def load_sweep(path: Path, max_cases: int | None = None) -> Sweep:
+    """Read and check a sweep file (decks, values, keys); raise SweepError. ``max_cases``
+    (the command line's) overrides the file's max_cases."""
     file = str(path)
     try:
         text = path.read_text()
@@ -223,6 +260,15 @@ def load_sweep(path: Path) -> Sweep:
         if key not in TOP_KEYS:
             problems.add(key, "unknown key (keys: " + ", ".join(sorted(TOP_KEYS)) + ")")
     sweep = Sweep(source=file, decks=[], places=places)
+    if "max_cases" in data:
+        value = data["max_cases"]
+        if isinstance(value, int) and not isinstance(value, bool) and value >= 1:
+            sweep.max_cases = value
+        else:
+            problems.add("max_cases", "expected a whole number >= 1")
+    if max_cases is not None:
+        sweep.max_cases = max_cases
+    problems.limit = sweep.max_cases
     decks = data.get("decks")
     if decks is None:
         problems.add("decks", "missing: give decks = [\"DECK\" or \"GLOB\", ...]")
@@ -368,6 +414,7 @@ def expand(sweep: Sweep, version: str) -> tuple[list[Case], dict[Case, Case]]:
                 problems.add(f"{section}.{k}", f"combine = \"zip\" needs lists of one length; "
                              f"the lists have " + ", ".join(f"{n}: {lengths[n]}" for n in longest))
     problems.check()
+    check_count(sweep)
 
     names = list(sweep.parameters) + list(sweep.options)
     lists = [sweep.parameters[n] for n in sweep.parameters] + [sweep.options[n] for n in sweep.options]

@@ -1,6 +1,8 @@
 """The work of one case on a Dask worker: run fekap into a private directory,
-record its exit code and message in case.json, and move the directory into
-place, so that a case directory with case.json is always a finished case.
+record its exit code and message in case.json with the run's statistics and
+the sweep's measures (computed here, on the worker, reading each CSV file once
+as a stream), and move the directory into place, so that a case directory with
+case.json is always a finished case.
 
 Standard library only: the module is sent to the workers by value (cloudpickle),
 so a worker needs nothing but Python and Dask, and the shared file system."""
@@ -9,7 +11,9 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -72,6 +76,86 @@ def statistics(directory: Path) -> dict:
     return stats
 
 
+#: A Fortran exponent without its letter, as gfortran writes 1.0E-100: 1.0-100.
+_FORTRAN_EXPONENT = re.compile(r"^([+-]?[0-9.]+)([+-][0-9]+)$")
+
+
+def _number(text: str) -> float | None:
+    """A CSV field as a finite number; None for an empty field (not computed at that step)
+    or one that is no number."""
+    text = text.strip().replace("D", "E").replace("d", "e")
+    try:
+        value = float(text)
+    except ValueError:
+        match = _FORTRAN_EXPONENT.match(text)
+        if match is None:
+            return None
+        value = float(f"{match.group(1)}e{match.group(2)}")
+    return value if math.isfinite(value) else None
+
+
+class _Reduction:
+    """What the measure functions need of a stream of values, kept as it goes."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.total = 0.0
+        self.low = self.high = self.first = self.last = math.nan
+
+    def add(self, value: float) -> None:
+        if self.count == 0:
+            self.low = self.high = self.first = value
+        self.low = min(self.low, value)
+        self.high = max(self.high, value)
+        self.last = value
+        self.total += value
+        self.count += 1
+
+    def result(self, function: str) -> float | None:
+        if self.count == 0:
+            return None
+        return {"max": self.high, "min": self.low, "range": self.high - self.low,
+                "mean": self.total / self.count, "first": self.first, "final": self.last,
+                "absmax": max(abs(self.low), abs(self.high))}[function]
+
+
+def measures(directory: Path, specs: list[list]) -> dict[str, float | None]:
+    """The measures of a run: ``specs`` are [text, function, source, name, quantity] as
+    batch.results parses them (every function but error(), which needs the reference run);
+    each source file (points.csv, links.csv, steps.csv) is read once, row by row, whatever
+    its size. A measure of a file, column or name the run lacks is None."""
+    values: dict[str, float | None] = {}
+    by_source: dict[str, list[list]] = {}
+    for spec in specs:
+        by_source.setdefault(spec[2], []).append(spec)
+    for source, group in by_source.items():
+        reductions = {spec[0]: _Reduction() for spec in group}
+        try:
+            with open(directory / f"{source}.csv", newline="", encoding="utf-8", errors="replace") as handle:
+                reader = csv.reader(handle)
+                header = [field.strip() for field in next(reader, [])]
+                key = {"points": "point", "links": "link"}.get(source)
+                key_column = header.index(key) if key in header else None
+                wanted = []
+                for text, _, _, name, quantity in group:
+                    column = name if source == "steps" else quantity
+                    if column in header and (source == "steps" or key_column is not None):
+                        wanted.append((reductions[text], header.index(column), None if source == "steps" else name))
+                for row in reader:
+                    for reduction, column, only in wanted:
+                        if column >= len(row) or (only is not None and (key_column >= len(row)
+                                                                        or row[key_column].strip() != only)):
+                            continue
+                        value = _number(row[column])
+                        if value is not None:
+                            reduction.add(value)
+        except OSError:
+            pass
+        for text, function, *_ in group:
+            values[text] = reductions[text].result(function)
+    return values
+
+
 def worker_name() -> str:
     """The Dask worker running this task ('' outside one)."""
     try:
@@ -111,7 +195,8 @@ def run_case(task: dict) -> dict:
     record = {"case": final.name, "exit": proc.returncode, "message": message[:300],
               "seconds": round(seconds, 4), "attempt": task["attempt"], "host": socket.gethostname(),
               "worker": worker_name(),
-              "command": command[:3] + ["DIR"] + command[4:], "statistics": statistics(work)}
+              "command": command[:3] + ["DIR"] + command[4:], "statistics": statistics(work),
+              "measures": measures(work, task.get("measures", []))}
     (work / "case.json.tmp").write_text(json.dumps(record, indent=1))
     os.replace(work / "case.json.tmp", work / "case.json")
     if final.exists():  # a stale, unfinished directory of an earlier attempt

@@ -1,7 +1,10 @@
 """fekap-batch (scripts/batch) on Dask, everything on 127.0.0.1: a 20-case sweep
-gives the right table and a rerun does no work; a bad deck is recorded with its
-error; bad sweep files are refused before anything runs; a worker killed in
-mid-case has its case retried and completed; SIGINT keeps the finished cases;
+gives the right table and a rerun does no work; the measures are computed with
+the cases and read back; a bad deck is recorded with its error; bad sweep files,
+sweeps over the case limit and an output that is a file are refused before
+anything runs; a sweep whose every case failed exits 1; a worker killed in
+mid-case has its case retried and completed; Ctrl-C returns within seconds with
+the finished cases kept and counted, and the servers listen on 127.0.0.1 only;
 a sweep through --scheduler on a `dask scheduler` with two `dask worker`s.
 
 Each sweep runs `python3 -m batch` as a process, with bounded waits; every
@@ -206,6 +209,94 @@ def test_rerun_does_no_work(sweep20, fekap):
     assert len(rows) == 20 and all(float(row["min(points.C.y)"]) < 4 for row in rows)
 
 
+def test_measures_are_stored_with_the_case_and_read_back(sweep20, fekap):
+    """The workers computed the measures with the cases (case.json holds them); a rerun reads
+    them back: with one case's CSV files moved away, its row keeps its values."""
+    directory, first = sweep20
+    assert first.returncode == 0, first.stderr
+    rows = summary(directory / "out")
+    measures = ["max(points.B.x)", "range(links.AB.angle)", "max(steps.iterations)"]
+    for row in rows:
+        stored = json.loads((directory / "out" / "cases" / row["case"] / "case.json").read_text())["measures"]
+        assert [repr(stored[m]) for m in measures] == [row[m] for m in measures]
+    case = directory / "out" / "cases" / rows[0]["case"]
+    aside = directory / "aside"
+    aside.mkdir()
+    files = ("points.csv", "links.csv", "steps.csv")
+    try:
+        for name in files:
+            (case / name).rename(aside / name)
+        again = batch(directory, fekap, "sweep.toml", "--no-plots")
+        assert again.returncode == 0, again.stderr
+        assert "ran 0 cases" in again.stderr
+        assert [summary(directory / "out")[0][m] for m in measures] == [rows[0][m] for m in measures]
+    finally:
+        for name in files:
+            (aside / name).rename(case / name)
+
+
+@pytest.mark.parametrize("text, args, phrase", [
+    # 10^9 cases: refused at once, without listing them (that took 19 GiB in a minute).
+    ('decks = ["p.deck"]\n[parameters]\ncrank = { linspace = [1, 2, 1000] }\nturns = { linspace = [1, 2, 1000] }\n'
+     'dt = { linspace = [0.01, 0.02, 1000] }\n', (), "sweep.toml: the sweep has 1,000,000,000 cases, more than "
+     "the limit of 100,000 cases"),
+    ('decks = ["p.deck"]\n[parameters]\ncrank = { range = [0, 1e12, 1] }\n', (),
+     "sweep.toml:3: parameters.crank: 1,000,000,000,001 values, more than the limit of 100,000 cases"),
+    ('decks = ["p.deck"]\nmax_cases = 10\n[parameters]\ncrank = { linspace = [1, 2, 5] }\nturns = [1, 2, 3, 4]\n',
+     (), "sweep.toml:2: the sweep has 20 cases, more than the limit of 10 cases"),
+    ('decks = ["p.deck"]\n[parameters]\ncrank = { linspace = [1, 2, 5] }\nturns = [1, 2, 3, 4]\n', ("--max-cases", "19"),
+     "sweep.toml: the sweep has 20 cases, more than the limit of 19 cases"),
+    ('decks = ["p.deck"]\nmax_cases = 0\n', (), "sweep.toml:2: max_cases: expected a whole number >= 1"),
+])
+def test_sweep_over_its_case_limit_is_refused_before_anything_is_made(tmp_path, text, args, phrase,
+                                                                      monkeypatch, capsys):
+    sweep = write_sweep(tmp_path, text)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    from batch import cli
+    start = time.monotonic()
+    # No fekap at all: the count is checked before FEKAP is looked for (or built).
+    assert cli.main([str(sweep), "-o", "out", "--fekap", str(tmp_path / "none"), *args]) == 2
+    assert time.monotonic() - start < 5
+    stderr = capsys.readouterr().err
+    assert phrase in stderr, stderr
+    assert "no fekap executable" not in stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_case_limit_can_be_raised(tmp_path, monkeypatch, capsys):
+    sweep = write_sweep(tmp_path, 'decks = ["p.deck"]\nmax_cases = 10\n[parameters]\ncrank = { linspace = [1, 2, 20] }\n')
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    from batch import cli
+    # Past the count (--max-cases overrides the file's max_cases), on to the missing fekap.
+    assert cli.main([str(sweep), "-o", "out", "--fekap", str(tmp_path / "none"), "--max-cases", "20"]) == 2
+    assert "no fekap executable" in capsys.readouterr().err
+
+
+def test_output_that_is_a_file_is_an_error(tmp_path, fekap, monkeypatch, capsys):
+    sweep = write_sweep(tmp_path, 'decks = ["p.deck"]\noutput = "results"\n')
+    (tmp_path / "results").write_text("mine\n")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    from batch import cli
+    for args in ((), ("-o", "results"), ("-o", "results/inside")):
+        assert cli.main([str(sweep), "--fekap", fekap, *args]) == 2
+        stderr = capsys.readouterr().err
+        assert "Traceback" not in stderr
+        assert "'results" in stderr and ("is not a directory" in stderr or "Not a directory" in stderr), stderr
+    assert (tmp_path / "results").read_text() == "mine\n"
+
+
+def test_sweep_whose_every_case_failed_exits_1(tmp_path, fekap):
+    # crank = 13 and 14 leave C unreachable: every case is an input error (exit 2).
+    sweep = write_sweep(tmp_path, 'decks = ["p.deck"]\n[parameters]\ncrank = [13, 14]\n')
+    result = batch(tmp_path, fekap, str(sweep), "-o", "out", "--no-plots", workers=1)
+    assert result.returncode == 1, result.stderr
+    assert "every case failed: none of the 2 ended with exit 0" in result.stderr
+    assert [row["exit"] for row in summary(tmp_path / "out")] == ["2", "2"]
+
+
 def test_bad_deck_is_recorded_with_its_error_and_not_retried(tmp_path, fekap):
     # crank = 13 leaves C unreachable: cy is the square root of a negative number.
     sweep = write_sweep(tmp_path, """\
@@ -312,6 +403,41 @@ dt = 1e-4
     wait_until(lambda: not fekap_processes(str(tmp_path)), 10, "no fekap left running")
 
 
+def process_tree(root: int) -> list[int]:
+    """``root`` and its descendants."""
+    tree, todo = [], [root]
+    while todo:
+        pid = todo.pop()
+        tree.append(pid)
+        for task in Path(f"/proc/{pid}/task").glob("*"):
+            try:
+                todo += [int(p) for p in (task / "children").read_text().split()]
+            except OSError:
+                continue
+    return tree
+
+
+def listening_addresses(pids: list[int]) -> set[str]:
+    """The local addresses (hex, as /proc/net/tcp* gives them) of the TCP sockets that the
+    processes listen on."""
+    inodes = set()
+    for pid in pids:
+        try:
+            for fd in Path(f"/proc/{pid}/fd").iterdir():
+                target = os.readlink(fd)
+                if target.startswith("socket:["):
+                    inodes.add(target[8:-1])
+        except OSError:
+            continue
+    addresses = set()
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        for line in Path(table).read_text().splitlines()[1:]:
+            fields = line.split()
+            if fields[3] == "0A" and fields[9] in inodes:  # 0A: LISTEN
+                addresses.add(fields[1].split(":")[0])
+    return addresses
+
+
 def test_sigint_keeps_the_finished_cases(tmp_path, fekap):
     # One short case and three five times as long: whichever finishes first,
     # a long one still has at least four short cases' time to run when the
@@ -327,19 +453,33 @@ every = 10000
 [options]
 dt = 1e-4
 """)
+    # A process group of its own, to which the SIGINT goes as a terminal's Ctrl-C does: to the
+    # sweep and its Dask processes alike.
+    # SIGINT as a terminal's shell leaves it: a test run started in the background of a
+    # non-interactive shell inherits it ignored, and Python then never raises KeyboardInterrupt.
     process = subprocess.Popen(batch_command(fekap, str(sweep), "-o", "out"), cwd=tmp_path, env=batch_env(),
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     cases = tmp_path / "out" / "cases"
     try:
         wait_until(lambda: list(cases.glob("*/case.json")) if cases.is_dir() else [], 60, "a finished case")
-        process.send_signal(signal.SIGINT)
+        # Dask's scheduler, nannies and workers listen on the loopback address only.
+        addresses = listening_addresses(process_tree(process.pid))
+        assert addresses and addresses <= {"0100007F", "00000000000000000000000001000000"}, addresses
+        start = time.monotonic()
+        os.killpg(process.pid, signal.SIGINT)
         out, err = process.communicate(timeout=60)
+        seconds = time.monotonic() - start
     finally:
         stop(process)
     assert process.returncode == 130, err
+    assert seconds < 10, f"Ctrl-C took {seconds:.1f} s to return"
     assert "interrupted; finished cases are kept" in err
     done = {path.parent.name for path in cases.glob("*/case.json")}
     assert 1 <= len(done) < 4
+    # The count is the cases finished on disk, whether or not their answers had come back.
+    assert f"interrupted: {len(done)} of 4 cases finished ({len(done)} in this run)" in err, err
     rows = summary(tmp_path / "out")
     assert len(rows) == 4
     assert {row["case"] for row in rows if row["exit"] == "0"} == done
@@ -397,3 +537,26 @@ method = ["fem", "cartesian", "angles", "fem"]
     finally:
         for process in reversed(processes):
             stop(process)
+
+
+def test_streamed_measures_equal_those_of_the_loaded_run(sweep20, monkeypatch):
+    """The workers' one-pass measures (batch.task.measures) against the same measures taken
+    from the whole run as fekap_csv loads it (results.Measure.value), every function on
+    points, links and steps of one case."""
+    directory, first = sweep20
+    assert first.returncode == 0, first.stderr
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    from batch import results, task
+    case = next((directory / "out" / "cases").glob("*/case.json")).parent
+    run = results.load(case)
+    texts = [f"{function}({source})" for function in ("max", "min", "range", "mean", "first", "final", "absmax")
+             for source in ("points.C.y", "points.B.vx", "links.BC.omega", "steps.iterations", "points.Q.x")]
+    measures = [results.parse_measure(text) for text in texts]
+    streamed = task.measures(case, [m.spec() for m in measures])
+    for measure in measures:
+        loaded = measure.value(run, None)
+        if measure.name == "Q":  # no such point: no value either way
+            assert loaded is None and streamed[measure.text] is None
+            continue
+        # Exact but for mean(), summed in another order: round-off of the values' size (<= 2 pi * 10).
+        assert streamed[measure.text] == pytest.approx(loaded, rel=1e-14, abs=1e-13), measure.text

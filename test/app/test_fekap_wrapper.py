@@ -19,9 +19,16 @@ from apptest import ROOT  # noqa: E402
 WRAPPER = ROOT / "scripts" / "fekap"
 
 
+def default_sigint() -> None:
+    """In the child: SIGINT as a terminal's shell leaves it. A test run started in the background
+    of a non-interactive shell inherits SIGINT ignored, and bash cannot trap a signal ignored on
+    entry (nor Python raise KeyboardInterrupt for it)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(*args: str) -> subprocess.Popen:
     return subprocess.Popen([str(WRAPPER), *args], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
+                            text=True, start_new_session=True, preexec_fn=default_sigint)
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -81,3 +88,18 @@ def test_no_plots_after_an_input_error(tmp_path):
     assert call.wait(timeout=300) == 2
     assert paths.stat().st_mtime_ns == before
     assert "plots in" not in call.stdout.read()
+
+
+def test_a_plotting_failure_fails_the_command(tmp_path):
+    """Plotting that fails (here matplotlib refuses the backend MPLBACKEND names) makes the
+    script exit 1 after a run that ended with exit 0, with plot.py's message and its own;
+    the run's results stay."""
+    out = tmp_path / "out"
+    call = subprocess.run([str(WRAPPER), "--no-animation", "-q", "-o", str(out), "decks/fourbar-half-turn.deck"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, MPLBACKEND="no-such-backend"))
+    assert call.returncode == 1, (call.returncode, call.stderr)
+    assert "no-such-backend" in call.stderr, call.stderr
+    assert "fekap: plotting failed" in call.stderr, call.stderr
+    assert (out / "points.csv").is_file()
+    assert not list(out.glob("*.png"))

@@ -25,7 +25,7 @@ REASON = "over 600 lines"
 def test_fortitude_finds_nothing():
     """fortitude check src app passes (exit 0)."""
     fortitude = shutil.which("fortitude")
-    assert fortitude is not None, "fortitude is not installed (scripts/setup installs fortitude-lint)"
+    assert fortitude is not None, "fortitude is not installed (scripts/setup --test installs fortitude-lint into build/venv)"
     r = subprocess.run([fortitude, "check", "--output-format", "concise", "src", "app"], cwd=ROOT,
                        capture_output=True, text=True)
     assert r.returncode == 0, f"fortitude found problems:\n{r.stdout}{r.stderr}"

@@ -26,7 +26,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from apptest import ROOT, fekap_binary  # noqa: E402
 
-vtk = pytest.importorskip("vtk", reason="the vtk package (scripts/setup installs it)")
+vtk = pytest.importorskip("vtk", reason="the vtk package (scripts/setup --test installs it into build/venv)")
 
 
 def vtk_deck(tmp_path: Path, deck: str, extra: str = "") -> Path:
