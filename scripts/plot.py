@@ -470,10 +470,15 @@ def draw_paths(ax, run: Run) -> None:
             continue
         _, _, x, y = series.curve("x", "y")
         ax.plot(x, y, ":", color="0.55", lw=0.9, zorder=1.8)
+    reference = run.reference() if run.shape_kind == "displacement" else {}
     for index, name in enumerate(tracked):
         series = run.nodes.paths[name]
         color = f"C{index % 10}"
         _, _, x, y = series.curve("x", "y")
+        if name in reference and run.magnification != 1:
+            # The path magnified as the shapes are: from the undeformed position.
+            (x0, y0), m = reference[name], run.magnification
+            x, y = x0 + m * (x - x0), y0 + m * (y - y0)
         if is_fixed(series):
             ax.plot(x[:1], y[:1], "s", color=color, ms=7, zorder=3, label=f"{short(name)} (fixed)")
         else:
@@ -497,7 +502,12 @@ def draw_loads_and_masses(ax, run: Run, where: dict[str, tuple[float, float]]) -
             # A moment load: a ring around its node.
             ax.plot([x], [y], "o", ms=16, mfc="none", mec="C3", mew=2.0, zorder=6)
     if loads:
-        ax.plot([], [], "-", color="C3", lw=2.0, label="loads (direction)")
+        moments = any(math.isfinite(m) and m != 0 for *_, m in loads)
+        forces = any(math.hypot(fx, fy) > 0 for _, fx, fy, _ in loads
+                     if math.isfinite(fx) and math.isfinite(fy))
+        what = ", ".join(w for w, there in (("forces: arrows (direction)", forces),
+                                            ("moments: rings", moments)) if there)
+        ax.plot([], [], "-", color="C3", lw=2.0, label=f"loads ({what})")
     masses = {node: mass for node, mass in run.mech.masses.items() if node in drawn and mass > 0}
     if masses:
         largest = max(masses.values())
@@ -550,7 +560,8 @@ def draw_support_reactions(ax, run: Run, step: int) -> None:
                   f"(largest {largest:.3g} {run.unit('force')})")
 
 
-def fit_to_motion(ax, run: Run, instants: list[dict[str, tuple[float, float]]]) -> None:
+def motion_limits(run: Run, instants: list[dict[str, tuple[float, float]]]
+                  ) -> tuple[tuple[float, float], tuple[float, float]]:
     """Axis limits around the nodes' motion and the drawn (magnified) shapes, with a margin for
     the ground symbols; a guide reaching beyond is cut at the frame."""
     low, high = motion_box(run)
@@ -559,8 +570,15 @@ def fit_to_motion(ax, run: Run, instants: list[dict[str, tuple[float, float]]]) 
         if drawn.size:
             low, high = np.minimum(low, drawn.min(axis=0)), np.maximum(high, drawn.max(axis=0))
     pad = 0.08 * run.size
-    ax.set_xlim(low[0] - pad, high[0] + pad)
-    ax.set_ylim(low[1] - 1.5 * pad, high[1] + pad)
+    xlim, ylim = [low[0] - pad, high[0] + pad], [low[1] - 1.5 * pad, high[1] + pad]
+    # A frame between 2.6 / 6.4 and 7.5 / 6.4 as high as wide (the drawing's sizes): a flat
+    # or a tall mechanism is centred in the wider span.
+    aspect = (ylim[1] - ylim[0]) / (xlim[1] - xlim[0])
+    for limits, factor in ((ylim, 2.6 / 6.4 / aspect), (xlim, aspect / (7.5 / 6.4))):
+        if factor > 1:
+            middle, half = 0.5 * (limits[0] + limits[1]), 0.5 * (limits[1] - limits[0]) * factor
+            limits[:] = [middle - half, middle + half]
+    return (xlim[0], xlim[1]), (ylim[0], ylim[1])
 
 
 def mechanism_axes(ax, run: Run) -> None:
@@ -572,22 +590,27 @@ def mechanism_axes(ax, run: Run) -> None:
 
 def plot_paths(run: Run, at: float | None = None) -> Figure:
     """The whole mechanism at a few instants (coloured by time, with a colour bar), the tracked
-    points' paths highlighted, loads, masses and support reactions."""
+    points' paths highlighted, loads, masses and support reactions; the drawing fitted to the
+    motion, the legend below it."""
     from matplotlib import cm
-    from matplotlib.colors import Normalize
+    from matplotlib.colors import ListedColormap, Normalize
+    from matplotlib.transforms import offset_copy
 
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(8.6, 6.8))
+    instants = [run.frame(target) for target in run.instant_targets]
+    instants = list({step: (step, t, where) for step, t, where in instants}.values())
+    xlim, ylim = motion_limits(run, [where for _, _, where in instants])
+    # The drawing 6.4 inches wide and as high as the motion's aspect asks (2.6 to 7.5).
+    width = 6.4
+    height = float(np.clip(width * (ylim[1] - ylim[0]) / (xlim[1] - xlim[0]), 2.6, 7.5))
+    fig = plt.figure(figsize=(width + 2.2, height + 1.4))
+    ax = fig.add_axes((0.8 / (width + 2.2), 0.35 / (height + 1.4), width / (width + 2.2), height / (height + 1.4)))
     size = run.size
     draw_ground(ax, run, size)
     draw_paths(ax, run)
-    instants = [run.frame(target) for target in run.instant_targets]
-    instants = list({step: (step, t, where) for step, t, where in instants}.values())
     t_first, t_last = run.nodes.frames[min(run.nodes.frames)][0], run.nodes.frames[max(run.nodes.frames)][0]
     norm = Normalize(t_first, t_last if t_last > t_first else t_first + 1)
     # viridis without its palest yellows (faint on white).
-    from matplotlib.colors import ListedColormap
-
     cmap = ListedColormap(plt.get_cmap("viridis")(np.linspace(0.0, 0.85, 256)), name="instants")
     for step, t, where in instants:
         draw_links(ax, run, where, cmap(norm(t)), 0.85, None)
@@ -605,12 +628,19 @@ def plot_paths(run: Run, at: float | None = None) -> Figure:
                 ax.annotate(short(name), (x, y), xytext=(5, 5), textcoords="offset points",
                             fontsize="small", color="0.1", zorder=5,
                             bbox=dict(boxstyle="round,pad=0.12", fc="white", ec="none", alpha=0.7))
-        bar = fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.75, pad=0.02)
+    mechanism_axes(ax, run)
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
+    ax.set_aspect("equal", adjustable="box")
+    if instants:
+        # The colour bar beside the drawing, as high as it is once its aspect is applied.
+        fig.canvas.draw()
+        box = ax.get_position()
+        bar_ax = fig.add_axes((box.x1 + 0.02, box.y0, 0.025, box.height))
+        bar = fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), cax=bar_ax)
         bar.set_label(f"instant: {run.label('t')}")
         bar.set_ticks([t for _, t, _ in instants])
         bar.ax.set_yticklabels([f"{t:.4g}" for _, t, _ in instants])
-    mechanism_axes(ax, run)
-    fit_to_motion(ax, run, [where for _, _, where in instants])
     fig.suptitle(run.title)
     what = "the mechanism at " + (f"{len(instants)} instants" if instants else "no instant")
     title = f"{what}, paths of the tracked points"
@@ -619,7 +649,9 @@ def plot_paths(run: Run, at: float | None = None) -> Figure:
     ax.set_title(title, color="0.3")
     handles, _ = ax.get_legend_handles_labels()
     if handles:
-        ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=2, fontsize="small")
+        # Below the x axis's label, whatever the drawing's height.
+        ax.legend(loc="upper left", bbox_to_anchor=(0.0, 0.0), ncol=2, fontsize="small",
+                  bbox_transform=offset_copy(ax.transAxes, fig, y=-42, units="points"))
     return fig
 
 
@@ -1046,14 +1078,7 @@ class Movie:
         size = run.size
         # The frame fits the drawn mechanism over its motion (magnified shapes included), not
         # the guides (they are clipped).
-        low, high = motion_box(run)
-        for _, _, where in self.frames:
-            drawn = np.array([xy for xy in run.shape(where).values() if np.isfinite(xy).all()])
-            if drawn.size:
-                low, high = np.minimum(low, drawn.min(axis=0)), np.maximum(high, drawn.max(axis=0))
-        pad = 0.08 * size
-        xlim = (low[0] - pad, high[0] + pad)
-        ylim = (low[1] - 1.5 * pad, high[1] + pad)
+        xlim, ylim = motion_limits(run, [where for _, _, where in self.frames])
         # The drawing 7 inches wide, 3.2 to 7 high (even pixel counts for the MP4 encoder).
         aspect = (ylim[1] - ylim[0]) / (xlim[1] - xlim[0])
         draw_w = 7.0

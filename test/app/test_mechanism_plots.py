@@ -428,7 +428,7 @@ def test_loads_masses_and_support_reactions_are_drawn(runs):
     assert len(arrows) == 1 + len(run.mech.supports)
     assert len(ax.collections) == 1 and ax.collections[0].get_offsets().shape == (1, 2)
     labels = [text.get_text() for text in ax.get_legend().get_texts()]
-    assert "loads (direction)" in labels and any(l.startswith("support reactions at t = 1 ") for l in labels)
+    assert "loads (forces: arrows (direction))" in labels and any(l.startswith("support reactions at t = 1 ") for l in labels)
     plot.fc.pyplot().close(fig)
 
 
