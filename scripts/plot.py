@@ -255,7 +255,7 @@ class Run:
                     x, y = where[name]
                     drawn[name] = (x0 + m * (x - x0), y0 + m * (y - y0))
             return drawn
-        for link, chain in self.chains.items():
+        for chain in self.chains.values():
             if len(chain) <= 2 or chain[0] not in where or chain[-1] not in where:
                 continue
             a, b = np.array(where[chain[0]]), np.array(where[chain[-1]])
@@ -449,7 +449,7 @@ def draw_links(ax, run: Run, where: dict[str, tuple[float, float]], color, alpha
     them (the elastic shape, magnified as run.shape says), its end nodes marked."""
     artists = []
     drawn = run.shape(where)
-    for link, chain in run.chains.items():
+    for chain in run.chains.values():
         xy = link_xy(run, chain, drawn)
         if xy is None:
             continue
@@ -534,7 +534,7 @@ def reaction_instant(run: Run, at: float | None) -> int | None:
 def draw_support_reactions(ax, run: Run, step: int) -> None:
     """Each support's reaction force at one step as an arrow pointing at the support, the
     largest 0.15 of the model's extent long."""
-    _, t, where = run.frame(step)
+    _, _, where = run.frame(step)
     drawn = run.shape(where)
     forces = []
     for name, series in run.reactions.items():
@@ -911,7 +911,7 @@ def plot_reactions(run: Run, components: bool = False) -> Figure:
             continue
         magnitude = {}
         for name, s in group.items():
-            step, t, fx, fy = s.curve("fx", "fy")
+            _, t, fx, fy = s.curve("fx", "fy")
             magnitude[name] = (t, np.hypot(fx, fy), fx, fy)
         order = sorted(magnitude, key=lambda n: -np.nanmax(magnitude[n][1], initial=0.0))
         shown = order[:MAX_FORCE_CURVES]
