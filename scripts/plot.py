@@ -636,7 +636,7 @@ def plot_paths(run: Run, at: float | None = None) -> Figure:
         # The colour bar beside the drawing, as high as it is once its aspect is applied.
         fig.canvas.draw()
         box = ax.get_position()
-        bar_ax = fig.add_axes((box.x1 + 0.02, box.y0, 0.025, box.height))
+        bar_ax = fig.add_axes((box.x1 + 0.02, box.y0, 0.025, box.height), label="<colorbar>")
         bar = fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), cax=bar_ax)
         bar.set_label(f"instant: {run.label('t')}")
         bar.set_ticks([t for _, t, _ in instants])
