@@ -66,6 +66,10 @@ program fekap_main
    if (allocated(error)) call finish(error)
    call check_effects_request(model, error)
    if (allocated(error)) call finish(error)
+   ! Without a mesh line, nodes.csv holds the meshed links' interior points
+   ! where their bending is the result: statics and dynamics.
+   if (.not. model%output%mesh_nodes_given) model%output%mesh_nodes = any(model%links%nelem > 1) .and. &
+      & any(planned_effects(model) == [effects_statics, effects_dynamics])
 
    call make_stepper(model, stepper, error)
    if (allocated(error)) call finish(error)

@@ -54,7 +54,7 @@ def a02_deck(n: int, dt_text: str = "0.01", law: str = "absolute") -> str:
         "SUPPorts", *[f"  O{k}  pin" for k in range(n + 1)],
         "DRIVes", f"  rotation crank0  {rate}",
         "ANALysis", f"  time 0 1 {dt_text}",
-        "OUTPut", "  track " + " ".join(f"T{k}" for k in range(n + 1)),
+        "OUTPut", "  units length=m time=s", "  track " + " ".join(f"T{k}" for k in range(n + 1)),
         "END", ""])
 
 

@@ -51,6 +51,7 @@ def deck(n, dt=2e-3, t_end=20.0):
         "  ! type auto: masses on a scene without drives give dynamics",
         "  time 0 t_end dt",
         "OUTPut",
+        "  units length=m time=s",
         "  track T0",
         "  angles C0",
         "END",

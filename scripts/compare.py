@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 import fekap_csv as fc
+import fekap_stream as fs
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -153,36 +154,53 @@ def format_table(rows, reference: str, steps: int) -> str:
     return "\n".join(lines)
 
 
-def plot_comparison(sources: list[Source], point: str, quantity: str) -> Figure:
-    """Path of ``point`` for every run, the quantity against t, and its differences."""
+def plot_comparison(sources: list[Source], point: str, quantity: str, title: str | None = None,
+                    mech=None, note: str = "") -> Figure:
+    """Path of ``point`` for every run, the quantity against t, and its differences from the
+    first run (of the runs written at its times; the panel says which are left out).
+
+    ``mech`` (fekap_stream.Mechanism, optional) labels the axes with the deck's units;
+    ``title`` and ``note`` (which cases are shown) head the figure."""
     plt = fc.pyplot()
-    fig = plt.figure(figsize=(13, 6))
+    fig = plt.figure(figsize=(13, 6.4))
     grid = fig.add_gridspec(2, 2, width_ratios=[1.0, 1.3])
     ax_path = fig.add_subplot(grid[:, 0])
     ax_value = fig.add_subplot(grid[0, 1])
     ax_diff = fig.add_subplot(grid[1, 1], sharex=ax_value)
     reference = sources[0].points[point]
+    unit = (lambda q: mech.unit(q)) if mech is not None else (lambda q: "as in the runs")
+    name = (lambda q: mech.name(q)) if mech is not None else (lambda q: q)
+    left_out = []
     for index, source in enumerate(sources):
         series = source.points[point]
         style = dict(STYLES[index % len(STYLES)], color=f"C{index % 10}", label=source.label)
         ax_path.plot(series.values["x"], series.values["y"], **style)
         ax_value.plot(series.t, series.values[quantity], **style)
-        if index > 0:
-            ax_diff.plot(series.t, series.values[quantity] - reference.values[quantity],
-                         **style)
+        if index == 0:
+            continue
+        if series.t.shape == reference.t.shape and np.allclose(series.t, reference.t, rtol=0, atol=1e-9):
+            ax_diff.plot(series.t, series.values[quantity] - reference.values[quantity], **style)
+        else:
+            left_out.append(source.label)
     ax_path.set_aspect("equal", adjustable="datalim")
-    ax_path.set_xlabel("x")
-    ax_path.set_ylabel("y")
+    ax_path.set_xlabel(f"x ({unit('x')})")
+    ax_path.set_ylabel(f"y ({unit('y')})")
     ax_path.set_title(f"path of {point}")
     ax_path.legend(fontsize="small")
-    ax_value.set_ylabel(quantity)
-    ax_value.set_title(f"{quantity} of {point}")
+    ax_value.set_ylabel(f"{name(quantity)} ({unit(quantity)})")
+    ax_value.set_title(f"{name(quantity)} of {point}")
     ax_value.tick_params(labelbottom=False)
-    ax_diff.set_ylabel(f"{quantity} - {quantity}[{sources[0].label}]")
-    ax_diff.set_xlabel("t")
+    ax_diff.set_ylabel(f"difference ({unit(quantity)})")
+    ax_diff.set_title(f"{name(quantity)} - {name(quantity)}[{sources[0].label}]"
+                      + (f"; not on its times, left out: {', '.join(left_out)}" if left_out else ""),
+                      fontsize="small")
+    ax_diff.set_xlabel(f"{name('t')} ({unit('t')})")
     ax_diff.axhline(0.0, color="0.6", lw=0.8)
     for ax in (ax_path, ax_value, ax_diff):
         ax.grid(True, alpha=0.3)
+    heading = [text for text in (title, note) if text]
+    if heading:
+        fig.suptitle("\n".join(heading))
     fig.tight_layout()
     return fig
 
@@ -206,7 +224,10 @@ def main(argv: list[str] | None = None) -> int:
     check_quantity(sources, points[0], args.quantity)
     print(format_table(max_differences(sources, points), sources[0].label,
                        sources[0].points[points[0]].t.size))
-    fig = plot_comparison(sources, points[0], args.quantity)
+    mech = next((fs.read_mechanism(path) for path in paths if path.is_dir()), None)
+    title = mech.title if mech is not None and mech.title else None
+    fig = plot_comparison(sources, points[0], args.quantity, title, mech,
+                          f"runs: {', '.join(source.label for source in sources)}")
     fig.savefig(output, dpi=110, bbox_inches="tight")
     plt.close(fig)
     print(f"wrote {output}")

@@ -59,7 +59,7 @@ def run_main(prog: str, main, argv: list[str] | None = None) -> int:
 
 
 def pyplot():
-    """matplotlib.pyplot on the headless Agg backend.
+    """matplotlib.pyplot on the headless Agg backend, drawing every text as plain text.
 
     Imported only when a figure is drawn, so that bad arguments are refused at once.
     """
@@ -68,6 +68,9 @@ def pyplot():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    # Titles, units and names are plain text: a $ in a title is a dollar, not mathtext.
+    plt.rcParams["text.parse_math"] = False
+    plt.rcParams["text.usetex"] = False
     return plt
 
 

@@ -13,13 +13,20 @@ Files (see README.md, "What a run writes"):
 - ``nodes.csv``: ``step,t,A.x,A.y,B.x,...``, every node's position at every written step;
 - ``points.csv``: ``step,t,point,x,y[,vx,vy[,ax,ay]]``; ``links.csv``: ``step,t,link,angle[,...]``;
 - ``steps.csv``: ``step,t,iterations,residual,cuts``;
-- ``mesh.csv``: ``link,node1,node2``; ``mechanism.txt``: title, units, supports, guides, drives.
+- ``mesh.csv``: ``link,node1,node2``; ``mechanism.txt``: title, units, supports, guides, drives,
+  loads, masses, the analysis, the nodes' initial coordinates;
+- ``reactions.csv``: ``step,t,kind,link,node,fx,fy,m`` (kinetostatics, statics, dynamics).
+
+Text is read with a tolerant decoding (UTF-8, else Latin-1: a title FEKAP accepted is never an
+error here) and fields of any length (a 128 KiB node name) are taken.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import math
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,6 +38,30 @@ from fekap_csv import UsageError, parse_number
 MAX_BUCKETS = 1500
 #: Bytes of a file parsed at a time.
 BLOCK_BYTES = 1 << 24
+#: Interior mesh points in nodes.csv are named LINK#k (k = 1 .. elements - 1 from the first end).
+INTERIOR = "#"
+
+# A node name, a title may be any length (the csv module's default limit is 128 KiB).
+csv.field_size_limit(min(sys.maxsize, 2**31 - 1))
+
+
+def read_text(path: Path) -> str:
+    """A text file FEKAP wrote, decoded tolerantly: UTF-8, else Latin-1 (which takes any byte)."""
+    data = Path(path).read_bytes()
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def first_line(path: Path) -> str:
+    """The first line of a file (a CSV header), decoded as read_text does."""
+    with open(path, "rb") as handle:
+        data = handle.readline()
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
 
 
 @dataclass
@@ -38,8 +69,15 @@ class Mechanism:
     """What mechanism.txt and mesh.csv say about the model (for drawing and labelling)."""
 
     title: str = ""
-    length_unit: str = "m"
-    time_unit: str = "s"
+    #: Without a units record (a deck without a units line) lengths and times are unlabelled.
+    length_unit: str = "length"
+    time_unit: str = "time"
+    units_given: bool = False
+    #: kinematics, kinetostatics, statics or dynamics ("" for a run of an older FEKAP).
+    analysis: str = ""
+    #: Dynamics: the integrator's name and rho_inf.
+    integrator: str = ""
+    rho_inf: float = float("nan")
     #: (link, first node, second node).
     links: list[tuple[str, str, str]] = field(default_factory=list)
     #: node -> fixed freedoms, e.g. "x y" or "x y rotation".
@@ -50,15 +88,49 @@ class Mechanism:
     slots: list[tuple[str, str, list[str]]] = field(default_factory=list)
     #: ("rotation", link, node) or ("x"|"y", node).
     drives: list[tuple[str, ...]] = field(default_factory=list)
-    loads: list[str] = field(default_factory=list)
+    #: (node, fx, fy, m) at unit load factor (NaN: a run of an older FEKAP gives only the node).
+    loads: list[tuple[str, float, float, float]] = field(default_factory=list)
+    #: node -> point mass.
+    masses: dict[str, float] = field(default_factory=dict)
+    #: node -> initial (x, y), the undeformed geometry.
+    initial: dict[str, tuple[float, float]] = field(default_factory=dict)
     tracked: list[str] = field(default_factory=list)
 
+    @property
+    def statics(self) -> bool:
+        return self.analysis == "statics"
+
+    @property
+    def si(self) -> bool:
+        """Lengths in metres and times in seconds: forces are newtons."""
+        return self.units_given and self.length_unit == "m" and self.time_unit == "s"
+
     def unit(self, quantity: str) -> str:
-        """The unit of a quantity of points.csv, links.csv or nodes.csv, e.g. ``vx`` -> ``m/s``."""
+        """The unit of a quantity of points.csv, links.csv, nodes.csv or reactions.csv, e.g.
+        ``vx`` -> ``m/s``; in statics the rates are derivatives by the load factor."""
         length, time = self.length_unit, self.time_unit
+        if self.statics:
+            # d/d(load factor): the load factor has no unit.
+            time_units = {"vx": length, "vy": length, "ax": length, "ay": length,
+                          "omega": "rad", "alpha": "rad", "t": "-"}
+            if quantity in time_units:
+                return time_units[quantity]
+        force = "N" if self.si else "force"
         return {"x": length, "y": length, "vx": f"{length}/{time}", "vy": f"{length}/{time}",
                 "ax": f"{length}/{time}²", "ay": f"{length}/{time}²", "angle": "rad",
-                "omega": f"rad/{time}", "alpha": f"rad/{time}²", "t": time}[quantity]
+                "omega": f"rad/{time}", "alpha": f"rad/{time}²", "t": time,
+                "force": force, "moment": "N m" if self.si else f"{force} {length}",
+                "energy": "J" if self.si else f"{force} {length}",
+                "momentum": "N s" if self.si else f"{force} {time}",
+                "angular momentum": "N m s" if self.si else f"{force} {length} {time}"}[quantity]
+
+    def name(self, quantity: str) -> str:
+        """How a quantity is called on an axis: in statics the time is the load factor and the
+        rates are derivatives by it."""
+        if not self.statics:
+            return quantity
+        return {"t": "load factor λ", "vx": "dx/dλ", "vy": "dy/dλ", "ax": "d²x/dλ²",
+                "ay": "d²y/dλ²", "omega": "dθ/dλ", "alpha": "d²θ/dλ²"}.get(quantity, quantity)
 
 
 def read_mechanism(directory: Path) -> Mechanism:
@@ -66,37 +138,48 @@ def read_mechanism(directory: Path) -> Mechanism:
     mech = Mechanism()
     path = directory / "mechanism.txt"
     if path.is_file():
-        with open(path, newline="", encoding="utf-8") as handle:
-            for row in csv.reader(handle):
-                if not row:
-                    continue
-                kind, rest = row[0], row[1:]
-                try:
-                    if kind == "title" and rest:
-                        mech.title = rest[0]
-                    elif kind == "units" and len(rest) >= 2:
-                        if rest[0] == "length":
-                            mech.length_unit = rest[1]
-                        elif rest[0] == "time":
-                            mech.time_unit = rest[1]
-                    elif kind == "support" and len(rest) >= 2:
-                        mech.supports[rest[0]] = rest[1]
-                    elif kind == "guide" and len(rest) >= 6:
-                        mech.guides.append((rest[0], rest[1], *(parse_number(v) for v in rest[2:6])))
-                    elif kind == "slot" and len(rest) >= 3:
-                        mech.slots.append((rest[0], rest[1], rest[2:]))
-                    elif kind == "drive" and len(rest) >= 2:
-                        mech.drives.append(tuple(rest))
-                    elif kind == "load" and rest:
-                        mech.loads.append(rest[0])
-                    elif kind == "track":
-                        mech.tracked = list(rest)
-                except ValueError:
-                    raise UsageError(f"{path}: bad {kind} record: {','.join(row)}") from None
+        for row in csv.reader(io.StringIO(read_text(path), newline="")):
+            if not row:
+                continue
+            kind, rest = row[0], row[1:]
+            try:
+                if kind == "title" and rest:
+                    mech.title = rest[0]
+                elif kind == "units" and len(rest) >= 2:
+                    mech.units_given = True
+                    if rest[0] == "length":
+                        mech.length_unit = rest[1]
+                    elif rest[0] == "time":
+                        mech.time_unit = rest[1]
+                elif kind == "analysis" and rest:
+                    mech.analysis = rest[0]
+                    if len(rest) >= 3:
+                        mech.integrator, mech.rho_inf = rest[1], parse_number(rest[2])
+                elif kind == "mass" and len(rest) >= 2:
+                    mech.masses[rest[0]] = mech.masses.get(rest[0], 0.0) + parse_number(rest[1])
+                elif kind == "node" and len(rest) >= 3:
+                    mech.initial[rest[0]] = (parse_number(rest[1]), parse_number(rest[2]))
+                elif kind == "support" and len(rest) >= 2:
+                    mech.supports[rest[0]] = rest[1]
+                elif kind == "guide" and len(rest) >= 6:
+                    mech.guides.append((rest[0], rest[1], *(parse_number(v) for v in rest[2:6])))
+                elif kind == "slot" and len(rest) >= 3:
+                    mech.slots.append((rest[0], rest[1], rest[2:]))
+                elif kind == "drive" and len(rest) >= 2:
+                    mech.drives.append(tuple(rest))
+                elif kind == "load" and rest:
+                    values = [parse_number(v) for v in rest[1:4]] + [math.nan] * 3
+                    mech.loads.append((rest[0], *values[:3]))
+                elif kind == "track":
+                    mech.tracked = list(rest)
+            except ValueError:
+                raise UsageError(f"{path}: bad {kind} record: {','.join(row)}") from None
+    if not mech.units_given and not path.is_file():
+        # A run of a FEKAP that wrote no mechanism.txt plotted in SI.
+        mech.length_unit, mech.time_unit = "m", "s"
     mesh = directory / "mesh.csv"
     if mesh.is_file():
-        with open(mesh, newline="", encoding="utf-8") as handle:
-            rows = [r for r in csv.reader(handle) if r]
+        rows = [r for r in csv.reader(io.StringIO(read_text(mesh), newline="")) if r]
         mech.links = [(r[0], r[1], r[2]) for r in rows[1:] if len(r) >= 3]
     return mech
 
@@ -110,9 +193,16 @@ def step_range(path: Path) -> tuple[int, int]:
             raise UsageError(f"{path}: no steps were written (the file has only its header)")
         handle.seek(0, 2)
         size = handle.tell()
+        # Back from the end until the tail holds a whole last row (a row can be long: a name of
+        # any length).
         back = min(size, 65536)
-        handle.seek(size - back)
-        lines = [line for line in handle.read(back).splitlines() if line.strip()]
+        while True:
+            handle.seek(size - back)
+            tail = handle.read(back)
+            if back == size or tail.rstrip().count(b"\n") >= 1:
+                break
+            back = min(size, 4 * back)
+        lines = [line for line in tail.splitlines() if line.strip()]
     try:
         return int(first.split(b",")[0]), int(lines[-1].split(b",")[0])
     except ValueError:
@@ -207,9 +297,7 @@ class _SlowPath(Exception):
 
 
 def _header(path: Path) -> list[str]:
-    with open(path, newline="", encoding="utf-8") as handle:
-        line = handle.readline()
-    return [field.strip() for field in next(csv.reader([line]), [])]
+    return [field.strip() for field in next(csv.reader([first_line(path)]), [])]
 
 
 def _blocks(path: Path, key: str | None, slow: bool):
@@ -223,8 +311,9 @@ def _blocks(path: Path, key: str | None, slow: bool):
     import pyarrow.csv as pacsv
 
     header = _header(path)
-    numeric = [c for c in header if c != key]
-    types = {c: (pa.string() if slow or c == key else pa.float64()) for c in header}
+    keys = key if isinstance(key, tuple) else (key,)
+    numeric = [c for c in header if c not in keys]
+    types = {c: (pa.string() if slow or c in keys else pa.float64()) for c in header}
     # use_threads=False: the parse runs on this thread, and Arrow's CPU thread pool is never
     # started. A pool still alive when the interpreter exits aborts it at random (SIGABRT,
     # "terminate called without an active exception"), after a usage error's message too.
@@ -233,8 +322,16 @@ def _blocks(path: Path, key: str | None, slow: bool):
                                                         quoted_strings_can_be_null=False))
     try:
         for block in _byte_blocks(path):
+            # A block of pyarrow's must hold a whole row, however long a name in it.
+            options["read_options"].block_size = max(1 << 20, len(block) + 1)
             table = pacsv.read_csv(pa.BufferReader(block), **options)
-            names = table.column(key).to_numpy() if key else None
+            if isinstance(key, tuple):
+                names = np.array(["|".join(parts) for parts in zip(
+                    *(table.column(k).to_pylist() for k in key))], dtype=object)
+            elif key:
+                names = table.column(key).to_numpy()
+            else:
+                names = None
             numbers = np.empty((table.num_rows, len(numeric)))
             for index, name in enumerate(numeric):
                 column = table.column(name)
@@ -285,9 +382,11 @@ def _twice(read):
 @_twice
 def read_long(path: Path, key: str, known: tuple[str, ...], required: tuple[str, ...],
               buckets: int = MAX_BUCKETS, slow: bool = False) -> dict[str, Reduced]:
-    """A long table (points.csv, links.csv) as one decimated series per name in column ``key``."""
+    """A long table (points.csv, links.csv, reactions.csv) as one decimated series per name in
+    column ``key`` (or per combination of the columns of a tuple ``key``, joined by ``|``)."""
     header = _header(path)
-    missing = [c for c in ("step", "t", key) + required if c not in header]
+    keys = key if isinstance(key, tuple) else (key,)
+    missing = [c for c in ("step", "t", *keys) + required if c not in header]
     if missing:
         raise UsageError(f"{path}: missing column(s) {', '.join(missing)} in header '{','.join(header)}'")
     first, last = step_range(path)
@@ -349,6 +448,38 @@ def read_nodes(path: Path, targets: list[int] | None = None, count: int = 0,
         rows, masks = reducer.finish()
         paths[name] = Reduced(name, ("x", "y"), rows, masks)
     return Nodes(names, paths, dict(sorted(frames.items())), first, last)
+
+
+@_twice
+def read_deflections(path: Path, chains: dict[str, list[str]], buckets: int = MAX_BUCKETS,
+                     slow: bool = False) -> Reduced:
+    """Of each link in ``chains`` (its points in order, first node to second, as named in
+    nodes.csv), at every written step: the interior point's signed distance from the chord with
+    the largest size (positive to the left of the first -> second direction); decimated."""
+    header = _header(path)
+    columns = {c[:-2]: i for i, c in enumerate(header) if c.endswith(".x")}
+    links = [link for link, chain in chains.items() if all(n in columns for n in chain)]
+    first, last = step_range(path)
+    reducer = Reducer(first, last, len(links), buckets)
+    for _, numbers, _ in _blocks(path, None, slow):
+        if not len(numbers):
+            continue
+        out = np.empty((len(numbers), 2 + len(links)))
+        out[:, :2] = numbers[:, :2]
+        for index, link in enumerate(links):
+            xs = numbers[:, [columns[n] for n in chains[link]]]
+            ys = numbers[:, [columns[n] + 1 for n in chains[link]]]
+            dx, dy = xs[:, -1] - xs[:, 0], ys[:, -1] - ys[:, 0]
+            length = np.hypot(dx, dy)
+            length[length == 0] = np.nan
+            # Cross product of the chord's unit vector with each point's offset from the start.
+            side = (dx[:, None] * (ys[:, 1:-1] - ys[:, :1]) - dy[:, None] * (xs[:, 1:-1] - xs[:, :1]))
+            side /= length[:, None]
+            pick = np.nanargmax(np.abs(np.nan_to_num(side, nan=-1.0)), axis=1)
+            out[:, 2 + index] = side[np.arange(len(side)), pick]
+        reducer.feed(out)
+    rows, masks = reducer.finish()
+    return Reduced("deflection", tuple(links), rows, masks)
 
 
 def even_steps(first: int, last: int, count: int, endpoint: bool = True) -> list[int]:

@@ -97,6 +97,7 @@ ANALysis
   type dynamics
   time 0 t_end dt
 OUTPut
+  units length=m time=s
   track T
 END
 """)

@@ -255,7 +255,8 @@ def run(argv=None) -> int:
         path = results.plot_paths(finished, directories, point, quantity, plot_dir)
         plots += [path] if path else []
         plots += results.plot_measures(cases, {r["case"]: r for r in rows}, measures,
-                                       args.plot_parameter or sweep.plot.get("parameter"), plot_dir)
+                                       args.plot_parameter or sweep.plot.get("parameter"), plot_dir,
+                                       directories)
     if not args.quiet:
         ran = len(outcome.records)
         print(f"{PROG}: ran {ran} cases, {len(outcome.lost)} lost; wrote {output / 'summary.csv'}, "

@@ -17,6 +17,7 @@ import numpy as np
 
 import compare
 import fekap_csv as fc
+import fekap_stream as fs
 
 from . import task
 from .sweep import Case, format_value
@@ -249,12 +250,13 @@ def plot_paths(cases: list[Case], directories: dict[str, Path], point: str | Non
                and s.points[point].has("x")]
     if not sources:
         return None
-    base = sources[0].points[point]
-    # compare.py draws differences step by step: only cases on the first's time grid.
-    aligned = [s for s in sources if s.points[point].t.shape == base.t.shape
-               and np.allclose(s.points[point].t, base.t, rtol=0, atol=1e-9)]
+    # Every finished case is drawn; compare.py's difference panel takes those on the first
+    # case's times and names the others.
+    mech = fs.read_mechanism(sources[0].path)
+    note = (f"{len(sources)} of {len(cases)} finished cases shown: "
+            + ", ".join(source.label for source in sources))
     plt = fc.pyplot()
-    fig = compare.plot_comparison(aligned, point, quantity)
+    fig = compare.plot_comparison(sources, point, quantity, mech.title or None, mech, note)
     path = output / f"paths-{point}-{quantity}.png"
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -262,15 +264,19 @@ def plot_paths(cases: list[Case], directories: dict[str, Path], point: str | Non
 
 
 def plot_measures(cases: list[Case], rows: dict[str, dict], measures: list[Measure], parameter: str | None,
-                  output: Path) -> list[Path]:
+                  output: Path, directories: dict[str, Path] | None = None) -> list[Path]:
     """Each measure against a swept parameter, one line per combination of the
-    other swept values."""
+    other swept values; labelled with the deck's units and title (from a finished case's
+    mechanism.txt, when ``directories`` are given) and how many cases it shows."""
     keys = swept_keys(cases)
     numeric = [k for k in keys if k != "deck" and all(is_float(rows[c.name].get(k, "")) for c in cases)]
     parameter = parameter or (numeric[0] if numeric else None)
     if parameter is None or not measures:
         return []
     others = [k for k in keys if k != parameter]
+    finished = [c for c in cases if (c.name in rows and str(rows[c.name].get("exit", "")) == "0")]
+    mech = next((fs.read_mechanism(directories[c.name]) for c in finished
+                 if directories and c.name in directories and directories[c.name].is_dir()), None)
     plt = fc.pyplot()
     paths = []
     for index, measure in enumerate(measures):
@@ -288,9 +294,13 @@ def plot_measures(cases: list[Case], rows: dict[str, dict], measures: list[Measu
             points.sort()
             style = dict(compare.STYLES[number % len(compare.STYLES)], color=f"C{number % 10}")
             ax.plot([p[0] for p in points], [p[1] for p in points], label=label or None, **style)
-        ax.set_xlabel(parameter)
-        ax.set_ylabel(measure.text)
-        ax.set_title(f"{measure.text} against {parameter}")
+        ax.set_xlabel(parameter_label(parameter, mech))
+        ax.set_ylabel(f"{measure.text} ({measure_unit(measure, mech)})")
+        count = sum(len(points) for points in groups.values())
+        ax.set_title(f"{measure.text} against {parameter}: {count} of {len(cases)} cases"
+                     + (f", a line per {', '.join(others)}" if others else ""), fontsize="small")
+        if mech is not None and mech.title:
+            fig.suptitle(mech.title)
         ax.grid(True, alpha=0.3)
         if any(groups):
             ax.legend(fontsize="small")
@@ -300,6 +310,25 @@ def plot_measures(cases: list[Case], rows: dict[str, dict], measures: list[Measu
         plt.close(fig)
         paths.append(path)
     return paths
+
+
+def measure_unit(measure: Measure, mech) -> str:
+    """The unit of a measure's values, from the deck's units (mechanism.txt)."""
+    if measure.source == "steps":
+        return {"iterations": "count", "cuts": "count", "residual": "force"}.get(measure.name, "-")
+    if mech is None:
+        mech = fs.Mechanism()
+    if measure.quantity is None:
+        return mech.unit("x")
+    return mech.unit(measure.quantity)
+
+
+def parameter_label(parameter: str, mech) -> str:
+    """A swept parameter's axis label: the step and the end time in time units, a deck
+    parameter in the deck's own units."""
+    if parameter in ("dt", "t_end", "t-end") and mech is not None:
+        return f"{parameter} ({mech.unit('t')})"
+    return f"{parameter} (deck parameter, in the deck's units)"
 
 
 def is_float(text: str) -> bool:

@@ -212,7 +212,7 @@ contains
                call write_steps_row(out%steps, result, prefix)
                rows = rows + 1
             end if
-            if (units%nodes /= no_unit) call write_nodes_row(out%nodes, result, prefix)
+            if (units%nodes /= no_unit) call write_nodes_row(out%nodes, model, result, prefix)
             if (units%reactions /= no_unit) then
                call write_reactions_rows(out%reactions, model, result, prefix)
                rows = rows + size(result%reactions, 2)

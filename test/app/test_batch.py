@@ -560,3 +560,27 @@ def test_streamed_measures_equal_those_of_the_loaded_run(sweep20, monkeypatch):
             continue
         # Exact but for mean(), summed in another order: round-off of the values' size (<= 2 pi * 10).
         assert streamed[measure.text] == pytest.approx(loaded, rel=1e-14, abs=1e-13), measure.text
+
+
+def test_the_overlay_shows_every_case_with_units_and_title(sweep20, monkeypatch):
+    """The paths overlay draws every finished case (both step sizes), its differences only for
+    the cases on the first case's times and names the others; axes carry the deck's units."""
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    import compare
+    import fekap_stream as fs
+
+    directory, _ = sweep20
+    cases = sorted((directory / "out" / "cases").iterdir())
+    sources = [compare.load_source(case, case.name) for case in cases]
+    steps = {len(s.points["C"].t) for s in sources}
+    assert steps == {11, 21}
+    mech = fs.read_mechanism(cases[0])
+    fig = compare.plot_comparison(sources, "C", "y", "a sweep", mech, f"{len(sources)} cases")
+    path_ax, value_ax, diff_ax = fig.axes
+    assert len(path_ax.get_lines()) == len(value_ax.get_lines()) == 20
+    aligned = sum(len(s.points["C"].t) == len(sources[0].points["C"].t) for s in sources)
+    assert len(diff_ax.get_lines()) == aligned - 1 + 1  # the differences and the zero line
+    assert "left out" in diff_ax.get_title()
+    assert (path_ax.get_xlabel(), value_ax.get_ylabel(), diff_ax.get_xlabel()) == \
+        ("x (length)", "y (length)", "t (time)")
+    assert fig._suptitle.get_text() == "a sweep\n20 cases"

@@ -256,13 +256,13 @@ contains
    end subroutine read_analysis
 
    !> OUTPut: `track NODE ...`, `angles LINK ...`, `every K`, `files csv|listing|vtk ...`,
-   !> `units length=NAME time=NAME`, `deflection on|off`.
+   !> `units length=NAME time=NAME`, `deflection on|off`, `mesh on|off`.
    !> Without track every node is tracked; without angles every link is reported.
    subroutine read_output(ctx, model, lines)
       type(context_type), intent(inout) :: ctx
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
-      character(*), parameter :: keys = 'track angles every files units deflection'
+      character(*), parameter :: keys = 'track angles every files units deflection mesh'
       integer :: i, iline, k, idx, every, which
       logical :: ok, tracked, angled
       character(:), allocatable :: key
@@ -339,8 +339,27 @@ contains
                call ctx%error(iline, 2, "expected on or off, not '"//ctx%field(iline, 2)//"'", &
                   & label='deflection on writes deflection.csv (kinetostatics)')
             end select
+         else if (is_word_of(key, 'mesh', 4)) then
+            if (.not. ctx%require(iline, 'mesh on|off', 'a mesh line')) cycle
+            if (ctx%nfields(iline) > 2) then
+               call ctx%error(iline, 3, "unexpected field '"//ctx%field(iline, 3)//"'", &
+                  & label='the line is: mesh on|off')
+               cycle
+            end if
+            select case (word_index(ctx%field(iline, 2), 'on off'))
+            case (1)
+               model%output%mesh_nodes = .true.
+               model%output%mesh_nodes_given = .true.
+            case (2)
+               model%output%mesh_nodes = .false.
+               model%output%mesh_nodes_given = .true.
+            case default
+               call ctx%error(iline, 2, "expected on or off, not '"//ctx%field(iline, 2)//"'", &
+                  & label='mesh on writes every mesh point to nodes.csv')
+            end select
          else if (is_word_of(key, 'units', 4)) then
             if (.not. ctx%require(iline, 'units length=NAME [time=NAME]', 'a units line')) cycle
+            model%output%units_given = .true.
             do k = 2, ctx%nfields(iline)
                call read_unit(ctx, iline, k, model)
             end do

@@ -227,10 +227,20 @@ module fekap_model
       logical :: vtk = .false.
       !> Kinetostatics: write the elastic deflection of the nodes (deflection.csv).
       logical :: deflection = .false.
+      !> nodes.csv holds every point of the mesh: the named nodes, then the
+      !> interior points of each link meshed with several elements, named
+      !> LINK#k (k = 1 .. elements - 1 from the first end). OUTPut `mesh on|off`;
+      !> without it (mesh_nodes_given false) main sets it from the analysis:
+      !> on for statics and dynamics of a model with a meshed link.
+      logical :: mesh_nodes = .false.
+      logical :: mesh_nodes_given = .false.
       !> Names of the deck's length and time units, for the plots' axis labels
-      !> (the numbers are used as given; angles are always radians).
+      !> (the numbers are used as given; angles are always radians), and
+      !> whether the deck's OUTPut block has a units line (without one the
+      !> plots label lengths 'length', not metres).
       character(len=16) :: length_unit = 'm'
       character(len=16) :: time_unit = 's'
+      logical :: units_given = .false.
    end type output_type
 
    !> A deck parameter (PARAmeters block): a named number that later numeric

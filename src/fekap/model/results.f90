@@ -33,6 +33,10 @@ module fekap_model_results
       real(dp), allocatable :: pos(:, :), vel(:, :), acc(:, :)
       !> (number of links): direction angle (radians, not wrapped) and its rates.
       real(dp), allocatable :: angle(:), omega(:), alpha(:)
+      !> (2, interior points): x, y of the interior points of the meshed links
+      !> (the mesh's points after the model's nodes), filled by the finite
+      !> element method when the run writes them (output%mesh_nodes).
+      real(dp), allocatable :: interior(:, :)
       !> Field output (filled only when the deck asks for VTK files): the
       !> analysis mesh's points (2, npoint) with their velocities and
       !> accelerations, its line cells (2, ncell) as point indices, the link of

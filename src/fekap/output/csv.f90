@@ -8,7 +8,8 @@
 !> significant digits, enough to round-trip.
 module fekap_output_csv
    use fekap_kinds, only: dp
-   use fekap_model, only: model_type, dof_x, dof_y, dof_rot
+   use fekap_model, only: model_type, dof_x, dof_y, dof_rot, effects_dynamics, integrator_names
+   use fekap_model_effects, only: planned_effects, effects_name
    use fekap_model_results, only: step_result_type
    use fekap_model_reactions, only: reaction_row_type, reaction_rows
    use fekap_output_format, only: append_real, append_integer, append_text, real_text
@@ -195,33 +196,69 @@ contains
    end subroutine write_steps_row
 
    !> `step,t,A.x,A.y,B.x,...`: the header of nodes.csv, two columns per node
-   !> of the model, in the deck's order.
+   !> of the model, in the deck's order; with output%mesh_nodes, then two per
+   !> interior point of each meshed link, `L#1.x,L#1.y,...` from its first
+   !> end (`#` is in no deck name).
    subroutine write_nodes_header(out, model)
       type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
-      integer :: i
+      integer :: i, k
+      character(len=12) :: number
       call reserve_text(out, 7)
       call append_text(out%text, out%n, 'step,t')
       do i = 1, size(model%nodes)
          call reserve_text(out, 2*len(model%nodes(i)%name) + 7)
          call append_text(out%text, out%n, ','//model%nodes(i)%name//'.x,'//model%nodes(i)%name//'.y')
       end do
+      if (model%output%mesh_nodes) then
+         do i = 1, size(model%links)
+            do k = 1, model%links(i)%nelem - 1
+               write (number, '(i0)') k
+               call reserve_text(out, 2*(len(model%links(i)%name) + len_trim(number)) + 9)
+               call append_text(out%text, out%n, ','//model%links(i)%name//'#'//trim(number)//'.x,'// &
+                  & model%links(i)%name//'#'//trim(number)//'.y')
+            end do
+         end do
+      end if
       call append_text(out%text, out%n, new_line('a'))
    end subroutine write_nodes_header
 
    !> `step,t,x,y,x,y,...`: the positions of every node of the model at one
-   !> step, so that the whole mechanism can be drawn whatever is tracked.
-   subroutine write_nodes_row(out, result, prefix)
+   !> step, so that the whole mechanism can be drawn whatever is tracked; with
+   !> output%mesh_nodes, then those of the meshed links' interior points (a
+   !> method without a mesh, whose links stay straight, places them evenly
+   !> between the link's ends, as the mesh does).
+   subroutine write_nodes_row(out, model, result, prefix)
       type(text_buffer_type), intent(inout) :: out
+      type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       !> new_row_prefix of the result.
       type(row_prefix_type), intent(in) :: prefix
-      integer :: i
+      integer :: i, k, ip
+      real(dp) :: xa(2), xb(2)
       call reserve_text(out, prefix_length + 2*size(result%pos, 2)*(real_width + 1) + 1)
       call append_text(out%text, out%n, prefix%text(1:prefix%n - 1))
       do i = 1, size(result%pos, 2)
          call append_values(out%text, out%n, result%pos(:, i))
       end do
+      if (model%output%mesh_nodes) then
+         ip = 0
+         do i = 1, size(model%links)
+            associate (m => model%links(i)%nelem)
+               call reserve_text(out, 2*(m - 1)*(real_width + 1))
+               xa = result%pos(:, model%links(i)%node(1))
+               xb = result%pos(:, model%links(i)%node(2))
+               do k = 1, m - 1
+                  ip = ip + 1
+                  if (allocated(result%interior)) then
+                     call append_values(out%text, out%n, result%interior(:, ip))
+                  else
+                     call append_values(out%text, out%n, xa + (xb - xa)*real(k, dp)/m)
+                  end if
+               end do
+            end associate
+         end do
+      end if
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_nodes_row
 
@@ -230,17 +267,35 @@ contains
    !> and `units,time,NAME`; `support,NODE,FIXED` (FIXED: the fixed
    !> freedoms among x, y, rotation, blank-separated); `guide,NAME,SLAVE,x1,y1,x2,y2`
    !> (a ground guide) or `slot,NAME,SLAVE,LINK...` (a slideline on links);
-   !> `drive,x|y,NODE` or `drive,rotation,LINK,NODE`; `load,NODE`;
-   !> `track,NODE...`. To a unit open for unformatted stream access.
+   !> `drive,x|y,NODE` or `drive,rotation,LINK,NODE`; `load,NODE,fx,fy,m`
+   !> (at unit load factor, or the scale of its own law); `mass,NODE,m`;
+   !> `track,NODE...`; `analysis,EFFECTS` (kinematics, kinetostatics, statics,
+   !> dynamics, with the integrator's name and rho_inf for dynamics); `node,NAME,x,y`
+   !> (its initial coordinates: the undeformed geometry). The units
+   !> records only when the deck has a units line. To a unit open for
+   !> unformatted stream access.
    subroutine write_mechanism_csv(unit, model)
       integer, intent(in) :: unit
       type(model_type), intent(in) :: model
       character(:), allocatable :: line
-      integer :: i, j
+      integer :: i, j, effects
       call emit(unit, 'record,fields')
       if (allocated(model%title)) call emit(unit, 'title,'//quoted(model%title))
-      call emit(unit, 'units,length,'//trim(model%output%length_unit))
-      call emit(unit, 'units,time,'//trim(model%output%time_unit))
+      if (model%output%units_given) then
+         call emit(unit, 'units,length,'//trim(model%output%length_unit))
+         call emit(unit, 'units,time,'//trim(model%output%time_unit))
+      end if
+      do i = 1, size(model%nodes)
+         call emit(unit, 'node,'//model%nodes(i)%name//','//real_text(model%nodes(i)%x(1))//','// &
+            & real_text(model%nodes(i)%x(2)))
+      end do
+      effects = planned_effects(model)
+      if (effects == effects_dynamics) then
+         call emit(unit, 'analysis,dynamics,'//trim(word_at(integrator_names, model%analysis%integrator))//','// &
+            & real_text(model%analysis%rho_inf))
+      else
+         call emit(unit, 'analysis,'//effects_name(effects))
+      end if
       if (allocated(model%supports)) then
          do i = 1, size(model%supports)
             associate (s => model%supports(i))
@@ -282,7 +337,15 @@ contains
       end if
       if (allocated(model%loads)) then
          do i = 1, size(model%loads)
-            call emit(unit, 'load,'//model%nodes(model%loads(i)%node)%name)
+            associate (f => model%loads(i))
+               call emit(unit, 'load,'//model%nodes(f%node)%name//','//real_text(f%force(1))//','// &
+                  & real_text(f%force(2))//','//real_text(f%moment))
+            end associate
+         end do
+      end if
+      if (allocated(model%masses)) then
+         do i = 1, size(model%masses)
+            call emit(unit, 'mass,'//model%nodes(model%masses(i)%node)%name//','//real_text(model%masses(i)%mass))
          end do
       end if
       line = 'track'
@@ -291,6 +354,28 @@ contains
       end do
       call emit(unit, line)
    end subroutine write_mechanism_csv
+
+   !> The k-th blank-separated word of a list of names (integrator_names, ...).
+   pure function word_at(names, k) result(word)
+      character(*), intent(in) :: names
+      integer, intent(in) :: k
+      character(:), allocatable :: word
+      integer :: i, start, count
+      start = 1
+      count = 0
+      word = ''
+      do i = 1, len(names) + 1
+         if (i > len(names)) then
+            count = count + 1
+            if (count == k) word = names(start:i - 1)
+         else if (names(i:i) == ' ') then
+            count = count + 1
+            if (count == k) word = names(start:i - 1)
+            start = i + 1
+         end if
+         if (count >= k) return
+      end do
+   end function word_at
 
    !> A CSV field in double quotes, its double quotes doubled.
    pure function quoted(text) result(field)

@@ -24,8 +24,8 @@ module fekap_output_directory
    character(*), parameter :: own_files(*) = [character(len=17) :: 'points.csv', 'links.csv', 'steps.csv', &
       & 'mesh.csv', 'nodes.csv', 'reactions.csv', 'energy.csv', 'deflection.csv', 'mechanism.txt', '*.lis', '*.pvd', &
       & '*.fekap-tmp', 'paths.png', &
-      & 'angles.png', 'iterations.png', 'history_*.png', 'shapes.png', 'energy.png', 'motion.gif', 'motion.mp4', &
-      & 'motion-frame.png']
+      & 'angles.png', 'iterations.png', 'history_*.png', 'shapes.png', 'energy.png', 'reactions.png', &
+      & 'deflection.png', 'motion.gif', 'motion.mp4', 'motion-frame.png']
 
 contains
 

@@ -32,6 +32,12 @@ contains
       write (unit, '(a)') 'FEKAP '//version//' - Finite Element Kinematic Analysis Program'
       write (unit, '(a)') 'deck:  '//model%file
       if (allocated(model%title)) write (unit, '(a)') 'title: '//model%title
+      if (model%output%units_given) then
+         write (unit, '(a)') 'units: length '//trim(model%output%length_unit)//', time '//trim(model%output%time_unit)
+      else
+         write (unit, '(a)') 'units: none given (OUTPut units length=NAME time=NAME): the numbers are used as '// &
+            & 'given, the plots label lengths "length" and times "time"'
+      end if
       if (allocated(model%parameters)) call write_parameters(unit, model)
       write (unit, '(/,a)') 'NODES'
       write (unit, '(2x,a12,2a24)') 'name', 'x', 'y'

@@ -31,6 +31,12 @@ contains
             result%acc(k, i) = a(dof)
          end do
       end do
+      if (model%output%mesh_nodes) then
+         if (.not. allocated(result%interior)) allocate (result%interior(2, mesh%npoint - size(model%nodes)))
+         do i = 1, size(result%interior, 2)
+            result%interior(:, i) = q(mesh%tdof(:, size(model%nodes) + i))
+         end do
+      end if
       do i = 1, size(model%links)
          dof = mesh%link_rot(1, i)
          result%angle(i) = mesh%link_angle0(i) + q(dof)
