@@ -385,3 +385,20 @@ def test_deck_tolerances_act_on_the_dynamics() -> None:
     run = run_fekap(str(deck), "-q", "-o", str(outdir))
     check(run.returncode == 3, f"exit {run.returncode}: {run.stderr}")
     check("did not converge in 1 iterations" in run.stderr, run.stderr)
+
+
+def test_slider_crank_kept_factor_converges_at_round_off() -> None:
+    """The flexible slider-crank (decks/dynamics/slider-crank.deck) to 0.03 s:
+    no step is cut. Its kept factor reaches corrections at round-off (5e-16 m,
+    1e-3 of a 4.5e-13 m correction before), which must count as converged
+    corrections; when they did not, step 275 spent its 25 iterations there and
+    was cut."""
+    outdir = OUT / "slider-crank"
+    outdir.mkdir(parents=True, exist_ok=True)
+    run = run_fekap(str(ROOT / "decks" / "dynamics" / "slider-crank.deck"), "-q", "-o", str(outdir),
+                    "--set", "t_end=0.03")
+    check(run.returncode == 0, run.stderr)
+    rows = steps_of(outdir)
+    check(len(rows) == 301, f"{len(rows)} rows")
+    cut = [row["step"] for row in rows if int(row["cuts"]) > 0]
+    check(not cut, f"steps cut: {cut}")

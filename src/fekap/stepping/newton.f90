@@ -166,8 +166,9 @@ module fekap_stepping_newton
    !> factor, by `contraction`. A correction then leaves at most that share
    !> of itself as error, and the convergence test is full Newton's; a kept
    !> factor that contracted less than its bound raises kappa to what it
-   !> showed (the factor is renewed sooner) and its correction tells nothing.
-   !> kappa lives from solve to solve (the steps of a run).
+   !> showed (the factor is renewed sooner) and its correction tells nothing,
+   !> unless it is at round-off (below least). kappa lives from solve to solve
+   !> (the steps of a run).
    type, extends(reuse_policy_type) :: kept_factor_type
       !> The contraction a kept factor must be bound to; 0: never kept.
       real(dp) :: contraction = 1.0e-3_dp
@@ -374,7 +375,10 @@ contains
             self%kappa = max(self%kappa, correction/(2*self%previous*self%moved))
          end if
       end if
-      trusted = .not. kept .or. correction <= self%contraction*self%previous
+      ! A correction at round-off (below least) is trusted: the iterate is as
+      ! converged as the arithmetic allows, and a kept factor would otherwise
+      ! be stuck there (such corrections raise no kappa).
+      trusted = .not. kept .or. correction <= self%contraction*self%previous .or. correction <= self%least
       self%previous = correction
       self%full_before = .not. kept
       self%moved = self%moved + correction
