@@ -15,7 +15,8 @@ module fekap_run
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes, has_note
    use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_csv, only: write_points_header, write_points_rows, write_links_header, write_links_rows, &
-      & write_header, steps_header, reactions_header, deflection_header, write_steps_row, row_prefix_type, &
+      & write_header, steps_header, dynamics_steps_header, reactions_header, deflection_header, write_steps_row, &
+      & row_prefix_type, &
       & new_row_prefix, write_nodes_header, write_nodes_row, write_reactions_rows, write_energy_row, write_deflection_rows
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop, write_listing_note
@@ -141,7 +142,11 @@ contains
       call new_run_buffers(units, out)
       if (units%points /= no_unit) call write_points_header(out%points, vel, acc)
       if (units%links /= no_unit) call write_links_header(out%links, vel, acc)
-      if (units%steps /= no_unit) call write_header(out%steps, steps_header)
+      if (units%steps /= no_unit .and. units%energy /= no_unit) then
+         call write_header(out%steps, dynamics_steps_header)
+      else if (units%steps /= no_unit) then
+         call write_header(out%steps, steps_header)
+      end if
       if (units%nodes /= no_unit) call write_nodes_header(out%nodes, model)
       if (units%reactions /= no_unit) call write_header(out%reactions, reactions_header)
       if (units%energy /= no_unit) call write_header(out%energy, 'step,t,'//units%energy_names)

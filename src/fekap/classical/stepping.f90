@@ -11,11 +11,13 @@ module fekap_classical_stepping
    use fekap_strings, only: int_text, short_real_text
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_convergence, only: convergence_type, is_converged, divergence_length
+   use fekap_solver_convergence, only: convergence_type, divergence_length
    use fekap_solver_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, extrapolate, &
       & taylor_predict, prediction_none
    use fekap_solver_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
    use fekap_solver_branch, only: jump_ratio, jump_bound_ratio
+   use fekap_stepping_newton, only: newton_system_type, newton_contract_type, newton_report_type, newton_solve, &
+      & always_refactor_type, stop_spent, stop_diverged, test_solved_from, test_relative_first
    implicit none
    private
 
@@ -82,6 +84,18 @@ module fekap_classical_stepping
       procedure(position_correction_interface), deferred :: position_correction
    end type classical_stepper_type
 
+   !> A constraint-equation method's position equations at time t for
+   !> newton_solve (the method associated for one solve): its residual, and
+   !> its correction, which assembles, factors and solves the Jacobian itself.
+   type, extends(newton_system_type) :: position_system_type
+      class(classical_stepper_type), pointer :: s => null()
+      real(dp) :: t = 0
+   contains
+      procedure :: assemble => position_assemble
+      procedure :: factor => position_factor
+      procedure :: correct => position_correct
+   end type position_system_type
+
    abstract interface
       subroutine try_step_interface(self, t, iterations, error)
          import :: classical_stepper_type, dp, error_type
@@ -131,46 +145,71 @@ module fekap_classical_stepping
 contains
 
    !> Newton on the method's position equations at time t from its current
-   !> unknowns, until the shared convergence test passes (increment_residual:
-   !> the scale of the default test); iterations are counted as corrections.
+   !> unknowns (newton_solve), under the shared convergence test: `default`,
+   !> after each correction, the residual it was solved from at most tol times
+   !> increment_residual (the scale) or at the floor, and the correction below
+   !> the length tolerance; `paper`, the residual at the iterate below tol
+   !> times the first. Iterations are counted as corrections.
    !> The FEM's Newton (fem.f90's solve_step) shares this loop's parts (the
    !> convergence test, divergence_length, the step loop advance_by_cuts) but
-   !> not the loop: it chooses its tangent each iteration (material, full, or
+   !> not yet the driver: it chooses its tangent each iteration (material, full, or
    !> the square-root form's), accepts the predictor, stops on an estimate of
    !> the next correction, relocates slidelines and detects a round-off stall,
    !> none of which these methods' exactly determined equations need; and its
    !> messages keep their formatted-write text (fem_state's no_convergence_error).
    subroutine newton_positions(self, t, increment_residual, iterations, error)
-      class(classical_stepper_type), intent(inout) :: self
+      class(classical_stepper_type), target, intent(inout) :: self
       real(dp), intent(in) :: t, increment_residual
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r, r0, correction
-      iterations = 0
-      r0 = 0
-      do
-         call self%position_residual(t, r)
-         if (iterations == 0) r0 = r
-         if (self%conv%mode == convergence_paper .or. (iterations == 0 .and. r <= self%conv%residual_floor)) then
-            if (is_converged(self%conv, r, r0, increment_residual, 0.0_dp)) exit
-         end if
-         if (iterations >= self%analysis%max_iter) then
-            call analysis_error(error, no_convergence_text(t, iterations, r))
-            return
-         end if
-         call self%position_correction(t, correction, error)
-         if (allocated(error)) return
-         iterations = iterations + 1
-         self%counts%iterations = self%counts%iterations + 1
-         if (correction > divergence_length*self%model_length) then
-            call analysis_error(error, 't = '//short_real_text(t)//': Newton diverged at iteration '//int_text(iterations))
-            return
-         end if
-         if (self%conv%mode /= convergence_paper) then
-            if (is_converged(self%conv, r, r0, increment_residual, correction)) exit
-         end if
-      end do
+      type(position_system_type) :: system
+      type(newton_contract_type) :: contract
+      type(always_refactor_type) :: full
+      type(newton_report_type) :: report
+      system%s => self
+      system%t = t
+      contract%test = merge(test_relative_first, test_solved_from, self%conv%mode == convergence_paper)
+      contract%tolerance = self%conv%tol
+      contract%force_scale = increment_residual
+      contract%length = self%conv%length
+      contract%floor = self%conv%residual_floor
+      contract%max_iterations = self%analysis%max_iter
+      contract%divergence = divergence_length*self%model_length
+      call newton_solve(system, contract, full, report, error)
+      iterations = report%iterations
+      if (.not. allocated(error)) return
+      select case (report%stopped)
+      case (stop_spent)
+         error%message = no_convergence_text(t, iterations, report%last_residual)
+      case (stop_diverged)
+         error%message = 't = '//short_real_text(t)//': Newton diverged at iteration '//int_text(iterations)
+      case default
+         ! The method's own error (a singular Jacobian), or an interrupt.
+      end select
    end subroutine newton_positions
+
+   subroutine position_assemble(self, matrix, norm)
+      class(position_system_type), intent(inout) :: self
+      logical, intent(in) :: matrix
+      real(dp), intent(out) :: norm
+      call self%s%position_residual(self%t, norm)
+   end subroutine position_assemble
+
+   !> Nothing: the method's correction factors its Jacobian.
+   subroutine position_factor(self, info)
+      class(position_system_type), intent(inout) :: self
+      integer, intent(out) :: info
+      info = 0
+   end subroutine position_factor
+
+   subroutine position_correct(self, length, error)
+      class(position_system_type), intent(inout) :: self
+      real(dp), intent(out) :: length
+      type(error_type), allocatable, intent(out) :: error
+      call self%s%position_correction(self%t, length, error)
+      if (allocated(error)) return
+      self%s%counts%iterations = self%s%counts%iterations + 1
+   end subroutine position_correct
 
    !> Advance to time t: the method's Newton solve at t, the step cut in
    !> halves (at most max_cuts times) when Newton fails or the converged

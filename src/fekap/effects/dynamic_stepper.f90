@@ -20,7 +20,7 @@ module fekap_effects_dynamic_stepper
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type, integrator_energy_momentum
    use fekap_model_results, only: step_result_type, has_note
-   use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed
+   use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed, dof_free
    use fekap_assembly_tracking, only: relocate
    use fekap_assembly_assemble, only: scatter_element
    use fekap_solver_stepper, only: clock_seconds, phase_timed
@@ -41,6 +41,9 @@ module fekap_effects_dynamic_stepper
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
    use fekap_strings, only: es_text
+   use fekap_solver_convergence, only: divergence_length
+   use fekap_stepping_newton, only: newton_system_type, newton_contract_type, newton_report_type, newton_solve, &
+      & kept_factor_type, always_refactor_type, stop_spent, stop_not_finite, stop_singular, stop_at_floor
    implicit none
    private
 
@@ -53,9 +56,6 @@ module fekap_effects_dynamic_stepper
    !> A step that creates more energy than this fraction of the kinetic and
    !> strain energy (or of the step's work) is rejected and cut.
    real(dp), parameter :: max_created = 0.05_dp
-   !> Generalized-alpha's Newton keeps a factor while its iteration is
-   !> bound to contract by at least this (see alpha_newton).
-   real(dp), parameter :: default_reuse_contraction = 1.0e-3_dp
 
    !> The accepted state: time, configuration, velocity, acceleration, the
    !> integrator's acceleration variable a, the external forces, the residual
@@ -95,17 +95,13 @@ module fekap_effects_dynamic_stepper
       !> rates of the mean rates, see em_velocities), and the last step's length.
       logical, allocatable :: massless(:)
       real(dp) :: h_prev = 0
-      !> The residual of the last step tried (advance_by_cuts' tries).
+      !> The residual of the last step tried (advance_by_cuts' tries), and
+      !> the steps of the current advance accepted at the round-off floor.
       real(dp) :: try_residual = 0
-      !> Newton's quadratic constant as last measured (1 / length), for
-      !> keeping a factor (see alpha_newton); unknown (0) at first.
-      real(dp) :: newton_kappa = 0
-      !> The contraction a kept factor must be bound to (alpha_newton); 0:
-      !> every iteration factors afresh (tests compare the two).
-      real(dp) :: reuse_contraction = default_reuse_contraction
-      !> Newton iterations of the last step generalized-alpha converged: from
-      !> that many on, an iterate's residual is assembled alone first (see alpha_newton).
-      integer :: converged_after = 1
+      integer :: try_floor = 0
+      !> Generalized-alpha's kept factor (fekap_stepping_newton's
+      !> kept_factor_type; its contraction 0: every iteration factors afresh).
+      type(kept_factor_type) :: reuse
       !> How the start's velocities were found, for the plan.
       character(len=120) :: start_velocity = ''
       integer :: advances = 0
@@ -114,6 +110,30 @@ module fekap_effects_dynamic_stepper
       procedure :: advance => dynamic_advance
       procedure :: plan_text => dynamic_plan_text
    end type dynamic_stepper_type
+
+   !> A generalized-alpha step's equations for newton_solve: the stepper
+   !> (its iterate, system and counts; associated for one solve) and the
+   !> step's coefficients.
+   type, extends(newton_system_type) :: alpha_system_type
+      type(dynamic_stepper_type), pointer :: s => null()
+      type(alpha_coefficients_type) :: c
+      real(dp) :: t_new = 0
+   contains
+      procedure :: assemble => alpha_assemble
+      procedure :: factor => alpha_factor
+      procedure :: correct => alpha_correct
+   end type alpha_system_type
+
+   !> An energy-momentum step's equations for newton_solve: the stepper
+   !> (associated for one solve), the step's length and strain dissipation.
+   type, extends(newton_system_type) :: em_newton_system_type
+      type(dynamic_stepper_type), pointer :: s => null()
+      real(dp) :: h = 0, chi = 0
+   contains
+      procedure :: assemble => em_assemble
+      procedure :: factor => em_factor
+      procedure :: correct => em_correct
+   end type em_newton_system_type
 
 contains
 
@@ -125,6 +145,8 @@ contains
       call new_fem_base(self, model, dense=.false.)
       call new_dynamic_system(self%dynamics, model, self%mesh)
       call new_kinetostatics(self%rows, model, self%mesh)
+      ! Corrections near round-off measure no Newton constant.
+      self%reuse%least = 1.0e3_dp*epsilon(1.0_dp)*self%model_length
       self%damped = has_damping(self%dynamics)
       self%slide_damped = has_slide_damping(self%dynamics)
       if (model%analysis%integrator == integrator_energy_momentum) then
@@ -330,6 +352,7 @@ contains
       clock = 0
       if (self%system%timing) clock = clock_seconds()
       self%try_residual = 0
+      self%try_floor = 0
       call advance_by_cuts(self, dynamic_try, no_between, self%state%t, t, 0, cuts, result%iterations, error)
       if (allocated(error)) return
       result%residual = self%try_residual
@@ -382,13 +405,16 @@ contains
       integer :: seg(size(self%state%seg))
       logical :: moved, em
       character(len=300) :: msg
+      type(newton_report_type) :: report
       em = self%model%analysis%integrator == integrator_energy_momentum
       associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
          if (em) then
-            call em_newton(self, t_new, iterations, residual, error)
+            call em_newton(self, t_new, report, error)
          else
-            call alpha_newton(self, t_new, iterations, residual, error)
+            call alpha_newton(self, t_new, report, error)
          end if
+         iterations = report%iterations
+         residual = report%last_residual
          if (allocated(error)) return
          if (.not. all(abs(self%qt) <= huge(1.0_dp))) then
             call analysis_error(error, 'the configuration is not finite')
@@ -459,187 +485,159 @@ contains
          state%g = self%gt
          state%r = system%r
          self%counts%steps = self%counts%steps + 1
+         if (report%stopped == stop_at_floor) then
+            self%counts%floor_steps = self%counts%floor_steps + 1
+            self%try_floor = self%try_floor + 1
+         end if
       end associate
    end subroutine solve_step
 
    !> Newton on a step of generalized-alpha from the accepted state to
-   !> t_new: the iterate into qt, vt, acct, at and the residual (the
-   !> reactions) into system%r.
-   !>
-   !> The factor of the iteration matrix is kept for the next iteration when
-   !> the matrix can have changed little since it was factored: Newton's
-   !> quadratic constant kappa (measured on the steps' full iterations,
-   !> delta_k <= kappa delta_k-1^2) bounds the modified iteration's
-   !> contraction by 2 kappa times the distance moved since the factor, and
-   !> the factor is kept while that is at most reuse_contraction. A correction
-   !> then leaves at most that share of itself as error, and the convergence
-   !> tests are those of full Newton. From the iteration where the last step
-   !> converged, an iterate's residual is assembled alone first (the same
-   !> numbers as with the matrix), the iteration matrix only if needed.
-   subroutine alpha_newton(self, t_new, iterations, residual, error)
-      type(dynamic_stepper_type), intent(inout) :: self
+   !> t_new (fekap_stepping_newton's newton_solve on alpha_system_type,
+   !> with the stepper's kept factor): the iterate into qt, vt, acct, at and
+   !> the residual (the reactions) into system%r.
+   subroutine alpha_newton(self, t_new, report, error)
+      type(dynamic_stepper_type), target, intent(inout) :: self
       real(dp), intent(in) :: t_new
-      integer, intent(out) :: iterations
-      real(dp), intent(out) :: residual
+      type(newton_report_type), intent(out) :: report
       type(error_type), allocatable, intent(out) :: error
-      type(alpha_coefficients_type) :: c
-      real(dp) :: correction, r0, moved, previous
-      integer :: info, k, d
-      logical :: converged, factored, reuse, full_before, contracted, probed
-      associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
-         c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
-         call alpha_predict(c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
+      type(alpha_system_type) :: newton
+      associate (state => self%state, mesh => self%mesh, dyn => self%dynamics)
+         newton%c = new_alpha_coefficients(self%model%analysis%rho_inf, t_new - state%t)
+         newton%t_new = t_new
+         newton%s => self
+         call alpha_predict(newton%c, state%q, state%v, state%acc, state%a, self%qt, self%vt, self%acct, self%at)
          call hold_fixed(self)
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
          call external_forces(dyn, mesh, t_new, self%gt)
-         iterations = 0
-         r0 = 0
-         residual = huge(1.0_dp)
-         factored = .false.
-         full_before = .false.
-         moved = 0
-         previous = 0
-         do
-            ! A signal ends the step here (a slow step would delay the stop).
-            call interrupt_error(error)
-            if (allocated(error)) return
-            reuse = factored .and. self%newton_kappa > 0 .and. 2*self%newton_kappa*moved <= self%reuse_contraction
-            probed = reuse .or. iterations >= self%converged_after
-            if (probed) then
-               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
-               residual = residual_norm(system, mesh)
-               call residual_test(self, residual, iterations, r0, converged, error)
-               if (allocated(error)) return
-               if (converged) exit
-            end if
-            if (.not. reuse) then
-               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, &
-                  & self%counts, c%c1, c%c2)
-               ! A probed iterate's residual was tested already (the same numbers).
-               if (.not. probed) then
-                  residual = residual_norm(system, mesh)
-                  call residual_test(self, residual, iterations, r0, converged, error)
-                  if (allocated(error)) return
-                  if (converged) exit
-               end if
-               call factor_system(system, info, self%counts)
-               if (info /= 0) then
-                  call singular_matrix(error, 'K + c1 C + c2 M', info)
-                  return
-               end if
-               factored = .true.
-               moved = 0
-            end if
-            call newton_correction(system, mesh, self%dof_length, correction, self%counts)
-            do k = 1, mesh%nfree
-               d = mesh%eq_dof(k)
-               call alpha_update(c, system%rhs(k, 1), self%qt(d), self%vt(d), self%acct(d), self%at(d))
-            end do
-            iterations = iterations + 1
-            self%counts%iterations = self%counts%iterations + 1
-            call measure_kappa(self, reuse, full_before, previous, correction, moved)
-            ! A kept factor's small correction tells convergence only when it
-            ! contracted as bounded (else the error left may be near the correction).
-            contracted = .not. reuse .or. correction <= self%reuse_contraction*previous
-            previous = correction
-            full_before = .not. reuse
-            moved = moved + correction
-            if (contracted .and. correction <= 10*self%model%analysis%length_tol*self%model_length) then
-               ! The residual at the converged iterate: the reactions.
-               call assemble_dynamics(dyn, system, mesh, self%qt, self%vt, self%acct, t_new, state%seg, self%counts)
-               residual = residual_norm(system, mesh)
-               exit
-            end if
-         end do
-         self%converged_after = max(1, iterations)
+         call newton_solve(newton, step_contract(self), self%reuse, report, error)
+         if (allocated(error)) call newton_failure(report, 'K + c1 C + c2 M', error)
       end associate
    end subroutine alpha_newton
 
-   !> Newton's quadratic constant from a full iteration that follows a full
-   !> one (kappa = delta_k / delta_k-1^2, the latest measure counts); a
-   !> modified iteration that contracted less than its bound asked for
-   !> raises kappa to what it showed (the factor is then renewed sooner).
-   !> Corrections near round-off measure nothing (as converged_by_estimate).
-   subroutine measure_kappa(self, reuse, full_before, previous, correction, moved)
-      type(dynamic_stepper_type), intent(inout) :: self
-      logical, intent(in) :: reuse, full_before
-      real(dp), intent(in) :: previous, correction, moved
-      real(dp) :: least
-      least = 1.0e3_dp*epsilon(1.0_dp)*self%model_length
-      if (previous <= least .or. correction <= least) return
-      if (.not. reuse .and. full_before) then
-         self%newton_kappa = correction/previous**2
-      else if (reuse .and. correction > self%reuse_contraction*previous) then
-         self%newton_kappa = max(self%newton_kappa, correction/(2*previous*moved))
-      end if
-   end subroutine measure_kappa
+   !> The residual R at generalized-alpha's iterate (with `matrix` the
+   !> iteration matrix K + c1 C + c2 M), gathered for a correction, and its norm.
+   subroutine alpha_assemble(self, matrix, norm)
+      class(alpha_system_type), intent(inout) :: self
+      logical, intent(in) :: matrix
+      real(dp), intent(out) :: norm
+      associate (s => self%s)
+         if (matrix) then
+            call assemble_dynamics(s%dynamics, s%system, s%mesh, s%qt, s%vt, s%acct, self%t_new, s%state%seg, &
+               & s%counts, self%c%c1, self%c%c2)
+         else
+            call assemble_dynamics(s%dynamics, s%system, s%mesh, s%qt, s%vt, s%acct, self%t_new, s%state%seg, s%counts)
+         end if
+         norm = residual_norm(s%system, s%mesh)
+      end associate
+   end subroutine alpha_assemble
+
+   subroutine alpha_factor(self, info)
+      class(alpha_system_type), intent(inout) :: self
+      integer, intent(out) :: info
+      call factor_system(self%s%system, info, self%s%counts)
+   end subroutine alpha_factor
+
+   !> The correction of q with the factor in hand, and generalized-alpha's
+   !> update of the rates with it.
+   subroutine alpha_correct(self, length, error)
+      class(alpha_system_type), intent(inout) :: self
+      real(dp), intent(out) :: length
+      type(error_type), allocatable, intent(out) :: error
+      integer :: k, d
+      associate (s => self%s)
+         call newton_correction(s%system, s%mesh, s%dof_length, length, s%counts)
+         do k = 1, s%mesh%nfree
+            d = s%mesh%eq_dof(k)
+            call alpha_update(self%c, s%system%rhs(k, 1), s%qt(d), s%vt(d), s%acct(d), s%at(d))
+         end do
+         s%counts%iterations = s%counts%iterations + 1
+      end associate
+   end subroutine alpha_correct
 
    !> Newton on a step of the energy-momentum integrator
-   !> (fekap_effects_energy_momentum) from the accepted state to t_new: the
+   !> (fekap_effects_energy_momentum) from the accepted state to t_new
+   !> (newton_solve on em_system_type, a fresh factor every iteration): the
    !> iterate into qt, vt (v1 = 2 (q1 - q0)/h - v0 on the free dofs) and acct
    !> (the step's mean acceleration (v1 - v0)/h; the drives' second rate on
    !> theirs), the residual (the step's reactions) into system%r. The
    !> predictor is q0 + h v0 + h^2/2 acc0.
-   subroutine em_newton(self, t_new, iterations, residual, error)
-      type(dynamic_stepper_type), intent(inout) :: self
+   subroutine em_newton(self, t_new, report, error)
+      type(dynamic_stepper_type), target, intent(inout) :: self
       real(dp), intent(in) :: t_new
-      integer, intent(out) :: iterations
-      real(dp), intent(out) :: residual
+      type(newton_report_type), intent(out) :: report
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: h, chi, correction, r0
-      integer :: info, k, d
-      logical :: converged
-      associate (state => self%state, mesh => self%mesh, system => self%system, dyn => self%dynamics)
+      type(em_newton_system_type) :: newton
+      type(always_refactor_type) :: full
+      real(dp) :: h
+      associate (state => self%state, mesh => self%mesh, dyn => self%dynamics)
          h = t_new - state%t
-         chi = em_dissipation(self%model%analysis%rho_inf)
+         newton%h = h
+         newton%chi = em_dissipation(self%model%analysis%rho_inf)
+         newton%s => self
          self%qt = state%q + h*state%v + 0.5_dp*h**2*state%acc
          call hold_fixed(self)
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
          call em_velocities(self, h)
          call external_forces(dyn, mesh, t_new, self%gt)
-         iterations = 0
-         r0 = 0
-         residual = huge(1.0_dp)
-         do
-            call interrupt_error(error)
-            if (allocated(error)) return
-            call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, self%zt, self%dzt, &
-               & h, chi, state%seg, system%r, tangent=.true.)
-            self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-            residual = residual_norm(system, mesh)
-            call residual_test(self, residual, iterations, r0, converged, error)
-            if (allocated(error)) return
-            if (converged) exit
-            call factor_em(self%em, info)
-            if (info == 0) call solve_em(self%em, system%rhs(:, 1), info)
-            if (info /= 0) then
-               call singular_matrix(error, 'dp/dq + C/h + 2 M/h^2', info)
-               return
-            end if
-            correction = 0
-            do k = 1, mesh%nfree
-               d = mesh%eq_dof(k)
-               correction = max(correction, abs(system%rhs(k, 1))*self%dof_length(d))
-               self%qt(d) = self%qt(d) + system%rhs(k, 1)
-            end do
-            call em_velocities(self, h)
-            iterations = iterations + 1
-            self%counts%iterations = self%counts%iterations + 1
-            if (correction <= 10*self%model%analysis%length_tol*self%model_length) then
-               ! The residual at the converged iterate: the step's reactions.
-               call assemble_em(self%em, dyn, mesh, state%q, self%qt, state%v, self%vt, state%g, self%gt, self%zt, &
-                  & self%dzt, h, chi, state%seg, system%r, tangent=.false.)
-               self%counts%residual_assemblies = self%counts%residual_assemblies + 1
-               residual = residual_norm(system, mesh)
-               exit
-            end if
-         end do
+         call newton_solve(newton, step_contract(self), full, report, error)
+         if (allocated(error)) then
+            call newton_failure(report, 'dp/dq + C/h + 2 M/h^2', error)
+            return
+         end if
          self%acct = (self%vt - state%v)/h
          ! The step's mean rates z/h, for the next step's massless dofs.
          self%at = self%zt/h
          call drive_motion(self, t_new, self%qt, self%vt, self%acct)
       end associate
    end subroutine em_newton
+
+   !> The energy-momentum step's residual at the iterate (with `matrix` its
+   !> iteration matrix), gathered for a correction, and its norm.
+   subroutine em_assemble(self, matrix, norm)
+      class(em_newton_system_type), intent(inout) :: self
+      logical, intent(in) :: matrix
+      real(dp), intent(out) :: norm
+      associate (s => self%s)
+         call assemble_em(s%em, s%dynamics, s%mesh, s%state%q, s%qt, s%state%v, s%vt, s%state%g, s%gt, s%zt, s%dzt, &
+            & self%h, self%chi, s%state%seg, s%system%r, tangent=matrix)
+         if (matrix) then
+            s%counts%tangent_assemblies = s%counts%tangent_assemblies + 1
+         else
+            s%counts%residual_assemblies = s%counts%residual_assemblies + 1
+         end if
+         norm = residual_norm(s%system, s%mesh)
+      end associate
+   end subroutine em_assemble
+
+   subroutine em_factor(self, info)
+      class(em_newton_system_type), intent(inout) :: self
+      integer, intent(out) :: info
+      call factor_em(self%s%em, info)
+   end subroutine em_factor
+
+   !> The correction of q with the factor, and the velocities of the new iterate.
+   subroutine em_correct(self, length, error)
+      class(em_newton_system_type), intent(inout) :: self
+      real(dp), intent(out) :: length
+      type(error_type), allocatable, intent(out) :: error
+      integer :: info, k, d
+      associate (s => self%s)
+         length = 0
+         call solve_em(s%em, s%system%rhs(:, 1), info)
+         if (info /= 0) then
+            call singular_matrix(error, 'dp/dq + C/h + 2 M/h^2', info)
+            return
+         end if
+         do k = 1, s%mesh%nfree
+            d = s%mesh%eq_dof(k)
+            length = max(length, abs(s%system%rhs(k, 1))*s%dof_length(d))
+            s%qt(d) = s%qt(d) + s%system%rhs(k, 1)
+         end do
+         call em_velocities(s, self%h)
+         s%counts%iterations = s%counts%iterations + 1
+      end associate
+   end subroutine em_correct
 
    !> The iterate's increments zt, dzt (once per iterate: assemble_em, the
    !> step's work and the next step's mean rates use them) and its free dofs'
@@ -664,30 +662,71 @@ contains
       end do
    end subroutine hold_fixed
 
-   !> Both integrators' test of an iterate's residual: converged once below
-   !> the floor after a correction; an error when it is not finite or the
-   !> iterations are spent. r0 keeps the first residual for the message.
-   subroutine residual_test(self, residual, iterations, r0, converged, error)
+   !> Both integrators' convergence contract (fekap_stepping_newton): the
+   !> deck's tolerance relative to the forces in play in the step
+   !> (step_force_scale), its length tolerance times the model size, its
+   !> iterations; the round-off floor of the mesh's stiffness as the last resort.
+   function step_contract(self) result(contract)
       type(dynamic_stepper_type), intent(in) :: self
-      real(dp), intent(in) :: residual
-      integer, intent(in) :: iterations
-      real(dp), intent(inout) :: r0
-      logical, intent(out) :: converged
-      type(error_type), allocatable, intent(out) :: error
+      type(newton_contract_type) :: contract
+      contract%tolerance = self%model%analysis%tol
+      contract%length = self%model%analysis%length_tol*self%model_length
+      contract%max_iterations = self%model%analysis%max_iter
+      contract%force_scale = step_force_scale(self)
+      contract%floor = self%residual_floor
+      contract%divergence = divergence_length*self%model_length
+   end function step_contract
+
+   !> The forces in play in a step: the largest Euclidean norm (over all
+   !> dofs) of the weights and loads at its end (gt), of the inertia M a of
+   !> its predicted accelerations (acct), and of the reactions of supports
+   !> and drives at its start (the residual on the constrained dofs). The
+   !> element forces balance these (or are their reactions); a residual is
+   !> small when it is small against them, not against the stiffness.
+   function step_force_scale(self) result(scale)
+      type(dynamic_stepper_type), intent(in) :: self
+      real(dp) :: scale
+      real(dp) :: inertia(self%mesh%ndof), ae(6)
+      integer :: e, i
+      associate (mesh => self%mesh, dyn => self%dynamics)
+         inertia = dyn%point_mass*self%acct
+         do e = 1, size(mesh%elements)
+            do i = 1, 6
+               ae(i) = self%acct(mesh%edof(i, e))
+            end do
+            ae = times6(dyn%me, e, ae)
+            do i = 1, 6
+               inertia(mesh%edof(i, e)) = inertia(mesh%edof(i, e)) + ae(i)
+            end do
+         end do
+         scale = max(norm2(self%gt), norm2(inertia), norm2(merge(self%state%r, 0.0_dp, mesh%status /= dof_free)))
+      end associate
+   end function step_force_scale
+
+   !> A Newton solve of a step that did not converge (newton_solve's error):
+   !> its message in the integrators' words (the iteration matrix named by `what`).
+   subroutine newton_failure(report, what, error)
+      type(newton_report_type), intent(in) :: report
+      character(*), intent(in) :: what
+      type(error_type), allocatable, intent(inout) :: error
       character(len=300) :: msg
-      converged = .false.
-      if (.not. residual <= huge(1.0_dp)) then
+      select case (report%stopped)
+      case (stop_not_finite)
+         deallocate (error)
          call analysis_error(error, 'the residual of the equations of motion is not finite (the step is '// &
             & 'too long for the motion, or the mechanism has a dof without mass and stiffness)')
-         return
-      end if
-      if (iterations == 0) r0 = residual
-      converged = residual <= self%residual_floor .and. iterations > 0
-      if (converged .or. iterations < self%model%analysis%max_iter) return
-      write (msg, '(a,i0,a,a,a,a)') 'Newton did not converge in ', iterations, ' iterations (residual ', &
-         & es_text(residual, 12, 5), ', first ', es_text(r0, 12, 5)//')'
-      call analysis_error(error, trim(msg))
-   end subroutine residual_test
+      case (stop_spent)
+         deallocate (error)
+         write (msg, '(a,i0,a,a,a,a)') 'Newton did not converge in ', report%iterations, ' iterations (residual ', &
+            & es_text(report%last_residual, 12, 5), ', first ', es_text(report%first_residual, 12, 5)//')'
+         call analysis_error(error, trim(msg))
+      case (stop_singular)
+         deallocate (error)
+         call singular_matrix(error, what, report%info)
+      case default
+         ! Divergence and interrupts keep newton_solve's message.
+      end select
+   end subroutine newton_failure
 
    !> The iteration matrix (named by `what`) has no factor.
    subroutine singular_matrix(error, what, info)
@@ -709,6 +748,7 @@ contains
       real(dp) :: p(3)
       associate (state => self%state, mesh => self%mesh, dyn => self%dynamics)
          result%t = state%t
+         result%floor = self%try_floor
          result%has_velocity = .true.
          result%has_acceleration = .true.
          if (.not. result%written) return

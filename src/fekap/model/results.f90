@@ -21,6 +21,10 @@ module fekap_model_results
       real(dp) :: residual = 0
       !> Times the step was cut in halves to converge.
       integer :: cuts = 0
+      !> Dynamics: the (sub-)steps of this step accepted at the round-off
+      !> floor with the residual above the tolerance; -1: not reported (steps.csv's
+      !> `floor` column is written only for results that report it).
+      integer :: floor = -1
       !> Whether the run writes this step's rows (set by the time loop): a
       !> stepper may leave the rows' values of a step not written unfilled.
       logical :: written = .true.

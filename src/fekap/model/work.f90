@@ -19,6 +19,9 @@ module fekap_model_work
       integer :: velocity_solves = 0
       integer :: acceleration_solves = 0
       integer :: slideline_evaluations = 0
+      !> Steps accepted at the round-off floor with the residual above the
+      !> tolerance (fekap_stepping_newton's stop_at_floor).
+      integer :: floor_steps = 0
       !> Smallest pivot ratio of the tangents used for velocities (1: none computed),
       !> a measure of how close the run came to a singular configuration.
       real(dp) :: min_pivot_ratio = 1

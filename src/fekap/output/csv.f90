@@ -24,7 +24,9 @@ module fekap_output_csv
 
    !> The fixed headers (write_header) of steps.csv, reactions.csv and
    !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.
+   !> (dynamics_steps_header: a dynamics run's steps.csv, with the `floor` column.)
    character(*), parameter, public :: steps_header = 'step,t,iterations,residual,cuts', &
+      & dynamics_steps_header = steps_header//',floor', &
       & reactions_header = 'step,t,kind,link,node,fx,fy,m', deflection_header = 'step,t,node,ux,uy'
 
    !> Longest text of a real (es25.16e3 without its leading blank) and of an
@@ -179,19 +181,23 @@ contains
       call append_text(out%text, out%n, header//new_line('a'))
    end subroutine write_header
 
-   !> `step,t,iterations,residual,cuts`.
+   !> `step,t,iterations,residual,cuts` (and `,floor` when the result reports it: dynamics).
    subroutine write_steps_row(out, result, prefix)
       type(text_buffer_type), intent(inout) :: out
       type(step_result_type), intent(in) :: result
       !> new_row_prefix of the result.
       type(row_prefix_type), intent(in) :: prefix
-      call reserve_text(out, prefix_length + 2*(integer_width + 1) + real_width + 1)
+      call reserve_text(out, prefix_length + 3*(integer_width + 1) + real_width + 1)
       call append_text(out%text, out%n, prefix%text(1:prefix%n))
       call append_integer(out%text, out%n, result%iterations)
       call append_char(out%text, out%n, ',')
       call append_real(out%text, out%n, result%residual)
       call append_char(out%text, out%n, ',')
       call append_integer(out%text, out%n, result%cuts)
+      if (result%floor >= 0) then
+         call append_char(out%text, out%n, ',')
+         call append_integer(out%text, out%n, result%floor)
+      end if
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_steps_row
 

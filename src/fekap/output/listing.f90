@@ -360,6 +360,8 @@ contains
       write (unit, '(2x,a30,i12)') 'Newton iterations', counts%iterations
       if (counts%steps > 0) write (unit, '(2x,a30,f12.3)') 'iterations per configuration', &
          & real(counts%iterations, dp)/counts%steps
+      ! Dynamics: steps whose residual stayed above the tolerance at round-off (steps.csv's floor column).
+      if (counts%floor_steps > 0) write (unit, '(2x,a30,i12)') 'accepted at round-off floor', counts%floor_steps
       write (unit, '(2x,a30,i12)') 'residual assemblies', counts%residual_assemblies
       write (unit, '(2x,a30,i12)') 'tangent assemblies', counts%tangent_assemblies
       write (unit, '(2x,a30,i12)') 'Cholesky factorisations', counts%cholesky_factorisations
