@@ -15,7 +15,7 @@ program fekap_main
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
       & new_cartesian_stepper
-   use fekap_solver_interrupt, only: catch_interrupts
+   use fekap_stepping_interrupt, only: catch_interrupts
    use fekap_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
    use fekap_output_csv, only: write_mesh_csv, write_mechanism_csv
    use fekap_strings, only: es_text

@@ -10,7 +10,7 @@ module fekap_run
    use fekap_kinds, only: dp
    use, intrinsic :: iso_fortran_env, only: int64
    use fekap_error, only: error_type, analysis_error, fatal_error, output_error
-   use fekap_solver_interrupt, only: interrupt_signal
+   use fekap_stepping_interrupt, only: interrupt_signal
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type, new_step_result, fill_fields_from_nodes, has_note
    use fekap_solver_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed

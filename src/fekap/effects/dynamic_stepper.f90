@@ -29,7 +29,7 @@ module fekap_effects_dynamic_stepper
       & system_pivot, residual_norm, newton_correction, solve_system
    use fekap_solver_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
    use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_interrupt, only: interrupt_error
+   use fekap_stepping_interrupt, only: interrupt_error
    use fekap_solver_fields, only: fill_nodes_links, fill_fields
    use fekap_effects_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients, alpha_predict, &
       & alpha_update

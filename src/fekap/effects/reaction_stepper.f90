@@ -31,7 +31,7 @@ module fekap_effects_reaction_stepper
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type
    use fekap_solver_step_control, only: step_cuts_type, max_cuts
-   use fekap_solver_interrupt, only: interrupt_error
+   use fekap_stepping_interrupt, only: interrupt_error
    use fekap_strings, only: es_text
    use fekap_assembly_loads, only: load_set_type
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, kinetostatic_loads, &

@@ -32,7 +32,7 @@ module fekap_solver_fem
    use fekap_solver_rates, only: near_singular_drop
    use fekap_solver_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
       & try_ended
-   use fekap_solver_interrupt, only: interrupt_error
+   use fekap_stepping_interrupt, only: interrupt_error
    use fekap_solver_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
       & prepend_cuts_note, model_distance, no_convergence_error
    use fekap_solver_fem_factor, only: refactor_at_accepted, newton_assembly, root_correction, factor_root, &

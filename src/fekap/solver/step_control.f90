@@ -9,7 +9,7 @@ module fekap_solver_step_control
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
    use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_interrupt, only: interrupt_signal
+   use fekap_stepping_interrupt, only: interrupt_signal
    implicit none
    private
 

@@ -18,7 +18,7 @@ module fekap_stepping_newton
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
    use fekap_strings, only: int_text, short_real_text
-   use fekap_solver_interrupt, only: interrupt_error
+   use fekap_stepping_interrupt, only: interrupt_error
    implicit none
    private
 

@@ -9,7 +9,7 @@
 !>
 !> The record is the one piece of module state in FEKAP: a signal handler has
 !> no other place to leave it.
-module fekap_solver_interrupt
+module fekap_stepping_interrupt
    use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
    use fekap_posix, only: c_signal
    use fekap_error, only: error_type, fatal_error
@@ -55,4 +55,4 @@ contains
       call fatal_error(error, trim(text))
    end subroutine interrupt_error
 
-end module fekap_solver_interrupt
+end module fekap_stepping_interrupt
