@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from apptest import check, point_series, run_fekap
+from apptest import ROOT, check, point_series, read_rows, run_fekap
 
 #: A massless bar of axial stiffness EA along x, pinned at A, a point mass m at B, and
 #: gravity g along the bar: B's axial motion is a linear oscillator of omega^2 = EA/(m L)
@@ -66,4 +66,91 @@ def test_energy_momentum_strain_ratio_is_minus_rho_inf(tmp_path: Path, rho_inf: 
         ratio = deviation[n + 1] / deviation[n]
         check(abs(ratio + rho_inf) < 25 / omega_h**2,
               f"step {n + 1}: strain ratio {ratio!r}, want {-rho_inf} (omega h {omega_h:g})")
+
+
+#: A uniform rod (no point masses) pinned at A, released 30 degrees above the horizontal.
+ROD_PENDULUM = """TITLe  uniform rod pendulum
+SECTions
+  rod  EA=1e10  kGA=1e10  EI=1e9  rhoA=6
+NODEs
+  A  0  0
+  B  cos(pi/6)  sin(pi/6)
+LINKs
+  AB  A  B  rod  4
+SUPPorts
+  A  pin
+GRAVity  0  -9.81
+ANALysis
+  type dynamics
+  time 0 0.05 1e-3
+END
+"""
+
+
+def node_balance(outdir: Path, masses: dict[str, float], gravity: tuple[float, float]) -> float:
+    """The largest imbalance, relative to the step's largest row, of every node with a
+    support or drive row at every step: the joint rows at the node (each link
+    end's force from its node's pin) plus m (a - g) of its point mass must be what its
+    support, drive and slider rows apply."""
+    rows = read_rows(outdir / "reactions.csv")
+    check(bool(rows), f"no reactions in {outdir}")
+    accel = {}
+    for node in masses:
+        series = point_series(outdir, node)
+        for step, ax, ay in zip(series["step"], series["ax"], series["ay"]):
+            accel[int(step), node] = (ax, ay)
+    sums: dict[tuple[int, str], list[float]] = {}
+    scale: dict[int, float] = {}
+    for row in rows:
+        step, node = int(row["step"]), row["node"]
+        force = [float(row["fx"]), float(row["fy"])]
+        sign = 1.0 if row["kind"] == "joint" else -1.0
+        total = sums.setdefault((step, node), [0.0, 0.0])
+        total[0] += sign * force[0]
+        total[1] += sign * force[1]
+        scale[step] = max(scale.get(step, 0.0), abs(force[0]), abs(force[1]))
+    # The joint rows at a free node add up to the equations' residual there (Newton's
+    # tolerance, the round-off of stiff links' forces): only the constrained nodes' rows
+    # are the same numbers.
+    # A slider's slave is a free node too (its row is the penalty spring's force).
+    held = {(int(r["step"]), r["node"]) for r in rows if r["kind"] in ("support", "drive")}
+    worst = 0.0
+    for (step, node), total in sums.items():
+        if (step, node) not in held:
+            continue
+        if node in masses:
+            ax, ay = accel[step, node]
+            total = [total[0] + masses[node] * (ax - gravity[0]), total[1] + masses[node] * (ay - gravity[1])]
+        if scale[step] > 0:
+            worst = max(worst, max(abs(total[0]), abs(total[1])) / scale[step])
+    return worst
+
+
+@pytest.mark.parametrize("integrator", ["generalized-alpha", "energy-momentum 0.8", "energy-momentum 1"])
+@pytest.mark.parametrize("deck, masses, gravity", [
+    ("rod-pendulum", {}, (0.0, -9.81)),
+    ("pendulum.deck", {"B": 1.0}, (0.0, -9.81)),
+    ("slider-crank.deck", {}, (0.0, 0.0)),
+    ("a02-n2.deck", {}, (0.0, -9.81)),
+])
+def test_every_node_is_in_equilibrium_under_its_reactions(tmp_path: Path, deck: str, masses: dict[str, float],
+                                                          gravity: tuple[float, float], integrator: str) -> None:
+    """Issue 34 item 4: at each node the joint rows of reactions.csv add up to its
+    support, drive and slider rows (with m (a - g) of a point mass), to 1e-10 of the
+    step's largest row, at every step, under both integrators (energy-momentum's rows
+    are those of its step's discrete-gradient equations)."""
+    if deck == "rod-pendulum":
+        text = ROD_PENDULUM
+    else:
+        text = (ROOT / "decks" / "dynamics" / deck).read_text()
+    check("  type dynamics\n" in text or "ANALysis\n" in text, f"{deck}: no ANALysis block")
+    text = text.replace("ANALysis\n", f"ANALysis\n  integrator {integrator}\n", 1)
+    path = tmp_path / "deck.deck"
+    path.write_text(text)
+    run = run_fekap(str(path), "-o", str(tmp_path / "out"), "-q", "--set", "t_end=0.01")
+    if run.returncode != 0 and "t_end" in run.stderr:
+        run = run_fekap(str(path), "-o", str(tmp_path / "out"), "-q")
+    check(run.returncode == 0, f"fekap failed: {run.stderr}")
+    worst = node_balance(tmp_path / "out", masses, gravity)
+    check(worst < 1e-10, f"{deck} with {integrator}: a node's rows are out of balance by {worst:.3e} of the largest")
 

@@ -21,7 +21,7 @@ module fekap_effects_dynamic_stepper
    use fekap_model, only: model_type, integrator_energy_momentum
    use fekap_model_results, only: step_result_type, has_note
    use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed
-   use fekap_assembly_tracking, only: relocate
+   use fekap_assembly_tracking, only: relocate, slide_position
    use fekap_assembly_assemble, only: scatter_element
    use fekap_solver_stepper, only: clock_seconds, phase_timed
    use fekap_solver_fem_setup, only: fem_base_type, new_fem_base, start_configuration, mesh_plan_line
@@ -95,6 +95,12 @@ module fekap_effects_dynamic_stepper
       !> rates of the mean rates, see em_velocities), and the last step's length.
       logical, allocatable :: massless(:)
       real(dp) :: h_prev = 0
+      !> Energy-momentum: the start (q0, v0, master segments) and length of
+      !> the last accepted step, for its reactions (fill_reactions: the
+      !> elements' end forces of the step's own equations); em_h 0 at the start.
+      real(dp), allocatable :: em_q0(:), em_v0(:)
+      integer, allocatable :: em_seg(:)
+      real(dp) :: em_h = 0
       !> The residual of the last step tried (advance_by_cuts' tries).
       real(dp) :: try_residual = 0
       !> Newton's quadratic constant as last measured (1 / length), for
@@ -442,6 +448,7 @@ contains
          seg = state%seg
          call relocate(mesh, self%model, t_new, self%qt, seg, moved, error)
          if (allocated(error)) return
+         if (em) call keep_step_start(self, t_new - state%t)
          state%seg = seg
          if (em) self%h_prev = t_new - state%t
          state%work_loads = state%work_loads + work_loads
@@ -736,13 +743,23 @@ contains
       real(dp), intent(out) :: reactions(:, :)
       integer :: row, e, k, dof
       real(dp) :: pe(6)
+      logical :: em_step
       reactions = 0
+      ! Energy-momentum's residual (the supports' and drives' rows) is that of
+      ! its step's equations: the joints' and sliders' rows too (em_end_forces).
+      em_step = self%model%analysis%integrator == integrator_energy_momentum .and. self%em_h > 0
       associate (state => self%state, mesh => self%mesh, dyn => self%dynamics, rows => self%rows)
          do row = 1, size(reactions, 2)
             e = rows%row_element(row)
             if (e > 0) then
-               call end_forces(e, pe)
+               if (em_step) then
+                  call em_end_forces(self, e, pe)
+               else
+                  call end_forces(e, pe)
+               end if
                reactions(:, row) = pe(3*rows%row_end(row) - 2:3*rows%row_end(row))
+            else if (rows%row_slide(row) > 0 .and. em_step) then
+               call em_slider_force(self, rows%row_slide(row), reactions(:, row))
             else if (rows%row_slide(row) > 0) then
                ! A sliding joint: the penalty force on the slave, and its dashpot's.
                call slider_force(mesh, rows%row_slide(row), state%q, state%seg, reactions(:, row))
@@ -781,6 +798,62 @@ contains
          if (self%damped) fe = fe + element_damping_force(self%dynamics, self%mesh, e, self%state%q, self%state%v)
       end subroutine end_forces
    end subroutine fill_reactions
+
+   !> Energy-momentum: the step's start (q0, v0, master segments: those its
+   !> forces used) and length, for its reactions (fill_reactions).
+   subroutine keep_step_start(self, h)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: h
+      self%em_q0 = self%state%q
+      self%em_v0 = self%state%v
+      self%em_seg = self%state%seg
+      self%em_h = h
+   end subroutine keep_step_start
+
+   !> Element e's end forces in the last energy-momentum step's equations
+   !> (assemble_em): its discrete gradient p(q0, q1) with the dissipation
+   !> chi + 2 beta/h, M_e (v1 - v0)/h, alpha M_e z/h, less its weight; so that
+   !> each node's joint rows add up to its support, drive and slider rows
+   !> (the step's residual there), as generalized-alpha's do.
+   subroutine em_end_forces(self, e, fe)
+      use fekap_element_discrete_gradient, only: beam_discrete_gradient, cayley_increment
+      use fekap_model, only: dof_rot
+      type(dynamic_stepper_type), intent(in) :: self
+      integer, intent(in) :: e
+      real(dp), intent(out) :: fe(6)
+      real(dp) :: x0(6), x1(6), am(6), z(6), chi_e, h, dpsi
+      integer :: i, d
+      h = self%em_h
+      do i = 1, 6
+         d = self%mesh%edof(i, e)
+         x0(i) = self%em_q0(d)
+         x1(i) = self%state%q(d)
+         am(i) = (self%state%v(d) - self%em_v0(d))/h
+         z(i) = x1(i) - x0(i)
+         if (self%mesh%dof_kind(d) == dof_rot) call cayley_increment(x1(i) - x0(i), z(i), dpsi)
+      end do
+      chi_e = em_dissipation(self%model%analysis%rho_inf) + 2*self%dynamics%beta(e)/h
+      call beam_discrete_gradient(self%mesh%elements(e), x0, x1, chi_e, fe)
+      fe = fe + times6(self%dynamics%me, e, am) - element_weight(self%model, self%mesh, e)
+      if (self%dynamics%alpha(e) /= 0) fe = fe + self%dynamics%alpha(e)*times6(self%dynamics%me, e, z/h)
+   end subroutine em_end_forces
+
+   !> Slideline i's force on its slave in the last energy-momentum step's
+   !> equations: minus the penalty spring's discrete gradient on the step's
+   !> master segment (assemble_em; as slider_force, the force the spring applies).
+   subroutine em_slider_force(self, i, force)
+      use fekap_contact_slide_gradient, only: slide_discrete_gradient
+      type(dynamic_stepper_type), intent(in) :: self
+      integer, intent(in) :: i
+      real(dp), intent(out) :: force(3)
+      real(dp) :: x0(6), x1(6), pe(6)
+      integer :: dofs(6)
+      call slide_position(self%mesh, self%mesh%slides(i), self%em_seg(i), self%em_q0, x0(1:2), x0(3:4), x0(5:6), dofs)
+      call slide_position(self%mesh, self%mesh%slides(i), self%em_seg(i), self%state%q, x1(1:2), x1(3:4), x1(5:6), &
+         & dofs)
+      call slide_discrete_gradient(x0, x1, self%mesh%slides(i)%kp, pe)
+      force = [-pe(1), -pe(2), 0.0_dp]
+   end subroutine em_slider_force
 
    subroutine element_force(mesh, e, xe, pe)
       use fekap_element_beam, only: beam_residual
