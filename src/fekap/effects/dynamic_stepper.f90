@@ -40,6 +40,7 @@ module fekap_effects_dynamic_stepper
       & solve_em, em_free_velocities, massless_dofs, em_increments
    use fekap_effects_kinetostatics, only: kinetostatics_type, new_kinetostatics, slider_force
    use fekap_model_reactions, only: reaction_count
+   use fekap_effects_consistent_start, only: start_report_type, consistent_start
    use fekap_output_format, only: es_text
    implicit none
    private
@@ -114,6 +115,8 @@ module fekap_effects_dynamic_stepper
       integer :: converged_after = 1
       !> How the start's velocities were found, for the plan.
       character(len=120) :: start_velocity = ''
+      !> How the start's configuration and accelerations were found (consistent_start), for the plan.
+      character(len=200) :: start_state = ''
       integer :: advances = 0
    contains
       procedure :: start => dynamic_start
@@ -161,6 +164,7 @@ contains
       end if
       text = text//new_line('a')//'  '//trim(line)
       if (len_trim(self%start_velocity) > 0) text = text//new_line('a')//'  start: '//trim(self%start_velocity)
+      if (len_trim(self%start_state) > 0) text = text//new_line('a')//'  start state: '//trim(self%start_state)
    end function dynamic_plan_text
 
    !> The start: velocities, consistent accelerations, energies.
@@ -168,6 +172,7 @@ contains
       class(dynamic_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
+      type(start_report_type) :: report
       integer :: info
       associate (state => self%state, mesh => self%mesh)
          ! The drives' start values law0 are new_fem_base's.
@@ -175,7 +180,16 @@ contains
          if (allocated(error)) return
          call drive_motion(self, state%t, state%q, state%v, state%acc)
          call start_velocities(self, info)
-         call start_accelerations(self, error)
+         if (self%model%analysis%start_unstrained) then
+            call start_accelerations(self, error)
+            self%start_state = 'unstrained, accelerations of M a = -R (ANALysis start unstrained)'
+         else
+            call external_forces(self%dynamics, mesh, state%t, state%g)
+            call consistent_start(self%dynamics, self%system, mesh, state%q, state%v, state%acc, state%t, state%seg, &
+               & self%counts, report, error)
+            state%r = self%system%r
+            call describe_start(self, report)
+         end if
          if (allocated(error)) return
          state%a = state%acc
          state%work_loads = 0
@@ -189,8 +203,24 @@ contains
          result%iterations = 0
          result%residual = 0
          call fill_result(self, result)
+         ! The plan is written before the start: the listing's note of step 0 says how it went.
+         if (.not. self%model%analysis%start_unstrained) then
+            result%note = 'start: '//trim(self%start_velocity)//'; '//trim(self%start_state)
+         end if
       end associate
    end subroutine dynamic_start
+
+   !> The plan's line on a consistent start.
+   subroutine describe_start(self, report)
+      type(dynamic_stepper_type), intent(inout) :: self
+      type(start_report_type), intent(in) :: report
+      character(len=200) :: line
+      write (line, '(a,es9.2,a,i0,a,i0,a,i0,a,es9.2,a)') 'consistent (rigid-link accelerations; deflection up to ', &
+         & report%deflection, '; ', report%passes, ' passes of ', report%iterations_a, ' + ', report%iterations_delta, &
+         & ' iterations; residual ', report%residual, ' of the forces)'
+      if (.not. report%converged) line = trim(line)//': the iterations stopped short'
+      self%start_state = line
+   end subroutine describe_start
 
    !> Velocities at the start: given (v_start), or those the drives' rates
    !> give a mechanism they move whole (K_ff v_f = -K_fd v_d with the material
