@@ -97,6 +97,13 @@ contains
                ikey(key) = k
                cycle
             end if
+            if (key == 11 .and. v == 0) then
+               ! rhoI=0: no rotary inertia (as rhoI= left out); needs rhoA= as any rhoI=.
+               given(key) = .true.
+               value(key) = 0
+               ikey(key) = k
+               cycle
+            end if
             if (v <= 0) then
                call ctx%error(iline, k, 'non-positive section property '//field(:eq - 1), &
                   & label='section properties must be positive')

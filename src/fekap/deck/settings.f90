@@ -57,7 +57,7 @@ contains
       type(model_type), intent(inout) :: model
       integer, intent(in) :: lines(:)
       character(*), parameter :: keys = 'method time compute tolerance length iterations predictor convergence '// &
-         & 'gauss redundant solver type integrator'
+         & 'gauss redundant solver type integrator start'
       integer :: i, iline, k, time_line, ivalue
       real(dp) :: t(3), span, v
       logical :: ok, fine
@@ -141,6 +141,11 @@ contains
             if (.not. one_value('type auto|kinematics|kinetostatics|statics|dynamics')) cycle
             model%analysis%effects = chosen('auto kinematics kinetostatics statics dynamics', [effects_auto, &
                & effects_kinematics, effects_kinetostatics, effects_statics, effects_dynamics], model%analysis%effects)
+         else if (is_word_of(key, 'start', 4)) then
+            ! start consistent|unstrained: dynamics' start state (docs/dynamics.md).
+            if (.not. one_value('start consistent|unstrained')) cycle
+            model%analysis%start_unstrained = chosen('consistent unstrained', [0, 1], &
+               & merge(1, 0, model%analysis%start_unstrained)) == 1
          else if (is_word_of(key, 'integrator', 4)) then
             ! integrator generalized-alpha [RHO_INF]: Chung-Hulbert with rho_inf in [0, 1] (default 0.8);
             ! integrator energy-momentum [RHO_INF]: the midpoint rule with the discrete gradient,

@@ -21,7 +21,7 @@ module fekap_effects_dynamic_stepper
    use fekap_model, only: model_type, integrator_energy_momentum
    use fekap_model_results, only: step_result_type, has_note
    use fekap_assembly_mesh, only: mesh_type, dof_driven, dof_fixed, dof_free
-   use fekap_assembly_tracking, only: relocate
+   use fekap_assembly_tracking, only: relocate, slide_position
    use fekap_assembly_assemble, only: scatter_element
    use fekap_solver_stepper, only: clock_seconds, phase_timed
    use fekap_solver_fem_setup, only: fem_base_type, new_fem_base, start_configuration, mesh_plan_line
@@ -44,6 +44,7 @@ module fekap_effects_dynamic_stepper
    use fekap_solver_convergence, only: divergence_length
    use fekap_stepping_newton, only: newton_system_type, newton_contract_type, newton_report_type, newton_solve, &
       & kept_factor_type, always_refactor_type, stop_spent, stop_not_finite, stop_singular, stop_at_floor
+   use fekap_effects_consistent_start, only: start_report_type, consistent_start
    implicit none
    private
 
@@ -95,6 +96,12 @@ module fekap_effects_dynamic_stepper
       !> rates of the mean rates, see em_velocities), and the last step's length.
       logical, allocatable :: massless(:)
       real(dp) :: h_prev = 0
+      !> Energy-momentum: the start (q0, v0, master segments) and length of
+      !> the last accepted step, for its reactions (fill_reactions: the
+      !> elements' end forces of the step's own equations); em_h 0 at the start.
+      real(dp), allocatable :: em_q0(:), em_v0(:)
+      integer, allocatable :: em_seg(:)
+      real(dp) :: em_h = 0
       !> The residual of the last step tried (advance_by_cuts' tries), and
       !> the steps of the current advance accepted at the round-off floor.
       real(dp) :: try_residual = 0
@@ -104,6 +111,8 @@ module fekap_effects_dynamic_stepper
       type(kept_factor_type) :: reuse
       !> How the start's velocities were found, for the plan.
       character(len=120) :: start_velocity = ''
+      !> How the start's configuration and accelerations were found (consistent_start), for the plan.
+      character(len=200) :: start_state = ''
       integer :: advances = 0
    contains
       procedure :: start => dynamic_start
@@ -177,6 +186,7 @@ contains
       end if
       text = text//new_line('a')//'  '//trim(line)
       if (len_trim(self%start_velocity) > 0) text = text//new_line('a')//'  start: '//trim(self%start_velocity)
+      if (len_trim(self%start_state) > 0) text = text//new_line('a')//'  start state: '//trim(self%start_state)
    end function dynamic_plan_text
 
    !> The start: velocities, consistent accelerations, energies.
@@ -184,6 +194,7 @@ contains
       class(dynamic_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
+      type(start_report_type) :: report
       integer :: info
       associate (state => self%state, mesh => self%mesh)
          ! The drives' start values law0 are new_fem_base's.
@@ -191,7 +202,16 @@ contains
          if (allocated(error)) return
          call drive_motion(self, state%t, state%q, state%v, state%acc)
          call start_velocities(self, info)
-         call start_accelerations(self, error)
+         if (self%model%analysis%start_unstrained) then
+            call start_accelerations(self, error)
+            self%start_state = 'unstrained, accelerations of M a = -R (ANALysis start unstrained)'
+         else
+            call external_forces(self%dynamics, mesh, state%t, state%g)
+            call consistent_start(self%dynamics, self%system, mesh, state%q, state%v, state%acc, state%t, state%seg, &
+               & self%counts, report, error)
+            state%r = self%system%r
+            call describe_start(self, report)
+         end if
          if (allocated(error)) return
          state%a = state%acc
          state%work_loads = 0
@@ -205,8 +225,24 @@ contains
          result%iterations = 0
          result%residual = 0
          call fill_result(self, result)
+         ! The plan is written before the start: the listing's note of step 0 says how it went.
+         if (.not. self%model%analysis%start_unstrained) then
+            result%note = 'start: '//trim(self%start_velocity)//'; '//trim(self%start_state)
+         end if
       end associate
    end subroutine dynamic_start
+
+   !> The plan's line on a consistent start.
+   subroutine describe_start(self, report)
+      type(dynamic_stepper_type), intent(inout) :: self
+      type(start_report_type), intent(in) :: report
+      character(len=200) :: line
+      write (line, '(a,es9.2,a,i0,a,i0,a,i0,a,es9.2,a)') 'consistent (rigid-link accelerations; deflection up to ', &
+         & report%deflection, '; ', report%passes, ' passes of ', report%iterations_a, ' + ', report%iterations_delta, &
+         & ' iterations; residual ', report%residual, ' of the forces)'
+      if (.not. report%converged) line = trim(line)//': the iterations stopped short'
+      self%start_state = line
+   end subroutine describe_start
 
    !> Velocities at the start: given (v_start), or those the drives' rates
    !> give a mechanism they move whole (K_ff v_f = -K_fd v_d with the material
@@ -468,6 +504,7 @@ contains
          seg = state%seg
          call relocate(mesh, self%model, t_new, self%qt, seg, moved, error)
          if (allocated(error)) return
+         if (em) call keep_step_start(self, t_new - state%t)
          state%seg = seg
          if (em) self%h_prev = t_new - state%t
          state%work_loads = state%work_loads + work_loads
@@ -776,13 +813,23 @@ contains
       real(dp), intent(out) :: reactions(:, :)
       integer :: row, e, k, dof
       real(dp) :: pe(6)
+      logical :: em_step
       reactions = 0
+      ! Energy-momentum's residual (the supports' and drives' rows) is that of
+      ! its step's equations: the joints' and sliders' rows too (em_end_forces).
+      em_step = self%model%analysis%integrator == integrator_energy_momentum .and. self%em_h > 0
       associate (state => self%state, mesh => self%mesh, dyn => self%dynamics, rows => self%rows)
          do row = 1, size(reactions, 2)
             e = rows%row_element(row)
             if (e > 0) then
-               call end_forces(e, pe)
+               if (em_step) then
+                  call em_end_forces(self, e, pe)
+               else
+                  call end_forces(e, pe)
+               end if
                reactions(:, row) = pe(3*rows%row_end(row) - 2:3*rows%row_end(row))
+            else if (rows%row_slide(row) > 0 .and. em_step) then
+               call em_slider_force(self, rows%row_slide(row), reactions(:, row))
             else if (rows%row_slide(row) > 0) then
                ! A sliding joint: the penalty force on the slave, and its dashpot's.
                call slider_force(mesh, rows%row_slide(row), state%q, state%seg, reactions(:, row))
@@ -821,6 +868,62 @@ contains
          if (self%damped) fe = fe + element_damping_force(self%dynamics, self%mesh, e, self%state%q, self%state%v)
       end subroutine end_forces
    end subroutine fill_reactions
+
+   !> Energy-momentum: the step's start (q0, v0, master segments: those its
+   !> forces used) and length, for its reactions (fill_reactions).
+   subroutine keep_step_start(self, h)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: h
+      self%em_q0 = self%state%q
+      self%em_v0 = self%state%v
+      self%em_seg = self%state%seg
+      self%em_h = h
+   end subroutine keep_step_start
+
+   !> Element e's end forces in the last energy-momentum step's equations
+   !> (assemble_em): its discrete gradient p(q0, q1) with the dissipation
+   !> chi + 2 beta/h, M_e (v1 - v0)/h, alpha M_e z/h, less its weight; so that
+   !> each node's joint rows add up to its support, drive and slider rows
+   !> (the step's residual there), as generalized-alpha's do.
+   subroutine em_end_forces(self, e, fe)
+      use fekap_element_discrete_gradient, only: beam_discrete_gradient, cayley_increment
+      use fekap_model, only: dof_rot
+      type(dynamic_stepper_type), intent(in) :: self
+      integer, intent(in) :: e
+      real(dp), intent(out) :: fe(6)
+      real(dp) :: x0(6), x1(6), am(6), z(6), chi_e, h, dpsi
+      integer :: i, d
+      h = self%em_h
+      do i = 1, 6
+         d = self%mesh%edof(i, e)
+         x0(i) = self%em_q0(d)
+         x1(i) = self%state%q(d)
+         am(i) = (self%state%v(d) - self%em_v0(d))/h
+         z(i) = x1(i) - x0(i)
+         if (self%mesh%dof_kind(d) == dof_rot) call cayley_increment(x1(i) - x0(i), z(i), dpsi)
+      end do
+      chi_e = em_dissipation(self%model%analysis%rho_inf) + 2*self%dynamics%beta(e)/h
+      call beam_discrete_gradient(self%mesh%elements(e), x0, x1, chi_e, fe)
+      fe = fe + times6(self%dynamics%me, e, am) - element_weight(self%model, self%mesh, e)
+      if (self%dynamics%alpha(e) /= 0) fe = fe + self%dynamics%alpha(e)*times6(self%dynamics%me, e, z/h)
+   end subroutine em_end_forces
+
+   !> Slideline i's force on its slave in the last energy-momentum step's
+   !> equations: minus the penalty spring's discrete gradient on the step's
+   !> master segment (assemble_em; as slider_force, the force the spring applies).
+   subroutine em_slider_force(self, i, force)
+      use fekap_contact_slide_gradient, only: slide_discrete_gradient
+      type(dynamic_stepper_type), intent(in) :: self
+      integer, intent(in) :: i
+      real(dp), intent(out) :: force(3)
+      real(dp) :: x0(6), x1(6), pe(6)
+      integer :: dofs(6)
+      call slide_position(self%mesh, self%mesh%slides(i), self%em_seg(i), self%em_q0, x0(1:2), x0(3:4), x0(5:6), dofs)
+      call slide_position(self%mesh, self%mesh%slides(i), self%em_seg(i), self%state%q, x1(1:2), x1(3:4), x1(5:6), &
+         & dofs)
+      call slide_discrete_gradient(x0, x1, self%mesh%slides(i)%kp, pe)
+      force = [-pe(1), -pe(2), 0.0_dp]
+   end subroutine em_slider_force
 
    subroutine element_force(mesh, e, xe, pe)
       use fekap_element_beam, only: beam_residual
