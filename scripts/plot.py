@@ -561,6 +561,8 @@ def animate(run: Run, directory: Path, wanted: str) -> Path:
     fps = int(min(30, max(8, round(len(frames) / MOVIE_SECONDS))))
     target = directory / f"motion.{fmt}"
     movie = FuncAnimation(fig, update, frames=len(frames), blit=False)
+    record(target)
+    record(directory / "motion-frame.png")
     if fmt == "mp4":
         writer = FFMpegWriter(fps=fps, codec="libx264", bitrate=-1,
                               extra_args=["-pix_fmt", "yuv420p", "-preset", "veryfast", "-crf", "23"])
@@ -576,9 +578,17 @@ def animate(run: Run, directory: Path, wanted: str) -> Path:
 
 # --------------------------------------------------------------------------- main
 
+def record(target: Path) -> None:
+    """Add a file to the directory's manifest before writing it: the next fekap run there removes
+    the files listed, and no other (README, "What a run writes")."""
+    with open(target.parent / ".fekap-manifest", "a", encoding="utf-8") as manifest:
+        manifest.write(target.name + "\n")
+
+
 def save(fig: Figure, target: Path, written: list[Path]) -> None:
     """Save a figure as PNG, close it and remember the file."""
     plt = fc.pyplot()
+    record(target)
     fig.savefig(target)
     plt.close(fig)
     written.append(target)
