@@ -81,3 +81,11 @@ def test_no_plots_after_an_input_error(tmp_path):
     assert call.wait(timeout=300) == 2
     assert paths.stat().st_mtime_ns == before
     assert "plots in" not in call.stdout.read()
+
+
+def test_help_lists_the_wrappers_own_options():
+    """scripts/fekap --help: fekap's options and exit codes, and the two the script takes itself."""
+    done = subprocess.run([str(WRAPPER), "--help"], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert "usage: fekap" in done.stdout and "exit codes:" in done.stdout, done.stdout
+    assert "--no-plots" in done.stdout and "--no-animation" in done.stdout, done.stdout
