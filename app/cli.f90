@@ -2,7 +2,7 @@
 module fekap_app_cli
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
-   use fekap_model, only: model_type, method_names, predictor_names
+   use fekap_model, only: model_type, method_names, predictor_names, convergence_default
    use fekap_strings, only: lower, word_index
    use fekap_deck_expression, only: evaluate_expression
    use fekap_deck, only: override_type
@@ -21,9 +21,13 @@ module fekap_app_cli
       logical :: version = .false.
       !> Print the output directory and exit (used by scripts/fekap).
       logical :: print_outdir = .false.
+      !> Replace files of FEKAP's names in the output directory that no earlier run recorded.
+      logical :: force = .false.
       character(:), allocatable :: method, dt, tol, predictor, compute
       !> `--set name=value` values of deck parameters, in the order given.
       type(override_type), allocatable :: sets(:)
+      !> A note on the overrides for the user (apply_overrides), '' for none.
+      character(:), allocatable :: note
    end type cli_type
 
 contains
@@ -44,6 +48,8 @@ contains
          & '  --predictor NAME    previous | extrapolate | taylor (overrides the deck)'//nl// &
          & '  --compute LIST      positions[,velocities[,accelerations]] (overrides the deck)'//nl// &
          & '  --set NAME=VALUE    value of the deck parameter NAME (PARAmeters block); repeatable'//nl// &
+         & '  --force             replace files of the names FEKAP writes that no earlier run'//nl// &
+         & '                      recorded in the output directory''s .fekap-manifest'//nl// &
          & '  --print-outdir      print the output directory and exit'//nl// &
          & '  --version           print the version and exit'//nl// &
          & '  --help              print this help and exit'//nl//nl// &
@@ -79,6 +85,8 @@ contains
             cli%quiet = .true.
          case ('--print-outdir')
             cli%print_outdir = .true.
+         case ('--force')
+            cli%force = .true.
          case ('--set')
             if (i == n) then
                call input_error(error, 'fekap: option --set needs a value NAME=VALUE (see fekap --help)')
@@ -96,6 +104,10 @@ contains
             select case (arg)
             case ('-o')
                call argument(i, cli%outdir)
+               if (len(cli%outdir) == 0) then
+                  call input_error(error, "fekap: option -o needs a directory name, got '' (see fekap --help)")
+                  return
+               end if
             case ('--method')
                call argument(i, cli%method)
             case ('--dt')
@@ -179,7 +191,7 @@ contains
 
    !> Apply the command-line overrides to the model's analysis settings.
    subroutine apply_overrides(cli, model, error)
-      type(cli_type), intent(in) :: cli
+      type(cli_type), intent(inout) :: cli
       type(model_type), intent(inout) :: model
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: value
@@ -213,7 +225,19 @@ contains
             call input_error(error, "fekap: --tol '"//cli%tol//"': expected a number between 0 and 1")
             return
          end if
+         ! A residual ratio below round-off asks for what no residual can
+         ! show: the residual floor would decide instead, silently.
+         if (value < 1.0e-15_dp) then
+            call input_error(error, "fekap: --tol '"//cli%tol//"': below 1e-15, under the round-off of a residual ratio "// &
+               & '(2.2e-16), which no Newton iterate can show; give at least 1e-15')
+            return
+         end if
          model%analysis%tol = value
+         if (model%analysis%convergence == convergence_default) cli%note = 'fekap: note: --tol sets the '// &
+            & 'residual ratio of the default convergence test, which ends a step only when the last '// &
+            & 'correction is also below the length tolerance (ANALysis length, 1e-12 of the model size '// &
+            & 'by default); that one usually decides, so --tol seldom changes the results. '// &
+            & 'The paper''s test (ANALysis convergence paper) is decided by --tol alone.'
       end if
       if (allocated(cli%compute)) then
          model%analysis%velocities = .false.

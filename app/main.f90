@@ -3,23 +3,24 @@
 program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
-   use fekap_error, only: error_type, error_input, error_analysis, error_output
+   use fekap_error, only: error_type, error_input, error_analysis, error_output, fatal_error
    use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_statics, &
       & effects_dynamics, effects_kinematics
    use fekap_deck, only: read_deck
    use fekap_model_effects, only: check_effects_request, planned_effects
    use fekap_effects_reaction_stepper, only: reaction_stepper_type, new_reaction_stepper
    use fekap_effects_free_motion, only: check_free_motion
+   use fekap_solver_determinacy, only: check_determined
    use fekap_effects_dynamic_stepper, only: dynamic_stepper_type, new_dynamic_stepper, energy_names
    use fekap_solver_stepper, only: stepper_type
    use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
       & new_cartesian_stepper
-   use fekap_stepping_interrupt, only: catch_interrupts
+   use fekap_stepping_interrupt, only: catch_interrupts, interrupt_signal, interrupt_reads
    use fekap_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
    use fekap_output_csv, only: write_mesh_csv, write_mechanism_csv
    use fekap_strings, only: es_text
-   use fekap_output_directory, only: prepare_output_directory, make_directory
+   use fekap_output_directory, only: prepare_output_directory, make_directory, output_plan_type, add_run_file
    use fekap_output_checked_file, only: close_checked
    use fekap_posix, only: os_ignore_sigpipe
    use fekap_output_listing, only: write_listing_model, write_listing_plan, plan_text
@@ -45,6 +46,9 @@ program fekap_main
    ! A closed standard output (`fekap ... | head -1`) is not a failed
    ! analysis: its writes fail quietly instead of killing the run.
    call os_ignore_sigpipe()
+   ! From the start: a signal while the deck is read or the model is set up
+   ! ends the run with exit 1 and a message, before any file is written.
+   call catch_interrupts()
    call parse_command_line(cli, error)
    if (allocated(error)) call finish(error)
    if (cli%help) then
@@ -60,10 +64,14 @@ program fekap_main
       call c_exit(0_c_int)
    end if
 
+   call interrupt_reads(.true.)
    call read_deck(model, cli%deck, error, cli%sets)
+   call interrupt_reads(.false.)
+   call stop_if_interrupted(cli%deck, 'while the deck was read')
    if (allocated(error)) call finish(error)
    call apply_overrides(cli, model, error)
    if (allocated(error)) call finish(error)
+   if (allocated(cli%note) .and. .not. cli%quiet) call say(cli%note)
    call check_effects_request(model, error)
    if (allocated(error)) call finish(error)
    ! Without a mesh line, nodes.csv holds the meshed links' interior points
@@ -73,8 +81,9 @@ program fekap_main
 
    call make_stepper(model, stepper, error)
    if (allocated(error)) call finish(error)
+   call stop_if_interrupted(cli%deck, 'while the model was set up')
    mesh_text = stepper%plan_text()
-   call open_outputs(cli%outdir, cli%deck, model, units, error)
+   call open_outputs(cli%outdir, cli%deck, cli%force, model, units, error)
    if (allocated(error)) then
       if (error%kind == error_output) error%message = 'fekap: '//error%message
       call finish(error)
@@ -85,10 +94,9 @@ program fekap_main
    end if
    if (.not. cli%quiet) call say('fekap: '//cli%deck//': '//plan_text(model, step_count(model)))
 
-   call catch_interrupts()
    call run_analysis(stepper, model, units, error)
    if (allocated(error)) then
-      error%message = cli%deck//': '//error%message
+      error%message = cli%deck//': '//without_drive_advice(model, error%message)
       if (.not. cli%quiet) call say('fekap: results of the completed steps are in '//cli%outdir//'/')
       call finish(error)
    end if
@@ -124,6 +132,12 @@ contains
       case (method_fem)
          allocate (fem)
          call new_fem_stepper(fem, model)
+         ! Dynamics moves a free part by its mass (check_free_motion below);
+         ! the other analyses need every motion held.
+         if (effects /= effects_dynamics) then
+            call check_determined(fem%mesh, model, error)
+            if (allocated(error)) return
+         end if
          if (any(effects == [effects_kinetostatics, effects_statics])) then
             allocate (reactions)
             call new_reaction_stepper(reactions, fem, effects)
@@ -141,30 +155,60 @@ contains
       case (method_cartesian)
          allocate (cartesian)
          call new_cartesian_stepper(cartesian, model, error)
-         if (allocated(error)) return
+         if (allocated(error)) then
+            error%message = model%file//': '//error%message
+            return
+         end if
          call move_alloc(cartesian, stepper)
       case default
          allocate (angles)
          call new_angles_stepper(angles, model, error)
-         if (allocated(error)) return
+         if (allocated(error)) then
+            error%message = model%file//': '//error%message
+            return
+         end if
          call move_alloc(angles, stepper)
       end select
    end subroutine make_stepper
 
    !> Create and lock the output directory, clear it of an earlier run's
    !> files, and open the files the deck asks for.
-   subroutine open_outputs(outdir, deck, model, units, error)
+   subroutine open_outputs(outdir, deck, force, model, units, error)
       character(*), intent(in) :: outdir, deck
+      !> Replace files of FEKAP's names that no earlier run recorded (--force).
+      logical, intent(in) :: force
       type(model_type), intent(in) :: model
       type(run_units_type), intent(out) :: units
       type(error_type), allocatable, intent(out) :: error
       integer :: mesh_unit, effects
       character(:), allocatable :: stem
+      type(output_plan_type) :: plan
       effects = planned_effects(model)
-      call prepare_output_directory(outdir, error)
-      if (allocated(error)) return
       stem = deck(index(deck, '/', back=.true.) + 1:)
       if (index(stem, '.', back=.true.) > 1) stem = stem(:index(stem, '.', back=.true.) - 1)
+      ! The files opened below, for the directory's manifest.
+      plan%deck = deck
+      plan%stem = stem
+      plan%force = force
+      if (model%output%csv) then
+         call add_run_file(plan, 'points.csv')
+         call add_run_file(plan, 'links.csv')
+         call add_run_file(plan, 'steps.csv')
+         call add_run_file(plan, 'nodes.csv')
+         call add_run_file(plan, 'mesh.csv')
+         if (effects /= effects_kinematics) call add_run_file(plan, 'reactions.csv')
+         if (effects == effects_kinetostatics .and. model%output%deflection) call add_run_file(plan, 'deflection.csv')
+         if (effects == effects_dynamics) call add_run_file(plan, 'energy.csv')
+         call add_run_file(plan, 'mechanism.txt')
+      end if
+      if (model%output%listing) call add_run_file(plan, stem//'.lis')
+      if (model%output%vtk) then
+         call add_run_file(plan, stem//'.pvd')
+         call add_run_file(plan, stem//'.pvd.fekap-tmp')
+         call add_run_file(plan, 'vtk/'//stem//'_*.vtu')
+      end if
+      call prepare_output_directory(outdir, plan, error)
+      if (allocated(error)) return
       if (model%output%csv) then
          call open_replace(outdir//'/points.csv', units%points, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/links.csv', units%links, error, stream=.true.)
@@ -205,6 +249,38 @@ contains
       end if
    end subroutine open_outputs
 
+
+   !> The step control's advice on a failure is about a drive's dead point;
+   !> a run without drives (statics: the loads grow with time) has none, and
+   !> its failure is a limit of the load.
+   function without_drive_advice(model, message) result(text)
+      type(model_type), intent(in) :: model
+      character(*), intent(in) :: message
+      character(:), allocatable :: text
+      character(*), parameter :: drive_advice = ' of the time step: the mechanism cannot follow its drive'
+      integer :: k, drives
+      text = message
+      drives = 0
+      if (allocated(model%drives)) drives = size(model%drives)
+      k = index(message, drive_advice)
+      if (drives > 0 .or. k == 0) return
+      text = message(:k - 1)//' of the time step: the structure cannot carry its loads past this point '// &
+         & '(a limit load, where it buckles or snaps through, or a part left free to move); a smaller time '// &
+         & 'step will not help: lower the loads, or support the structure where it gives way)'
+   end function without_drive_advice
+
+   !> Stop with exit 1 and a message when a signal came before the run's
+   !> files were opened (`when` says during what).
+   subroutine stop_if_interrupted(deck, when)
+      character(*), intent(in) :: deck, when
+      type(error_type), allocatable :: error
+      character(len=12) :: number
+      if (interrupt_signal() == 0) return
+      write (number, '(i0)') interrupt_signal()
+      call fatal_error(error, 'fekap: '//deck//': interrupted by signal '//trim(number)//' '//when// &
+         & '; nothing was run or written')
+      call finish(error)
+   end subroutine stop_if_interrupted
 
    !> Print the error and exit with the code of its kind.
    subroutine finish(error)

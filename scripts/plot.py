@@ -1150,6 +1150,8 @@ def animate(run: Run, directory: Path, wanted: str) -> Path:
     fps = int(min(30, max(8, round(len(movie.frames) / MOVIE_SECONDS))))
     target = directory / f"motion.{fmt}"
     animation = FuncAnimation(movie.fig, movie.update, frames=len(movie.frames), blit=False)
+    record(target)
+    record(directory / "motion-frame.png")
     # Not savefig's "tight" box: every frame must have the same size.
     with plt.rc_context({"savefig.bbox": None}):
         if fmt == "mp4":
@@ -1167,9 +1169,17 @@ def animate(run: Run, directory: Path, wanted: str) -> Path:
 
 # --------------------------------------------------------------------------- main
 
+def record(target: Path) -> None:
+    """Add a file to the directory's manifest before writing it: the next fekap run there removes
+    the files listed, and no other (README, "What a run writes")."""
+    with open(target.parent / ".fekap-manifest", "a", encoding="utf-8") as manifest:
+        manifest.write(target.name + "\n")
+
+
 def save(fig: Figure, target: Path, written: list[Path]) -> None:
     """Save a figure as PNG, close it and remember the file."""
     plt = fc.pyplot()
+    record(target)
     fig.savefig(target)
     plt.close(fig)
     written.append(target)

@@ -13,8 +13,8 @@ module fekap_posix
    private
 
    public :: os_mkdir, os_make_path, os_is_directory, os_rename, os_unlink, os_rmdir, os_truncate
-   public :: os_open_lock, os_append_probe, os_error_text, os_ignore_sigpipe
-   public :: os_list_directory, name_list_type, os_read_all, os_file_size
+   public :: os_open_lock, os_close, os_append_probe, os_error_text, os_ignore_sigpipe
+   public :: os_list_directory, name_list_type, os_read_all, os_file_size, os_file_kind, os_same_file
    ! The C library's signal(2), for the interrupt module.
    public :: c_signal
 
@@ -24,6 +24,11 @@ module fekap_posix
    !> Most bytes os_read_all reads (256 MiB).
    integer, parameter :: max_read = 268435456
    integer(c_int), parameter :: sigpipe = 13
+   !> Kinds of file (os_file_kind): the S_IFMT bits of st_mode.
+   integer, parameter, public :: kind_regular = 32768, kind_directory = 16384, kind_fifo = 4096, &
+      & kind_character_device = 8192, kind_block_device = 24576, kind_socket = 49152
+   !> statx(2): AT_FDCWD, AT_EMPTY_PATH, STATX_TYPE | STATX_INO.
+   integer(c_int), parameter :: at_fdcwd = -100, at_empty_path = 4096, statx_type_ino = 257
    !> Permissions of a new directory, before the umask: 0777.
    integer(c_int), parameter :: mode_directory = 511
 
@@ -156,6 +161,15 @@ module fekap_posix
          type(c_ptr), value :: dir
          integer(c_int) :: status
       end function c_closedir
+      function c_statx(dirfd, path, flags, mask, buffer) bind(C, name='statx') result(status)
+         import :: c_int, c_char
+         implicit none
+         integer(c_int), value :: dirfd, flags, mask
+         character(kind=c_char), intent(in) :: path(*)
+         !> struct statx: 256 bytes, the same layout on every architecture.
+         character(kind=c_char), intent(out) :: buffer(256)
+         integer(c_int) :: status
+      end function c_statx
       function c_signal(signum, handler) bind(C, name='signal') result(previous)
          import :: c_int, c_funptr
          implicit none
@@ -299,6 +313,13 @@ contains
       code = 0
    end function os_open_lock
 
+   !> close(2) of a descriptor from os_open_lock (releasing its lock).
+   subroutine os_close(fd)
+      integer, intent(in) :: fd
+      integer(c_int) :: status
+      status = c_close(int(fd, c_int))
+   end subroutine os_close
+
    !> Why a file took fewer bytes than written to it: append one byte with
    !> write(2) and return its errno (0 if the byte went in; the caller cuts
    !> the file back to its valid length afterwards).
@@ -339,9 +360,9 @@ contains
       end if
       do
          got = c_read(fd, chunk, int(len(chunk), c_size_t))
+         ! EINTR too ends the read: only the signals that stop the run interrupt it.
          if (got < 0) then
             code = errno()
-            if (code == eintr) cycle
             exit
          end if
          if (got == 0) exit
@@ -376,6 +397,42 @@ contains
       size_ = int(c_lseek(fd, 0_c_long, seek_end), c_int64_t)
       status = c_close(fd)
    end function os_file_size
+
+   !> The kind of file `path` names (kind_regular, kind_directory,
+   !> kind_fifo, ...; symbolic links followed), without opening it (opening a
+   !> FIFO waits for a writer), and whether it is the process's standard
+   !> input (`fekap /dev/stdin`: the same device and inode as descriptor 0).
+   !> 0 or the errno of statx(2).
+   integer function os_file_kind(path, kind, is_stdin) result(code)
+      character(*), intent(in) :: path
+      integer, intent(out) :: kind
+      logical, intent(out) :: is_stdin
+      character(kind=c_char) :: file(256), stdin(256)
+      integer(c_int), parameter :: stdin_fd = 0
+      code = 0
+      kind = 0
+      is_stdin = .false.
+      if (c_statx(at_fdcwd, c_string(path), 0_c_int, statx_type_ino, file) /= 0) then
+         code = errno()
+         return
+      end if
+      ! stx_mode: bytes 29-30 (little-endian u16); stx_ino 33-40; stx_dev_major, _minor 137-144.
+      kind = iand(iachar(file(29)) + 256*iachar(file(30)), 61440)
+      if (c_statx(stdin_fd, c_string(''), at_empty_path, statx_type_ino, stdin) == 0) then
+         is_stdin = all(file(33:40) == stdin(33:40)) .and. all(file(137:144) == stdin(137:144))
+      end if
+   end function os_file_kind
+
+   !> Whether paths `a` and `b` name the same file (the same device and
+   !> inode, links followed); .false. when either cannot be looked at.
+   logical function os_same_file(a, b)
+      character(*), intent(in) :: a, b
+      character(kind=c_char) :: sa(256), sb(256)
+      os_same_file = .false.
+      if (c_statx(at_fdcwd, c_string(a), 0_c_int, statx_type_ino, sa) /= 0) return
+      if (c_statx(at_fdcwd, c_string(b), 0_c_int, statx_type_ino, sb) /= 0) return
+      os_same_file = all(sa(33:40) == sb(33:40)) .and. all(sa(137:144) == sb(137:144))
+   end function os_same_file
 
    !> Writes to a closed pipe (`fekap ... | head -1`) then fail with EPIPE
    !> instead of killing the process with SIGPIPE.

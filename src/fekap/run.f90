@@ -25,6 +25,7 @@ module fekap_run
    use fekap_output_buffer, only: text_buffer_type, new_text_buffer, flush_text_buffer
    use fekap_strings, only: es_text
    use fekap_output_checked_file, only: close_checked, replace_checked
+   use fekap_posix, only: os_unlink
    implicit none
    private
 
@@ -118,11 +119,11 @@ contains
       type(run_units_type), intent(in) :: units
       type(error_type), allocatable, intent(out) :: error
       type(step_result_type) :: result
-      type(error_type), allocatable :: step_error, write_error
+      type(error_type), allocatable :: step_error, write_error, retry_error
       type(vtk_state_type) :: vtk
       type(run_buffers_type) :: out
       type(row_prefix_type) :: prefix
-      integer :: n, nsteps, rows, l
+      integer :: n, nsteps, rows, l, last_step, dropped
       real(dp) :: seconds(3), start(2), sampled(2), c0, c1, c2, c_start, c_loop, last_flush, now
       character(len=100) :: where_
       logical :: vel, acc, timed
@@ -158,13 +159,19 @@ contains
             vtk%links_nodes(:, l) = model%links(l)%node
          end do
       end if
+      ! The headers (and the listing's echo of the model) reach the disk
+      ! before the first step: a disk that fills during the run leaves every
+      ! file with its header. A disk already full runs no step.
+      last_step = nsteps
+      call flush_all(units, out, error)
+      if (allocated(error)) last_step = -1
 
       ! The start is timed whole; the time of the steps after it is split into
       ! analysis and output as on a sample of them (see split_timed). The
       ! sample is uniform: the first steps, with their short predictors, are
       ! no more typical of a run than the start.
       c_loop = clock_seconds()
-      do n = 0, nsteps
+      do n = 0, last_step
          timed = n == 0 .or. split_timed(n, nsteps)
          if (timed) c0 = clock_seconds()
          result%step = n
@@ -279,7 +286,23 @@ contains
       if (units%vtk .and. vtk%pvd%entries > vtk%pvd%written) then
          ! The whole collection, however the run ended.
          call write_pvd(units, vtk, write_error)
-         if (allocated(write_error)) call add_error(error, write_error)
+         ! A full disk: the newest step files make room for the collection
+         ! of the others, so that no .vtu is left without its .pvd.
+         dropped = 0
+         if (allocated(write_error)) then
+            do while (vtk%pvd%entries > 0)
+               call drop_last_step_file(units, vtk)
+               dropped = dropped + 1
+               call write_pvd(units, vtk, retry_error)
+               if (.not. allocated(retry_error)) exit
+               deallocate (retry_error)
+            end do
+            if (.not. allocated(retry_error)) then
+               write (where_, '(a,i0,a)') ' (the newest ', dropped, ' .vtu files were removed to make room for it)'
+               write_error%message = write_error%message//trim(where_)
+            end if
+            call add_error(error, write_error)
+         end if
       end if
       c1 = clock_seconds()
       seconds(2) = seconds(2) + (c1 - c0)
@@ -356,6 +379,23 @@ contains
          & units%outdir//'/'//units%stem//'.pvd', error)
       if (.not. allocated(error)) vtk%pvd%written = vtk%pvd%entries
    end subroutine write_pvd
+
+   !> Remove the newest step file of the collection and its entry (to make
+   !> room for the .pvd on a full disk).
+   subroutine drop_last_step_file(units, vtk)
+      type(run_units_type), intent(in) :: units
+      type(vtk_state_type), intent(inout) :: vtk
+      integer :: start, first, last, code
+      associate (p => vtk%pvd)
+         start = index(p%text(1:p%n - 1), new_line('a'), back=.true.) + 1
+         first = index(p%text(start:p%n), 'file="') + start + 5
+         last = first + index(p%text(first:p%n), '"') - 2
+         code = os_unlink(units%outdir//'/'//p%text(first:last))
+         p%n = start - 1
+         p%entries = p%entries - 1
+         p%written = min(p%written, p%entries)
+      end associate
+   end subroutine drop_last_step_file
 
    !> `vtk/<stem>_<step, at least 6 digits>.vtu`, relative to the output directory.
    pure function vtu_name(stem, step) result(name)

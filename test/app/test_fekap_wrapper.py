@@ -103,3 +103,11 @@ def test_a_plotting_failure_fails_the_command(tmp_path):
     assert "fekap: plotting failed" in call.stderr, call.stderr
     assert (out / "points.csv").is_file()
     assert not list(out.glob("*.png"))
+
+
+def test_help_lists_the_wrappers_own_options():
+    """scripts/fekap --help: fekap's options and exit codes, and the two the script takes itself."""
+    done = subprocess.run([str(WRAPPER), "--help"], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert "usage: fekap" in done.stdout and "exit codes:" in done.stdout, done.stdout
+    assert "--no-plots" in done.stdout and "--no-animation" in done.stdout, done.stdout

@@ -84,3 +84,115 @@ def test_listing_echoes_harmonic_drive(tmp_path):
     listing = (out / "peaucellier.lis").read_text()
     drives = listing[listing.index("DRIVES"):].split("\n\n")[0]
     assert "cos(" in drives and "*t + " in drives, drives
+
+
+# --- issue #31, item 9: messages ------------------------------------------------------------------
+
+FOURBAR_TEXT = (ROOT / "decks" / "fourbar.deck").read_text()
+
+
+def write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def test_empty_output_directory_is_a_command_line_error(tmp_path):
+    proc = fekap("-q", "-o", "", "decks/fourbar.deck")
+    assert proc.returncode == 2, (proc.returncode, proc.stderr)
+    assert "-o needs a directory name" in proc.stderr, proc.stderr
+
+
+def test_constraint_methods_errors_name_the_deck(tmp_path):
+    """A four-bar without SUPPorts: both classical methods refuse it, naming the file."""
+    text = FOURBAR_TEXT.replace("SUPPorts\n  A  pin\n  D  pin\n", "")
+    deck = write(tmp_path / "free.deck", text)
+    for method, phrase in (("cartesian", "not determined by its constraints"), ("angles", "four-bar")):
+        proc = fekap("-q", "-o", str(tmp_path / method), "--method", method, str(deck))
+        assert proc.returncode == 2, (method, proc.returncode, proc.stderr)
+        assert proc.stderr.startswith(f"{deck}: ") and phrase in proc.stderr, (method, proc.stderr)
+
+
+def test_malformed_node_line_gives_one_error_not_a_cascade(tmp_path):
+    for bad in ("  B   2   0  0 junk", "  B   2", "  B"):
+        text = FOURBAR_TEXT.replace("  B   2   0", bad, 1)
+        proc = fekap("-q", "-o", str(tmp_path / "o"), str(write(tmp_path / "n.deck", text)))
+        assert proc.returncode == 2, proc.stderr
+        assert "undefined" not in proc.stderr and "1 error in the deck" in proc.stderr, (bad, proc.stderr)
+
+
+def test_malformed_link_line_gives_one_error_not_a_cascade(tmp_path):
+    for bad in ("  AB  A  B  bar 4 extra", "  AB  A  B", "  AB  A  Q  bar"):
+        text = FOURBAR_TEXT.replace("  AB  A  B  bar", bad, 1)
+        proc = fekap("-q", "-o", str(tmp_path / "o"), str(write(tmp_path / "l.deck", text)))
+        assert proc.returncode == 2, proc.stderr
+        assert "undefined link" not in proc.stderr and "1 error in the deck" in proc.stderr, (bad, proc.stderr)
+
+
+def test_an_undefined_name_is_still_reported(tmp_path):
+    """The cascade guard hides only names whose own line was reported."""
+    text = FOURBAR_TEXT.replace("rotation AB", "rotation XY", 1)
+    proc = fekap("-q", "-o", str(tmp_path / "o"), str(write(tmp_path / "u.deck", text)))
+    assert proc.returncode == 2 and "undefined link 'XY'" in proc.stderr, proc.stderr
+
+
+def test_long_offending_line_is_echoed_cut(tmp_path):
+    """A 200 kB line: the echo is a window around the caret and the message is cut, not 200 kB of stderr."""
+    field = "Q" * 200_000
+    text = FOURBAR_TEXT.replace("  track B C", f"  track B C {field}", 1)
+    proc = fekap("-q", "-o", str(tmp_path / "o"), str(write(tmp_path / "w.deck", text)))
+    assert proc.returncode == 2, proc.stderr[:300]
+    assert len(proc.stderr) < 3000, len(proc.stderr)
+    echo = [line for line in proc.stderr.splitlines() if line.lstrip().startswith("25 |")]
+    assert echo and echo[0].endswith("...") and "track B C" in echo[0], proc.stderr
+    assert "more characters not shown" in proc.stderr, proc.stderr
+
+
+def test_caret_points_into_a_long_line_window(tmp_path):
+    """The bad field far into a long line: the window holds it and the caret stands under it."""
+    text = FOURBAR_TEXT.replace("  track B C", "  track B C" + " C" * 5000 + " 1junk", 1)
+    proc = fekap("-q", "-o", str(tmp_path / "o"), str(write(tmp_path / "c.deck", text)))
+    assert proc.returncode == 2, proc.stderr[:300]
+    lines = proc.stderr.splitlines()
+    at = next(k for k, line in enumerate(lines) if line.lstrip().startswith("25 |"))
+    echo, caret = lines[at], lines[at + 1]
+    assert echo.startswith("  25 | ...") and len(echo) < 200, echo
+    assert echo[caret.index("^"):].startswith("1junk"), (echo, caret)
+
+
+def test_include_error_does_not_echo_the_included_file(tmp_path):
+    """An INCLude of a file that is no deck: its first line (a password hash) is never printed."""
+    secret = "root:$6$saltsalt$SECRETHASHSECRETHASH:19000:0:99999:7:::"
+    write(tmp_path / "shadow", f"{secret}\nsecond SECRETLINE\n")
+    text = FOURBAR_TEXT.replace("OUTPut", "INCLude shadow\nOUTPut", 1)
+    proc = fekap("-q", "-o", str(tmp_path / "o"), str(write(tmp_path / "i.deck", text)))
+    assert proc.returncode == 2, proc.stderr
+    assert "SECRET" not in proc.stderr and "saltsalt" not in proc.stderr, proc.stderr
+    assert "shadow:1:" in proc.stderr and "first line of this INCLuded file" in proc.stderr, proc.stderr
+
+
+def test_include_error_after_a_good_first_line_is_echoed(tmp_path):
+    """An included deck fragment whose later line is wrong is shown as any deck line is."""
+    write(tmp_path / "nodes.inc", "  B   2   0\n  C   3   sqrt(1S)\n")
+    text = FOURBAR_TEXT.replace("  B   2   0\n  C   3   sqrt(15)          ! upper assembly branch\n",
+                                "INCLude nodes.inc\n", 1)
+    proc = fekap("-q", "-o", str(tmp_path / "o"), str(write(tmp_path / "f.deck", text)))
+    assert proc.returncode == 2, proc.stderr
+    assert "nodes.inc:2:" in proc.stderr and "sqrt(1S)" in proc.stderr, proc.stderr
+
+
+def test_include_depth_limit_is_the_documented_one(tmp_path):
+    """docs/deck-format.md says INCLudes nest at most 15 deep: 15 work, the 16th is refused."""
+    doc = (ROOT / "docs" / "deck-format.md").read_text()
+    limit = int(re.search(r"INCLudes nest at most (\d+) deep", doc).group(1))
+
+    def chain(depth: int) -> Path:
+        for k in range(depth, 0, -1):
+            inner = f"INCLude level{k + 1}.inc\n" if k < depth else "  track B C\n"
+            write(tmp_path / f"level{k}.inc", inner)
+        text = FOURBAR_TEXT.replace("  track B C\n", "INCLude level1.inc\n", 1)
+        return write(tmp_path / "nest.deck", text)
+
+    proc = fekap("-q", "-o", str(tmp_path / "ok"), str(chain(limit)))
+    assert proc.returncode == 0, proc.stderr
+    proc = fekap("-q", "-o", str(tmp_path / "deep"), str(chain(limit + 1)))
+    assert proc.returncode == 2 and "INCLude nested too deeply" in proc.stderr, proc.stderr

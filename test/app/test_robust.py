@@ -228,7 +228,10 @@ def test_runs_started_together_into_one_directory_never_mix(tmp_path):
     assert (out / "fourbar.lis").read_text().count("SUMMARY") == 1
 
 
-def test_files_of_an_earlier_run_are_removed_and_others_kept(tmp_path):
+def test_files_of_fekaps_names_without_a_manifest_are_refused_unless_forced(tmp_path):
+    # Issue #31: only the files a run's manifest lists are removed; files of
+    # the names a run writes that no manifest lists stop the run (exit 2)
+    # unless --force, which replaces them. Other files are kept either way.
     out = tmp_path / "reused"
     (out / "vtk").mkdir(parents=True)
     stale = ["old.pvd", "old.lis", "paths.png", "history_P.png", "angles.png", "iterations.png", "motion.gif",
@@ -237,10 +240,18 @@ def test_files_of_an_earlier_run_are_removed_and_others_kept(tmp_path):
         (out / name).write_text("stale\n")
     (out / "notes.txt").write_text("mine\n")
     done = fekap("-q", "-o", out, FOURBAR)
+    assert done.returncode == 2, done.stderr
+    for name in ("paths.png", "history_P.png", "links.csv"):
+        assert name in done.stderr, done.stderr
+    for name in ("old.pvd", "old.lis", "notes.txt", "old_000001.vtu"):
+        assert name not in done.stderr, done.stderr
+    assert all((out / name).read_text() == "stale\n" for name in stale), "a refused run changed files"
+    done = fekap("-q", "-o", out, "--force", FOURBAR)
     assert done.returncode == 0, done.stderr
     left = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
-    assert left == ["fourbar.lis", "links.csv", "mechanism.txt", "mesh.csv", "nodes.csv", "notes.txt", "points.csv",
-                    "steps.csv"], left
+    assert left == [".fekap-manifest", "fourbar.lis", "links.csv", "mechanism.txt", "mesh.csv", "nodes.csv",
+                    "notes.txt", "old.lis", "old.pvd", "points.csv", "steps.csv", "vtk", "vtk/old_000001.vtu",
+                    "x.pvd.fekap-tmp"], left
     assert (out / "links.csv").read_text() != "stale\n"
 
 
@@ -429,7 +440,8 @@ def test_deck_from_a_pipe(tmp_path):
 def test_endless_inputs_are_refused_not_read_forever(tmp_path):
     deck = write_deck(tmp_path / "z.deck", "INCLude /dev/zero\nEND\n")
     done = fekap("-q", "-o", tmp_path / "o", deck, timeout=30)
-    assert done.returncode == 2 and "binary file" in done.stderr, done.stderr[-300:]
+    # A device is no regular file: refused before it is opened (issue #31).
+    assert done.returncode == 2 and "a device, not a regular file" in done.stderr, done.stderr[-300:]
 
 
 def test_element_count_above_the_limit_names_the_limit(tmp_path):

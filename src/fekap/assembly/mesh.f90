@@ -21,7 +21,7 @@ module fekap_assembly_mesh
    use fekap_element_beam, only: beam_type, new_beam
    use fekap_contact_slideline, only: default_penalty
    use fekap_union_find, only: find_root, join, flatten
-   use fekap_model, only: load_type, effects_statics
+   use fekap_model, only: load_type, effects_statics, effects_dynamics
    use fekap_model_effects, only: planned_effects, has_masses
    use fekap_element_inertia, only: beam_gravity_force
    use fekap_assembly_loads, only: load_set_type
@@ -71,6 +71,12 @@ module fekap_assembly_mesh
       integer, allocatable :: link_rot(:, :)
       !> Initial direction angle of each link.
       real(dp), allocatable :: link_angle0(:)
+      !> The links whose angle is read off their chord (first to last node):
+      !> those that can bend, of more than one element or in a statics or
+      !> dynamics run; not allocated when there are none. Another link's
+      !> chord is its first end's rotation (an unstrained element's), which
+      !> costs no atan2 a step.
+      integer, allocatable :: chord_links(:)
       type(beam_type), allocatable :: elements(:)
       !> (6, nelem): global dofs of each element, (x1, y1, theta1, x2, y2, theta2).
       integer, allocatable :: edof(:, :)
@@ -210,6 +216,11 @@ contains
       ! Elements.
       nelem = sum(model%links%nelem)
       allocate (self%elements(nelem), self%edof(6, nelem), self%elink(nelem), self%link_angle0(nlink))
+      if (any(planned_effects(model) == [effects_statics, effects_dynamics])) then
+         self%chord_links = [(l, l=1, nlink)]
+      else if (any(model%links%nelem > 1)) then
+         self%chord_links = pack([(l, l=1, nlink)], model%links%nelem > 1)
+      end if
       e = 0
       do l = 1, nlink
          m = model%links(l)%nelem

@@ -22,8 +22,15 @@ module fekap_deck_context
       type(diagnostics_type) :: diagnostics
       !> Indexes of the model's node and link names, built as they are read.
       type(name_index_type) :: nodes, links
-      !> The deck's parameters read so far, which numeric fields may use.
+      !> Names of nodes and links whose lines were reported and dropped (a
+      !> malformed line, a link to a dropped node): the lines naming them
+      !> report nothing more, so one bad line gives one error, not a cascade.
+      type(name_index_type) :: dropped_nodes, dropped_links
+      !> The deck's parameters read so far, which numeric fields may use:
+      !> the first nparameters of `parameters`, their names indexed.
       type(parameter_type), allocatable :: parameters(:)
+      integer :: nparameters = 0
+      type(name_index_type) :: parameter_index
    contains
       !> Report an error at field `itok` of line `iline` (past the end: at the end of the line).
       procedure :: error => context_error
@@ -145,9 +152,11 @@ contains
             call evaluate_expression(self%field(iline, itok), value, error, detail)
          end if
       else if (present(text)) then
-         call evaluate_expression(text, value, error, detail, self%parameters)
+         call evaluate_expression(text, value, error, detail, self%parameters(:self%nparameters), &
+            & self%parameter_index)
       else
-         call evaluate_expression(self%field(iline, itok), value, error, detail, self%parameters)
+         call evaluate_expression(self%field(iline, itok), value, error, detail, &
+            & self%parameters(:self%nparameters), self%parameter_index)
       end if
       ok = .not. allocated(error)
       if (.not. ok) call self%error(iline, itok, error%message, detail)
@@ -161,7 +170,8 @@ contains
       type(error_type), allocatable :: error
       character(:), allocatable :: detail
       if (allocated(self%parameters)) then
-         call evaluate_integer(self%field(iline, itok), value, error, detail, self%parameters)
+         call evaluate_integer(self%field(iline, itok), value, error, detail, &
+            & self%parameters(:self%nparameters), self%parameter_index)
       else
          call evaluate_integer(self%field(iline, itok), value, error, detail)
       end if

@@ -14,6 +14,9 @@ module fekap_deck_diagnostic
 
    !> Most diagnostics rendered; the rest are only counted.
    integer, parameter :: max_shown = 100
+   !> Longest source line shown under a message, and longest message: a
+   !> longer line is shown as a window around the caret, a longer message cut.
+   integer, parameter :: max_line_shown = 160, max_message_shown = 400
 
    !> A place in the deck: file, line, columns, and the line's text for display.
    type :: mark_type
@@ -27,6 +30,10 @@ module fekap_deck_diagnostic
       character(:), allocatable :: text
       !> Sort key: the position of the line in the deck as read (includes spliced).
       integer :: order = 0
+      !> The first line of an INCLuded file: neither it nor any text of its
+      !> file is shown (an INCLude of a file that is no deck, a key or a
+      !> password file, must not print it).
+      logical :: withheld = .false.
    end type mark_type
 
    !> One error, with an optional note at a second place.
@@ -107,6 +114,7 @@ contains
       integer, allocatable :: order(:)
       integer :: i, j, k
       character(len=16) :: count_text
+      character(:), allocatable :: withheld_file
       text = ''
       if (self%count == 0) return
       ! Stable insertion sort by place in the deck.
@@ -121,8 +129,16 @@ contains
          end do
          order(j + 1) = k
       end do
+      withheld_file = ''
       do i = 1, self%kept
          associate (d => self%items(order(i)))
+            if (d%at%withheld) then
+               text = text//render_withheld(d%at)
+               withheld_file = d%at%file
+               cycle
+            end if
+            ! After a withheld first line, the rest of that file's errors are not shown either.
+            if (d%at%file == withheld_file .and. len(d%at%file) == len(withheld_file)) cycle
             text = text//render_one(d%at, 'error', d%message, d%label)
             if (d%has_note) text = text//render_one(d%note_at, 'note', d%note, '')
          end associate
@@ -149,9 +165,44 @@ contains
       character(*), intent(in) :: severity, message, label
       character(:), allocatable :: text
       character(len=16) :: num
-      character(:), allocatable :: gutter
-      integer :: width
+      character(:), allocatable :: gutter, shown
+      integer :: width, first, last, col, length
       character(*), parameter :: nl = new_line('a')
+      text = place(at)//' '//severity//': '//cut_message(message)//nl
+      if (.not. allocated(at%text) .or. at%line <= 0) return
+      if (len(at%text) == 0) return
+      write (num, '(i0)') at%line
+      width = max(4, len_trim(num) + 1)
+      gutter = repeat(' ', width)
+      ! A long line is shown as a window of max_line_shown columns around the caret.
+      first = 1
+      last = len(at%text)
+      col = at%col
+      length = max(at%length, 1)
+      if (last > max_line_shown) then
+         first = max(1, min(at%col - max_line_shown/4, len(at%text) - max_line_shown + 1))
+         last = first + max_line_shown - 1
+         shown = at%text(first:last)
+         if (first > 1) shown = '...'//shown
+         if (last < len(at%text)) shown = shown//'...'
+         col = at%col - first + 1 + merge(3, 0, first > 1)
+         length = min(length, last - at%col + 1)
+      else
+         shown = at%text
+      end if
+      text = text//repeat(' ', width - len_trim(num))//trim(num)//' | '//shown//nl
+      if (at%col > 0) then
+         text = text//gutter//' | '//repeat(' ', col - 1)//'^'//repeat('~', max(length, 1) - 1)
+         if (len(label) > 0) text = text//' '//cut_message(label)
+         text = text//nl
+      end if
+   end function render_one
+
+   !> `file:line:col:` of a mark (line and column when known).
+   pure function place(at) result(text)
+      type(mark_type), intent(in) :: at
+      character(:), allocatable :: text
+      character(len=16) :: num
       text = at%file//':'
       if (at%line > 0) then
          write (num, '(i0)') at%line
@@ -161,18 +212,28 @@ contains
             text = text//trim(num)//':'
          end if
       end if
-      text = text//' '//severity//': '//message//nl
-      if (.not. allocated(at%text) .or. at%line <= 0) return
-      if (len(at%text) == 0) return
-      write (num, '(i0)') at%line
-      width = max(4, len_trim(num) + 1)
-      gutter = repeat(' ', width)
-      text = text//repeat(' ', width - len_trim(num))//trim(num)//' | '//at%text//nl
-      if (at%col > 0) then
-         text = text//gutter//' | '//repeat(' ', at%col - 1)//'^'//repeat('~', max(at%length, 1) - 1)
-         if (len(label) > 0) text = text//' '//label
-         text = text//nl
+   end function place
+
+   !> An error at the first line of an INCLuded file, told without its text.
+   pure function render_withheld(at) result(text)
+      type(mark_type), intent(in) :: at
+      character(:), allocatable :: text
+      text = place(at)//' error: the first line of this INCLuded file is not valid deck text '// &
+         & '(not shown, nor the other errors in this file: is it the file you meant to include?)'//new_line('a')
+   end function render_withheld
+
+   !> A message of at most max_message_shown characters (a message quoting a
+   !> field of a 200 kB line is cut, saying how much was cut).
+   pure function cut_message(message) result(text)
+      character(*), intent(in) :: message
+      character(:), allocatable :: text
+      character(len=16) :: num
+      if (len(message) <= max_message_shown) then
+         text = message
+         return
       end if
-   end function render_one
+      write (num, '(i0)') len(message) - max_message_shown
+      text = message(:max_message_shown)//'... ('//trim(num)//' more characters not shown)'
+   end function cut_message
 
 end module fekap_deck_diagnostic

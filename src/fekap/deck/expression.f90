@@ -24,10 +24,11 @@ module fekap_deck_expression
    use fekap_error, only: error_type, input_error
    use fekap_strings, only: lower, same_name
    use fekap_model, only: parameter_type
+   use fekap_deck_name_index, only: name_index_type
    implicit none
    private
 
-   public :: evaluate_expression, evaluate_integer
+   public :: evaluate_expression, evaluate_integer, known_names
    public :: safe_add, safe_multiply, safe_divide
 
    !> Headline of an error in the form of the field.
@@ -59,8 +60,6 @@ module fekap_deck_expression
       character(:), allocatable :: detail
       !> Current nesting depth (see max_depth).
       integer :: depth = 0
-      !> The parameters the expression may name (none: not allocated).
-      type(parameter_type), allocatable :: parameters(:)
    end type parser_type
 
 contains
@@ -68,25 +67,27 @@ contains
    !> Evaluate the expression `text`. On failure `error` holds the headline
    !> (msg_not_a_number or msg_not_finite) and `detail` (when present) a short label
    !> saying what is wrong, for the caret line of a diagnostic.
-   pure subroutine evaluate_expression(text, value, error, detail, parameters)
+   pure subroutine evaluate_expression(text, value, error, detail, parameters, index)
       !> The field, without blanks.
       character(*), intent(in) :: text
       real(dp), intent(out) :: value
       type(error_type), allocatable, intent(out) :: error
       character(:), allocatable, intent(out), optional :: detail
-      !> Named values the expression may use besides pi and deg.
+      !> Named values the expression may use besides pi and deg: passed down
+      !> the parser, not copied (a copy per field made a deck of many
+      !> parameters quadratic to read).
       type(parameter_type), intent(in), optional :: parameters(:)
+      !> An index of the names of `parameters` (their positions), for a
+      !> lookup in constant time; without it the names are searched in turn.
+      type(name_index_type), intent(in), optional :: index
       type(parser_type) :: p
       p%text = text
       p%detail = ''
-      if (present(parameters)) then
-         if (size(parameters) > 0) p%parameters = parameters
-      end if
       value = 0
       if (len(text) == 0) then
          call fail(p, bad_syntax, 'empty field')
       else
-         call parse_sum(p, value)
+         call parse_sum(p, value, parameters, index)
          if (p%status == ok .and. p%pos <= len(p%text)) then
             call fail(p, bad_syntax, "unexpected '"//p%text(p%pos:p%pos)//"'")
          end if
@@ -103,17 +104,18 @@ contains
 
    !> Evaluate `text` as an expression whose value is a whole number that fits
    !> a default integer.
-   pure subroutine evaluate_integer(text, value, error, detail, parameters)
+   pure subroutine evaluate_integer(text, value, error, detail, parameters, index)
       character(*), intent(in) :: text
       integer, intent(out) :: value
       type(error_type), allocatable, intent(out) :: error
       character(:), allocatable, intent(out), optional :: detail
       type(parameter_type), intent(in), optional :: parameters(:)
+      type(name_index_type), intent(in), optional :: index
       real(dp) :: x
       character(:), allocatable :: why
       ! A local label: passing the optional deferred-length `detail` straight on
       ! loses its length with gfortran 12.
-      call evaluate_expression(text, x, error, why, parameters)
+      call evaluate_expression(text, x, error, why, parameters, index)
       value = 0
       if (allocated(error)) then
          if (error%message == msg_not_a_number) error%message = 'expected an integer'
@@ -198,18 +200,21 @@ contains
       if (p%pos <= len(p%text)) peek = p%text(p%pos:p%pos)
    end function peek
 
-   pure recursive subroutine parse_sum(p, v)
+   pure recursive subroutine parse_sum(p, v, prm, idx)
       type(parser_type), intent(inout) :: p
       real(dp), intent(out) :: v
+      !> The deck's parameters and the index of their names (absent: none).
+      type(parameter_type), intent(in), optional :: prm(:)
+      type(name_index_type), intent(in), optional :: idx
       real(dp) :: w, r
       character :: op
       logical :: fine
-      call parse_product(p, v)
+      call parse_product(p, v, prm, idx)
       do while (p%status == ok)
          op = peek(p)
          if (op /= '+' .and. op /= '-') exit
          p%pos = p%pos + 1
-         call parse_product(p, w)
+         call parse_product(p, w, prm, idx)
          if (p%status /= ok) exit
          if (op == '-') w = -w
          call safe_add(v, w, r, fine)
@@ -219,13 +224,16 @@ contains
       if (p%status /= ok) v = 0
    end subroutine parse_sum
 
-   pure recursive subroutine parse_product(p, v)
+   pure recursive subroutine parse_product(p, v, prm, idx)
       type(parser_type), intent(inout) :: p
       real(dp), intent(out) :: v
+      !> The deck's parameters and the index of their names (absent: none).
+      type(parameter_type), intent(in), optional :: prm(:)
+      type(name_index_type), intent(in), optional :: idx
       real(dp) :: w, r
       character :: op
       logical :: fine
-      call parse_unary(p, v)
+      call parse_unary(p, v, prm, idx)
       do while (p%status == ok)
          op = peek(p)
          if (op /= '*' .and. op /= '/') exit
@@ -233,7 +241,7 @@ contains
             if (p%text(p%pos + 1:p%pos + 1) == '*') exit   ! '**' is a power, handled below
          end if
          p%pos = p%pos + 1
-         call parse_unary(p, w)
+         call parse_unary(p, w, prm, idx)
          if (p%status /= ok) exit
          if (op == '*') then
             call safe_multiply(v, w, r, fine)
@@ -250,9 +258,12 @@ contains
       if (p%status /= ok) v = 0
    end subroutine parse_product
 
-   pure recursive subroutine parse_unary(p, v)
+   pure recursive subroutine parse_unary(p, v, prm, idx)
       type(parser_type), intent(inout) :: p
       real(dp), intent(out) :: v
+      !> The deck's parameters and the index of their names (absent: none).
+      type(parameter_type), intent(in), optional :: prm(:)
+      type(name_index_type), intent(in), optional :: idx
       character(len=12) :: limit
       ! Every level of nesting (a sign, a parenthesis, a function argument, an
       ! exponent) passes through here.
@@ -266,23 +277,26 @@ contains
       select case (peek(p))
       case ('-')
          p%pos = p%pos + 1
-         call parse_unary(p, v)
+         call parse_unary(p, v, prm, idx)
          v = -v
       case ('+')
          p%pos = p%pos + 1
-         call parse_unary(p, v)
+         call parse_unary(p, v, prm, idx)
       case default
-         call parse_power(p, v)
+         call parse_power(p, v, prm, idx)
       end select
       p%depth = p%depth - 1
       if (p%status /= ok) v = 0
    end subroutine parse_unary
 
-   pure recursive subroutine parse_power(p, v)
+   pure recursive subroutine parse_power(p, v, prm, idx)
       type(parser_type), intent(inout) :: p
       real(dp), intent(out) :: v
+      !> The deck's parameters and the index of their names (absent: none).
+      type(parameter_type), intent(in), optional :: prm(:)
+      type(name_index_type), intent(in), optional :: idx
       real(dp) :: e, power
-      call parse_primary(p, v)
+      call parse_primary(p, v, prm, idx)
       if (p%status /= ok) return
       if (peek(p) == '^') then
          p%pos = p%pos + 1
@@ -292,7 +306,7 @@ contains
       else
          return
       end if
-      call parse_unary(p, e)
+      call parse_unary(p, e, prm, idx)
       if (p%status /= ok) then
          v = 0
          return
@@ -335,9 +349,12 @@ contains
       if (a < 0 .and. mod(b, 2.0_dp) /= 0) v = -v
    end subroutine checked_power
 
-   pure recursive subroutine parse_primary(p, v)
+   pure recursive subroutine parse_primary(p, v, prm, idx)
       type(parser_type), intent(inout) :: p
       real(dp), intent(out) :: v
+      !> The deck's parameters and the index of their names (absent: none).
+      type(parameter_type), intent(in), optional :: prm(:)
+      type(name_index_type), intent(in), optional :: idx
       character :: c
       integer :: start
       character(:), allocatable :: name
@@ -345,7 +362,7 @@ contains
       c = peek(p)
       if (c == '(') then
          p%pos = p%pos + 1
-         call parse_sum(p, v)
+         call parse_sum(p, v, prm, idx)
          if (p%status /= ok) return
          call expect(p, ')')
       else if (is_digit(c) .or. c == '.') then
@@ -359,7 +376,7 @@ contains
          end do
          name = lower(p%text(start:p%pos - 1))
          if (peek(p) == '(') then
-            call parse_call(p, name, v)
+            call parse_call(p, name, v, prm, idx)
          else
             select case (name)
             case ('pi')
@@ -369,7 +386,7 @@ contains
             case ('nan', 'inf', 'infinity')
                call fail(p, bad_value, "'"//p%text(start:p%pos - 1)//"' is not a finite number")
             case default
-               call parameter_value(p, p%text(start:p%pos - 1), v)
+               call parameter_value(p, p%text(start:p%pos - 1), v, prm, idx)
             end select
          end if
       else if (c == ' ') then
@@ -382,32 +399,66 @@ contains
 
    !> The value of the parameter `name`, or an unknown-name failure that lists
    !> the names there are.
-   pure subroutine parameter_value(p, name, v)
+   pure subroutine parameter_value(p, name, v, prm, idx)
       type(parser_type), intent(inout) :: p
       character(*), intent(in) :: name
       real(dp), intent(out) :: v
-      character(:), allocatable :: known
+      !> The deck's parameters and the index of their names (absent: none).
+      type(parameter_type), intent(in), optional :: prm(:)
+      type(name_index_type), intent(in), optional :: idx
       integer :: i
       v = 0
-      known = 'pi deg'
-      if (allocated(p%parameters)) then
-         do i = 1, size(p%parameters)
-            if (same_name(p%parameters(i)%name, name)) then
-               v = p%parameters(i)%value
+      if (.not. present(prm)) then
+         call fail(p, bad_syntax, "unknown name '"//name//"' (constants: pi deg)")
+         return
+      end if
+      if (size(prm) == 0) then
+         call fail(p, bad_syntax, "unknown name '"//name//"' (constants: pi deg)")
+         return
+      end if
+      if (present(idx)) then
+         i = idx%find(name)
+         if (i >= 1 .and. i <= size(prm)) then
+            v = prm(i)%value
+            return
+         end if
+      else
+         do i = 1, size(prm)
+            if (same_name(prm(i)%name, name)) then
+               v = prm(i)%value
                return
             end if
-            known = known//' '//p%parameters(i)%name
          end do
-         call fail(p, bad_syntax, "unknown name '"//name//"' (constants and parameters defined so far: "//known//')')
-      else
-         call fail(p, bad_syntax, "unknown name '"//name//"' (constants: pi deg)")
       end if
+      call fail(p, bad_syntax, "unknown name '"//name//"' (constants and parameters defined so far: "// &
+         & known_names(prm)//')')
    end subroutine parameter_value
 
-   pure recursive subroutine parse_call(p, name, v)
+   !> 'pi deg' and the first names of `list`, with how many more there are:
+   !> a message of a deck with 100,000 parameters stays short.
+   pure function known_names(list) result(known)
+      type(parameter_type), intent(in) :: list(:)
+      character(:), allocatable :: known
+      integer, parameter :: shown = 20
+      character(len=12) :: more
+      integer :: i
+      known = 'pi deg'
+      do i = 1, min(size(list), shown)
+         known = known//' '//list(i)%name
+      end do
+      if (size(list) > shown) then
+         write (more, '(i0)') size(list) - shown
+         known = known//' and '//trim(more)//' more'
+      end if
+   end function known_names
+
+   pure recursive subroutine parse_call(p, name, v, prm, idx)
       type(parser_type), intent(inout) :: p
       character(*), intent(in) :: name
       real(dp), intent(out) :: v
+      !> The deck's parameters and the index of their names (absent: none).
+      type(parameter_type), intent(in), optional :: prm(:)
+      type(name_index_type), intent(in), optional :: idx
       real(dp) :: x, y
       v = 0
       select case (name)
@@ -418,12 +469,12 @@ contains
          return
       end select
       p%pos = p%pos + 1   ! the '('
-      call parse_sum(p, x)
+      call parse_sum(p, x, prm, idx)
       if (p%status /= ok) return
       if (name == 'atan2') then
          call expect(p, ',')
          if (p%status /= ok) return
-         call parse_sum(p, y)
+         call parse_sum(p, y, prm, idx)
          if (p%status /= ok) return
       end if
       call expect(p, ')')

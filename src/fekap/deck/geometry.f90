@@ -237,15 +237,20 @@ contains
       integer, intent(in) :: lines(:)
       type(node_type), allocatable :: list(:)
       integer :: n, i, iline, j
-      logical :: okx, oky
+      logical :: okx, oky, malformed
       allocate (list(size(lines)))
       call new_name_index(ctx%nodes, size(lines))
+      call new_name_index(ctx%dropped_nodes, size(lines))
       n = 0
       do i = 1, size(lines)
          iline = lines(i)
          if (.not. ctx%name_field(iline, 1, 'node')) cycle
-         if (.not. ctx%require(iline, 'name x y', 'a NODEs line')) cycle
-         if (too_many(ctx, iline, 3, 'name x y', 'a NODEs line')) cycle
+         malformed = .not. ctx%require(iline, 'name x y', 'a NODEs line')
+         if (.not. malformed) malformed = too_many(ctx, iline, 3, 'name x y', 'a NODEs line')
+         if (malformed) then
+            call ctx%dropped_nodes%insert(ctx%field(iline, 1), 1, j)
+            cycle
+         end if
          n = n + 1
          list(n) = node_type()   ! the slot may hold a dropped entry
          list(n)%name = ctx%field(iline, 1)
@@ -282,13 +287,18 @@ contains
       real(dp) :: length, size_
       allocate (list(size(lines)))
       call new_name_index(ctx%links, size(lines))
+      call new_name_index(ctx%dropped_links, size(lines))
       size_ = model_size(model)
       n = 0
       do i = 1, size(lines)
          iline = lines(i)
          if (.not. ctx%name_field(iline, 1, 'link')) cycle
-         if (.not. ctx%require(iline, form, 'a LINKs line')) cycle
-         if (too_many(ctx, iline, 5, form, 'a LINKs line')) cycle
+         fine = ctx%require(iline, form, 'a LINKs line')
+         if (fine) fine = .not. too_many(ctx, iline, 5, form, 'a LINKs line')
+         if (.not. fine) then
+            call ctx%dropped_links%insert(ctx%field(iline, 1), 1, j)
+            cycle
+         end if
          n = n + 1
          list(n) = link_type()   ! the slot may hold a dropped entry
          list(n)%name = ctx%field(iline, 1)
@@ -338,6 +348,8 @@ contains
                   & label='each link needs its own name', note_loc=list(j)%loc, note='first defined here')
                keep = .false.
             end if
+         else
+            call ctx%dropped_links%insert(list(n)%name, 1, j)
          end if
          if (.not. keep) n = n - 1
       end do
@@ -507,8 +519,10 @@ contains
       type(context_type), intent(inout) :: ctx
       integer, intent(in) :: iline, itok
       node = ctx%nodes%find(ctx%field(iline, itok))
-      if (node == 0) call ctx%error(iline, itok, "undefined node '"//ctx%field(iline, itok)//"'", &
-         & label='define it in NODEs')
+      if (node /= 0) return
+      ! A node whose own line was reported needs no second error here.
+      if (ctx%dropped_nodes%find(ctx%field(iline, itok)) /= 0) return
+      call ctx%error(iline, itok, "undefined node '"//ctx%field(iline, itok)//"'", label='define it in NODEs')
    end function lookup_node
 
    !> The link named by field itok, or 0 after reporting an undefined one.
@@ -516,8 +530,10 @@ contains
       type(context_type), intent(inout) :: ctx
       integer, intent(in) :: iline, itok
       link = ctx%links%find(ctx%field(iline, itok))
-      if (link == 0) call ctx%error(iline, itok, "undefined link '"//ctx%field(iline, itok)//"'", &
-         & label='define it in LINKs')
+      if (link /= 0) return
+      ! A link whose own line was reported (or a node of it) needs no second error here.
+      if (ctx%dropped_links%find(ctx%field(iline, itok)) /= 0) return
+      call ctx%error(iline, itok, "undefined link '"//ctx%field(iline, itok)//"'", label='define it in LINKs')
    end function lookup_link
 
 

@@ -10,7 +10,8 @@ module fekap_deck_parameters
    use fekap_strings, only: lower, same_name
    use fekap_deck_context, only: context_type
    use fekap_deck_diagnostic, only: mark_type
-   use fekap_deck_expression, only: evaluate_expression
+   use fekap_deck_expression, only: evaluate_expression, known_names
+   use fekap_deck_name_index, only: new_name_index
    implicit none
    private
 
@@ -48,11 +49,15 @@ contains
       do k = 1, size(overrides)
          valid(k) = check_override(ctx, overrides, k)
       end do
-      if (size(lines) > 0) allocate (ctx%parameters(0))
+      ! Room for every line's parameter at once, and an index of their names:
+      ! reading is linear in the number of lines.
+      if (size(lines) > 0) allocate (ctx%parameters(size(lines)))
+      ctx%nparameters = 0
+      call new_name_index(ctx%parameter_index, size(lines))
       do i = 1, size(lines)
          call split_line(ctx, lines(i), name, iexpr, expr, ok)
          if (.not. ok) cycle
-         previous = find(ctx%parameters, name)
+         previous = ctx%parameter_index%find(name)
          if (previous > 0) then
             call ctx%error_at(ctx%loc(lines(i), 1), "parameter '"//name//"' is defined twice", &
                & label='each parameter is defined once', note_loc=ctx%parameters(previous)%loc, &
@@ -73,7 +78,8 @@ contains
          if (k > 0) then
             used = used .or. [(same_name(override_name(overrides(eq)), name), eq=1, size(overrides))]
             eq = index(overrides(k)%text, '=')
-            call evaluate_expression(overrides(k)%text(eq + 1:), parameter%value, error, detail, ctx%parameters)
+            call evaluate_expression(overrides(k)%text(eq + 1:), parameter%value, error, detail, &
+               & ctx%parameters(:ctx%nparameters), ctx%parameter_index)
             parameter%set_on_command_line = .not. allocated(error)
             if (allocated(error)) then
                ! Reported; the deck's value keeps the fields that use the name quiet.
@@ -87,14 +93,17 @@ contains
             call ctx%real_field(lines(i), iexpr, parameter%value, ok, text=expr)
          end if
          ! A parameter without a value is left out: the fields that use it say so.
-         if (ok) ctx%parameters = [ctx%parameters, parameter]
+         if (ok) then
+            ctx%nparameters = ctx%nparameters + 1
+            ctx%parameters(ctx%nparameters) = parameter
+            call ctx%parameter_index%insert(name, ctx%nparameters, previous)
+         end if
       end do
-
-      known = ''
       if (allocated(ctx%parameters)) then
-         do i = 1, size(ctx%parameters)
-            known = known//' '//ctx%parameters(i)%name
-         end do
+         if (ctx%nparameters < size(ctx%parameters)) ctx%parameters = ctx%parameters(:ctx%nparameters)
+         known = known_names(ctx%parameters)
+         ! Without 'pi deg': the names the deck defines.
+         known = known(7:)
       end if
       do k = 1, size(overrides)
          if (used(k) .or. .not. valid(k)) cycle
@@ -208,20 +217,6 @@ contains
       mark%text = overrides(k)%text
       mark%order = k - size(overrides) - 1
    end function override_mark
-
-   !> Index of the parameter `name` in `list`, 0 if absent.
-   pure integer function find(list, name) result(idx)
-      type(parameter_type), intent(in) :: list(:)
-      character(*), intent(in) :: name
-      integer :: i
-      idx = 0
-      do i = 1, size(list)
-         if (same_name(list(i)%name, name)) then
-            idx = i
-            return
-         end if
-      end do
-   end function find
 
    !> Letters, digits and _, starting with a letter: a name an expression can use.
    pure logical function is_identifier(text)

@@ -11,7 +11,8 @@ module fekap_deck_source
    use fekap_deck_card, only: card_of, card_none, card_include, card_end
    use fekap_deck_diagnostic, only: diagnostics_type, mark_type
    use fekap_deck_lexer, only: token_type, text_type, split_lines, lex_line, find_control
-   use fekap_posix, only: os_read_all, os_error_text
+   use fekap_posix, only: os_read_all, os_error_text, os_file_kind, kind_regular, kind_directory, kind_fifo, &
+      & kind_socket
    implicit none
    private
 
@@ -32,6 +33,9 @@ module fekap_deck_source
       type(token_type), allocatable :: tokens(:)
       !> The card this line starts (card_none for a data line).
       integer :: card = card_none
+      !> The first non-blank line of an INCLuded file, when it starts no card:
+      !> an error there is told without the line (mark_type's withheld).
+      logical :: first_of_include = .false.
    end type line_type
 
    !> All lines of a deck.
@@ -59,7 +63,7 @@ contains
       type(text_type) :: stack(0)
       character(:), allocatable :: buffer, message
       logical :: ok
-      call read_whole_file(path, buffer, ok, message)
+      call read_whole_file(path, buffer, ok, message, main=.true.)
       if (.not. ok) then
          call diagnostics%add(mark_type(file=path, text=''), message)
          return
@@ -89,7 +93,7 @@ contains
       integer :: k, bad, lnum, col, empty_col, ifile, at_include
       character(:), allocatable :: target, included, message, included_text
       character(len=40) :: where
-      logical :: main, ok, ended
+      logical :: main, ok, ended, first
       character(*), parameter :: bom = achar(239)//achar(187)//achar(191), cr = achar(13), lf = achar(10)
       main = size(stack) == 0
       ! A UTF-8 byte order mark (some Windows editors write one) is not part of the text.
@@ -117,6 +121,7 @@ contains
       if (main) source%readable = .true.
       call split_lines(buffer, lines)
       ended = .false.
+      first = .not. main
       do k = 1, size(lines)
          line%file = ifile
          line%number = k
@@ -125,6 +130,11 @@ contains
          call lex_line(line%text, line%code, line%tokens, empty_col)
          if (size(line%tokens) == 0 .and. empty_col == 0) cycle
          if (main) source%last_line = k
+         ! Only a data line, not a card, is withheld: a file that is no deck
+         ! starts with no card.
+         line%first_of_include = first
+         if (size(line%tokens) > 0) line%first_of_include = first .and. card_of(line%tokens(1)%text) == card_none
+         first = .false.
          if (ended) then
             call diagnostics%add(mark_of(source, line, 1), 'text after END', &
                & label='END ends the deck; move this before END or delete it')
@@ -163,7 +173,7 @@ contains
                call diagnostics%add(mark_of(source, line, 2), 'INCLude nested too deeply')
                cycle
             end if
-            call read_whole_file(included, included_text, ok, message)
+            call read_whole_file(included, included_text, ok, message, main=.false.)
             if (.not. ok) then
                call diagnostics%add(mark_of(source, line, 2), message)
                cycle
@@ -201,6 +211,7 @@ contains
       mark%line = line%number
       mark%text = line%text
       mark%order = order
+      mark%withheld = line%first_of_include
       if (itok >= 1 .and. itok <= size(line%tokens)) then
          mark%col = line%tokens(itok)%col
          mark%length = len(line%tokens(itok)%text)
@@ -277,6 +288,7 @@ contains
             grown(i)%file = source%lines(i)%file
             grown(i)%number = source%lines(i)%number
             grown(i)%card = source%lines(i)%card
+            grown(i)%first_of_include = source%lines(i)%first_of_include
             call move_alloc(source%lines(i)%text, grown(i)%text)
             call move_alloc(source%lines(i)%code, grown(i)%code)
             call move_alloc(source%lines(i)%tokens, grown(i)%tokens)
@@ -288,19 +300,49 @@ contains
    end subroutine append_line
 
    !> The whole content of a file, or ok = .false. and a message naming the file.
-   subroutine read_whole_file(path, buffer, ok, message)
+   !> Only a regular file is opened, and for the main deck its standard
+   !> input (`... | fekap /dev/stdin`): opening a FIFO would wait for a
+   !> writer for ever, and a device (/dev/zero, /dev/urandom) is no deck.
+   subroutine read_whole_file(path, buffer, ok, message, main)
       character(*), intent(in) :: path
       character(:), allocatable, intent(out) :: buffer
       logical, intent(out) :: ok
       character(:), allocatable, intent(out) :: message
-      logical :: exists
-      integer :: unit, ios, n
+      !> The main deck (which may be the standard input), not an INCLude.
+      logical, intent(in) :: main
+      logical :: exists, is_stdin
+      integer :: unit, ios, n, kind
       character(len=256) :: iomsg
       ok = .false.
       buffer = ''
       inquire (file=path, exist=exists)
       if (.not. exists) then
          message = "cannot open '"//path//"': no such file"
+         return
+      end if
+      ios = os_file_kind(path, kind, is_stdin)
+      if (ios /= 0) then
+         message = "cannot open '"//path//"': "//os_error_text(ios)
+         return
+      end if
+      if (kind == kind_directory) then
+         message = "cannot read '"//path//"': it is a directory, not a deck"
+         return
+      end if
+      if (kind /= kind_regular .and. .not. (main .and. is_stdin)) then
+         select case (kind)
+         case (kind_fifo)
+            message = "cannot read '"//path//"': a FIFO (named pipe), not a regular file"
+         case (kind_socket)
+            message = "cannot read '"//path//"': a socket, not a regular file"
+         case default
+            message = "cannot read '"//path//"': a device, not a regular file"
+         end select
+         if (main) then
+            message = message//'; a deck is a plain text file (a pipe is read as fekap /dev/stdin)'
+         else
+            message = message//'; an INCLude names a plain text file'
+         end if
          return
       end if
       open (newunit=unit, file=path, access='stream', form='unformatted', action='read', status='old', &

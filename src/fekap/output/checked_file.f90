@@ -13,7 +13,7 @@ module fekap_output_checked_file
    implicit none
    private
 
-   public :: unit_path, verified_length, write_failure, close_checked, replace_checked
+   public :: unit_path, verified_length, write_failure, close_checked, replace_checked, whole_lines_length
 
 contains
 
@@ -42,6 +42,31 @@ contains
       size_ = os_file_size(path)
       if (size_ == pos - 1) length = size_
    end function verified_length
+
+   !> The length of `path` up to its last whole line at or after `from`
+   !> bytes (`from`, which ends a line or the file's start, when no newline
+   !> follows it): the bytes past `from` are read back from the disk.
+   integer(int64) function whole_lines_length(path, from) result(length)
+      character(*), intent(in) :: path
+      integer(int64), intent(in) :: from
+      character(:), allocatable :: tail
+      integer(int64) :: size_
+      integer :: unit, ios, last
+      length = max(from, 0_int64)
+      size_ = os_file_size(path)
+      if (size_ <= length) return
+      ! What a short write left: at most a buffer's worth past the last check.
+      if (size_ - length > huge(1)) return
+      allocate (character(len=int(size_ - length)) :: tail)
+      open (newunit=unit, file=path, access='stream', form='unformatted', action='read', status='old', &
+         & iostat=ios)
+      if (ios /= 0) return
+      read (unit, pos=length + 1, iostat=ios) tail
+      close (unit)
+      if (ios /= 0) return
+      last = index(tail, new_line('a'), back=.true.)
+      length = length + last
+   end function whole_lines_length
 
    !> After a failed write to `path`: why it failed (the OS error), with the
    !> file cut back to `keep` bytes, or removed when keep < 0. The file's unit

@@ -387,16 +387,26 @@ contains
    pure function quoted(text) result(field)
       character(*), intent(in) :: text
       character(:), allocatable :: field
-      integer :: i
-      field = '"'
+      integer :: i, n
+      ! Sized once: appending a character at a time copied the field each
+      ! time, quadratic in the length of a long title.
+      n = 0
+      do i = 1, len(text)
+         if (text(i:i) == '"') n = n + 1
+      end do
+      allocate (character(len=len(text) + n + 2) :: field)
+      field(1:1) = '"'
+      n = 1
       do i = 1, len(text)
          if (text(i:i) == '"') then
-            field = field//'""'
+            field(n + 1:n + 2) = '""'
+            n = n + 2
          else
-            field = field//text(i:i)
+            field(n + 1:n + 1) = text(i:i)
+            n = n + 1
          end if
       end do
-      field = field//'"'
+      field(n + 1:n + 1) = '"'
    end function quoted
 
    !> The text with runs of blanks made single blanks.

@@ -16,7 +16,18 @@ module fekap_stepping_interrupt
    implicit none
    private
 
-   public :: catch_interrupts, interrupt_signal, interrupt_error
+   public :: catch_interrupts, interrupt_signal, interrupt_error, interrupt_reads
+
+   interface
+      !> siginterrupt(3): whether the signal interrupts a system call (read(2)
+      !> returns EINTR) instead of restarting it.
+      function c_siginterrupt(signum, flag) bind(C, name='siginterrupt') result(status)
+         import :: c_int
+         implicit none
+         integer(c_int), value :: signum, flag
+         integer(c_int) :: status
+      end function c_siginterrupt
+   end interface
 
    integer(c_int), parameter :: sighup = 1, sigint = 2, sigterm = 15
 
@@ -32,6 +43,18 @@ contains
       previous = c_signal(sigint, c_funloc(record_signal))
       previous = c_signal(sigterm, c_funloc(record_signal))
    end subroutine catch_interrupts
+
+   !> With `on`, the three signals interrupt a read that waits (a deck read
+   !> from a terminal or a pipe, `fekap /dev/stdin`) instead of restarting
+   !> it, so that the read ends and the run can stop; off again for the run.
+   subroutine interrupt_reads(on)
+      logical, intent(in) :: on
+      integer(c_int) :: flag, status
+      flag = merge(1_c_int, 0_c_int, on)
+      status = c_siginterrupt(sighup, flag)
+      status = c_siginterrupt(sigint, flag)
+      status = c_siginterrupt(sigterm, flag)
+   end subroutine interrupt_reads
 
    subroutine record_signal(signum) bind(C)
       integer(c_int), value :: signum
