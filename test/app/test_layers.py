@@ -25,6 +25,7 @@ LAYER = {
     "solver": "methods",
     "classical": "methods",
     "effects": "methods",
+    "spatial": "methods",
     "deck": "deck",
     "output": "output",
     "run.f90": "driver",
