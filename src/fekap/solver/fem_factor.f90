@@ -9,7 +9,7 @@
 module fekap_solver_fem_factor
    use fekap_kinds, only: dp
    use fekap_solver_linear_system, only: assemble_system, assemble_system_residual, factor_system, system_pivot, &
-      & newton_correction, apply_correction, drive_response, system_rcond
+      & newton_correction, apply_correction, drive_response, system_rcond, phase_start, phase_end
    use fekap_solver_rates, only: root_drive_response
    use fekap_assembly_strain_rate, only: assemble_strain_rate, factor_strain_rate, solve_strain_rate, &
       & strain_rate_rcond
@@ -18,9 +18,33 @@ module fekap_solver_fem_factor
    private
 
    public :: refactor_at_accepted, newton_assembly, root_correction, factor_root, accepted_pivot
-   public :: accepted_rcond, accepted_response, fill_tangent, take_correction, restore_state
+   public :: accepted_rcond, accepted_response, fill_tangent, take_correction, restore_state, choose_form
 
 contains
+
+   !> Choose the form of the run's linear systems at its start configuration
+   !> (the accepted state), once for the run (the condition references of
+   !> change points and singular configurations are each form's own): the
+   !> square-root form (B_f by band LU) where the normal equations would lose
+   !> the digits the length tolerance asks for, else the K form (the
+   !> in-house band factor of K_ff), the cheaper on a small mechanism: its
+   !> steps may end at the predictor, with the factor Newton made there, and
+   !> its rates need no refinement. The normal equations square B_f's
+   !> condition number (K_ff = B_f^T W B_f), so their solves carry relative
+   !> errors of order kappa(B_f)**2 u; strain_rate_rcond's estimate is
+   !> 1/kappa_1(B_f)**2 (docs/theory.md, "Rates at scale"). A start where
+   !> B_f is singular keeps the square-root form (whose steps fall back to K
+   !> where B_f is singular).
+   subroutine choose_form(self)
+      class(fem_core_type), intent(inout) :: self
+      real(dp) :: rcond
+      integer :: info
+      if (.not. self%root_form) return
+      call factor_root(self, self%state%q, self%state%seg, info)
+      if (info /= 0) return
+      call strain_rate_rcond(self%root, rcond)
+      if (rcond > 0) self%root_form = epsilon(1.0_dp)/rcond > self%model%analysis%length_tol
+   end subroutine choose_form
 
    !> Make the system hold the factor of the tangent at the accepted
    !> configuration, unless it does already; info > 0 names the equation where
@@ -83,7 +107,7 @@ contains
       integer :: info, k
       correction = 0
       if (assemble) call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
-      call factor_strain_rate(self%root, info)
+      call timed_root_factor(self, info)
       solved = info == 0
       if (.not. solved) return
       self%root_work = -self%root_work
@@ -102,8 +126,19 @@ contains
       integer, intent(in) :: seg(:)
       integer, intent(out) :: info
       call assemble_strain_rate(self%root, self%mesh, q, seg, .true.)
-      call factor_strain_rate(self%root, info)
+      call timed_root_factor(self, info)
    end subroutine factor_root
+
+   !> The band LU of the assembled B_f, timed as the system's factorisations
+   !> are (the listing's factorisation time is either form's).
+   subroutine timed_root_factor(self, info)
+      class(fem_core_type), intent(inout) :: self
+      integer, intent(out) :: info
+      real(dp) :: clock
+      clock = phase_start(self%system)
+      call factor_strain_rate(self%root, info)
+      call phase_end(self%system, clock, self%counts%seconds_factorisation)
+   end subroutine timed_root_factor
 
    !> The pivot ratio of the factor at the accepted configuration (B_f's on
    !> K's scale in the square-root form, else K's).
