@@ -36,7 +36,7 @@ module fekap_solver_fem
    use fekap_solver_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
       & prepend_cuts_note, model_distance, no_convergence_error
    use fekap_solver_fem_factor, only: refactor_at_accepted, newton_assembly, root_correction, factor_root, &
-      & take_correction, restore_state, choose_form
+      & take_correction, restore_state
    use fekap_solver_fem_predict, only: predict, guard_extrapolation, drive_increment_residual, record_velocity
    use fekap_solver_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
    use fekap_solver_fem_fill, only: check_predictor, interpolate_fill, finish_fill, filled_state, next_output_time
@@ -100,7 +100,6 @@ contains
       else
          call accept(self, self%state%t, self%state%q)
       end if
-      call choose_form(self)
       if (.not. self%loaded) call start_response(self)
       call solve_rates(self)
       call fill_result(self, result)

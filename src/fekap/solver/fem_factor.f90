@@ -18,33 +18,9 @@ module fekap_solver_fem_factor
    private
 
    public :: refactor_at_accepted, newton_assembly, root_correction, factor_root, accepted_pivot
-   public :: accepted_rcond, accepted_response, fill_tangent, take_correction, restore_state, choose_form
+   public :: accepted_rcond, accepted_response, fill_tangent, take_correction, restore_state
 
 contains
-
-   !> Choose the form of the run's linear systems at its start configuration
-   !> (the accepted state), once for the run (the condition references of
-   !> change points and singular configurations are each form's own): the
-   !> square-root form (B_f by band LU) where the normal equations would lose
-   !> the digits the length tolerance asks for, else the K form (the
-   !> in-house band factor of K_ff), the cheaper on a small mechanism: its
-   !> steps may end at the predictor, with the factor Newton made there, and
-   !> its rates need no refinement. The normal equations square B_f's
-   !> condition number (K_ff = B_f^T W B_f), so their solves carry relative
-   !> errors of order kappa(B_f)**2 u; strain_rate_rcond's estimate is
-   !> 1/kappa_1(B_f)**2 (docs/theory.md, "Rates at scale"). A start where
-   !> B_f is singular keeps the square-root form (whose steps fall back to K
-   !> where B_f is singular).
-   subroutine choose_form(self)
-      class(fem_core_type), intent(inout) :: self
-      real(dp) :: rcond
-      integer :: info
-      if (.not. self%root_form) return
-      call factor_root(self, self%state%q, self%state%seg, info)
-      if (info /= 0) return
-      call strain_rate_rcond(self%root, rcond)
-      if (rcond > 0) self%root_form = epsilon(1.0_dp)/rcond > self%model%analysis%length_tol
-   end subroutine choose_form
 
    !> Make the system hold the factor of the tangent at the accepted
    !> configuration, unless it does already; info > 0 names the equation where
