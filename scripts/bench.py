@@ -41,10 +41,22 @@ time, full kinematics, CSV of B and C written.)
 Without --quick the figures also go to docs/performance.md (between the
 bench markers), docs/performance/bench.json and docs/performance/scissor.png.
 
+4. Instructions (scripts/bench_instructions.py): the marginal user-space
+   instructions per configuration of a fixed set of cases under valgrind's
+   callgrind (Example 1 P and P+V+A, with the listing alone and with the
+   deck's CSV files; the scissor lift at N = 100 and 1,000; a dynamics step of
+   the flexible slider-crank), which the machine's load does not move. A full
+   run records them in docs/performance/bench.json ("instructions") and in
+   docs/performance.md; `--check` runs them alone against bench.json and
+   exits 1 when a case rose by more than 5 % (run it before any change to the
+   solver; CI does not, it takes minutes).
+
 Usage: scripts/bench [--quick] [--repeat N] [--no-scissor] [--sizes 10,100,1000,10000]
                      [--dense-sizes 10,100] [--bin FEKAP] [--no-docs] [--dynamics-only]
+                     [--check] [--instructions-only] [--no-instructions]
 
 --dynamics-only runs section 3 alone (and writes only its table); its line is then the last.
+--instructions-only runs section 4 alone and records it (its table and bench.json's "instructions").
 """
 
 from __future__ import annotations
@@ -59,6 +71,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import bench_instructions as bi  # noqa: E402
 import fekap_bench as fb  # noqa: E402
 import scissor  # noqa: E402
 
@@ -356,7 +369,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-docs", action="store_true", help="do not write docs/performance*")
     parser.add_argument("--dynamics-only", action="store_true",
                         help="section 3 only (its table in docs/performance.md); its line is the last")
+    parser.add_argument("--check", action="store_true",
+                        help="instruction counts only, against docs/performance/bench.json: exit 1 on a rise > 5 %%")
+    parser.add_argument("--instructions-only", action="store_true",
+                        help="instruction counts only, recorded in bench.json and docs/performance.md")
+    parser.add_argument("--no-instructions", action="store_true", help="skip the instruction counts")
     args = parser.parse_args(argv)
+    if args.check or args.instructions_only:
+        return instructions_main(args)
     repeat = args.repeat or (1 if args.quick else 9)
     dt = args.dt or (1e-3 if args.quick else 1e-4)
     sizes = [int(x) for x in (args.sizes or ("10,30" if args.quick else "10,100,1000,3000,10000")).split(",") if x]
@@ -414,9 +434,16 @@ def main(argv: list[str] | None = None) -> int:
                       f"{c['factorisation_ms_per_iteration']:.4f}), {c['iterations_per_step']:.2f} its/step, "
                       f"peak RSS {c['rss_mb']:.1f} MB, reading + setup {c['setup_s']:.2f} s; {c['status']}")
 
+    counted = None
+    if not (args.quick or args.no_instructions):
+        print("\nInstructions per configuration (callgrind, marginal: two run lengths)")
+        counted = bi.measure(binary, work)
+
     shutil.rmtree(work, ignore_errors=True)
     if write_docs:
         doc = fb.ROOT / "docs" / "performance.md"
+        if counted:
+            fb.replace_block(doc, "bench-instructions", bi.table(counted))
         fb.replace_block(doc, "bench-machine",
                          f"- nproc: {info['nproc']}\n- CPU: {info['cpu']}\n- compiler: {info['gfortran']}\n"
                          f"- BLAS/LAPACK: {info['blas']}")
@@ -434,6 +461,11 @@ def main(argv: list[str] | None = None) -> int:
         record = {"machine": info, "dt": dt, "repeat": repeat, "aim_iterations": aim,
                   "fourbar": {f"{k[0]}/{k[1]}": v for k, v in cases.items()}, "scissor": scissor_cases,
                   "dynamics": dynamics, "exudyn": exudyn}
+        if counted:
+            record["instructions"] = counted
+        elif BENCH_JSON.is_file() and "instructions" in json.loads(BENCH_JSON.read_text()):
+            # --no-instructions keeps the counts recorded before (--check compares with them).
+            record["instructions"] = json.loads(BENCH_JSON.read_text())["instructions"]
         (fb.ROOT / "docs" / "performance").mkdir(parents=True, exist_ok=True)
         (fb.ROOT / "docs" / "performance" / "bench.json").write_text(json.dumps(record, indent=1) + "\n")
 
@@ -443,6 +475,35 @@ def main(argv: list[str] | None = None) -> int:
           f"us_per_config_positions={cases[('positions', 'no_output')]['analysis_us']:.3f} "
           f"us_per_config_with_output={cases[('full', 'with_output')]['total_us']:.3f} "
           f"iterations_per_step={full['iterations_per_step']:.3f}")
+    return 0
+
+
+BENCH_JSON = fb.ROOT / "docs" / "performance" / "bench.json"
+
+
+def instructions_main(args: argparse.Namespace) -> int:
+    """--check and --instructions-only: the instruction counts alone."""
+    binary = fb.fekap_binary(args.bin)
+    work = fb.scratch_dir("fekap-bench-instructions-")
+    print(f"binary: {binary}")
+    print("Instructions per configuration (callgrind, marginal: two run lengths)")
+    counted = bi.measure(binary, work)
+    shutil.rmtree(work, ignore_errors=True)
+    record = json.loads(BENCH_JSON.read_text()) if BENCH_JSON.is_file() else {}
+    if args.check:
+        recorded = record.get("instructions")
+        if not recorded:
+            print(f"{BENCH_JSON} records no instruction counts: run scripts/bench --instructions-only first")
+            return 1
+        print(f"Against {BENCH_JSON.relative_to(fb.ROOT)} (a rise of more than {bi.CHECK_RISE:.0%} fails):")
+        ok = bi.check(counted, recorded)
+        print("bench check: " + ("passed" if ok else "FAILED"))
+        return 0 if ok else 1
+    if not args.no_docs:
+        record["instructions"] = counted
+        BENCH_JSON.parent.mkdir(parents=True, exist_ok=True)
+        BENCH_JSON.write_text(json.dumps(record, indent=1) + "\n")
+        fb.replace_block(fb.ROOT / "docs" / "performance.md", "bench-instructions", bi.table(counted))
     return 0
 
 

@@ -129,3 +129,28 @@ def test_accuracy_study_short(fekap: Path) -> None:
     summary = [line for line in result.stdout.splitlines() if line.startswith("- energy-momentum 0.8, dt 0.0005")]
     check(len(summary) == 1 and "falls as the bars stiffen" in summary[0], f"the stiffness sweep's summary: {summary}")
 
+
+
+def test_bench_check_verdict_and_record() -> None:
+    """scripts/bench --check's verdict (bench_instructions.check): a case more
+    than 5 % above its recorded instruction count fails, a rise of exactly 5 %
+    or a fall passes; and the committed docs/performance/bench.json records
+    every case of the fixed set, so that --check has something to compare."""
+    import json
+
+    import bench_instructions as bi
+
+    recorded = {"a": {"instructions_per_configuration": 10000}, "b": {"instructions_per_configuration": 10000}}
+    quiet = lambda line: None  # noqa: E731
+
+    def now(count: int) -> dict:
+        return {"instructions_per_configuration": count}
+
+    check(bi.check({"a": now(10500), "b": now(9000)}, recorded, log=quiet), "a 5 % rise and a fall must pass")
+    check(not bi.check({"a": now(10000), "b": now(10501)}, recorded, log=quiet), "a rise above 5 % must fail")
+    record = json.loads((ROOT / "docs" / "performance" / "bench.json").read_text())
+    missing = set(bi.CASES) - set(record.get("instructions", {}))
+    check(not missing, f"bench.json records no instruction count for {sorted(missing)}")
+    for name in bi.CASES:
+        count = record["instructions"][name]["instructions_per_configuration"]
+        check(count > 0, f"{name}: recorded count {count}")

@@ -236,7 +236,11 @@ contains
          call dgbtrs('N', self%n, self%kd, self%kd, size(b, 2), self%f, size(self%f, 1), self%ipiv, &
             & b, size(b, 1), info)
       else if (self%kd <= narrow_band) then
-         call band_ldlt_solve(self%f, self%recip, self%top, self%n, self%kd, b)
+         if (size(b, 2) == 1) then
+            call ldlt_solve_vector(self%f, size(self%f, 1), self%recip, self%top, self%n, self%kd, b(:, 1))
+         else
+            call band_ldlt_solve(self%f, self%recip, self%top, self%n, self%kd, b)
+         end if
       else
          call dpbtrs('U', self%n, self%kd, size(b, 2), self%f, size(self%f, 1), b, size(b, 1), info)
       end if
@@ -279,6 +283,7 @@ contains
             s = 0
             ! The loops of this module run a few times each (kd = 5 in Example 1):
             ! vectorised, their set-up costs more than it saves (docs/performance.md).
+            !GCC$ unroll 1
             !GCC$ novector
             do k = max(top(i), top(j)), i - 1
                s = s + f(oi + k, i)*f(oj + k, j)
@@ -286,6 +291,7 @@ contains
             f(oj + i, j) = a(oj + i, j) - s
          end do
          d = a(kd + 1, j)
+         !GCC$ unroll 1
          !GCC$ novector
          do i = top(j), j - 1
             g = f(oj + i, j)
@@ -320,6 +326,7 @@ contains
          do j = 1, n
             oj = kd + 1 - j
             s = 0
+            !GCC$ unroll 1
             !GCC$ novector
             do i = top(j), j - 1
                s = s + f(oj + i, j)*b(i, k)
@@ -330,6 +337,7 @@ contains
          do j = n, 1, -1
             oj = kd + 1 - j
             t = b(j, k)
+            !GCC$ unroll 1
             !GCC$ novector
             do i = top(j), j - 1
                b(i, k) = b(i, k) - f(oj + i, j)*t
@@ -337,6 +345,42 @@ contains
          end do
       end do
    end subroutine band_ldlt_solve
+
+   !> band_ldlt_solve for one right-hand side, the same operations in the same
+   !> order, with explicit-shape arrays: a small model's step makes several
+   !> solves (Newton, the drive response, the rates, the condition
+   !> estimate's), and the descriptors and the loop over right-hand sides
+   !> cost as much as the arithmetic of 9 equations.
+   pure subroutine ldlt_solve_vector(f, ld, recip, top, n, kd, b)
+      integer, intent(in) :: ld, n, kd
+      real(dp), intent(in) :: f(ld, n), recip(n)
+      integer, intent(in) :: top(n)
+      real(dp), intent(inout) :: b(n)
+      real(dp) :: s, t
+      integer :: i, j, oj
+      do j = 1, n
+         oj = kd + 1 - j
+         s = 0
+         !GCC$ unroll 1
+         !GCC$ novector
+         do i = top(j), j - 1
+            s = s + f(oj + i, j)*b(i)
+         end do
+         b(j) = b(j) - s
+      end do
+      do j = 1, n
+         b(j) = b(j)*recip(j)
+      end do
+      do j = n, 1, -1
+         oj = kd + 1 - j
+         t = b(j)
+         !GCC$ unroll 1
+         !GCC$ novector
+         do i = top(j), j - 1
+            b(i) = b(i) - f(oj + i, j)*t
+         end do
+      end do
+   end subroutine ldlt_solve_vector
 
    !> The pivot of column j of the factor, on the matrix's scale: |U(j,j)| for
    !> LU (and the dense factor), D(j) for U^T D U, U(j,j)^2 for U^T U.
@@ -364,6 +408,17 @@ contains
       integer :: j
       real(dp) :: pivot
       ratio = 1
+      if (.not. self%dense .and. .not. self%is_lu .and. self%kd <= narrow_band) then
+         ! U^T D U: band_column_pivot's D(j), without a call per column.
+         do j = 1, self%n
+            if (abs(self%diag(j)) > 0) then
+               ratio = min(ratio, self%f(self%kd + 1, j)/abs(self%diag(j)))
+            else
+               ratio = 0
+            end if
+         end do
+         return
+      end if
       do j = 1, self%n
          pivot = band_column_pivot(self, j)
          if (abs(self%diag(j)) > 0) then
@@ -390,6 +445,10 @@ contains
       rcond = 0
       if (self%n == 0) then
          rcond = 1
+         return
+      end if
+      if (.not. self%dense .and. .not. self%is_lu .and. self%kd <= narrow_band) then
+         call ldlt_rcond(self, rcond)
          return
       end if
       kd = self%kd
@@ -419,5 +478,122 @@ contains
       end do
       if (est > 0) rcond = (1/anorm)/est
    end subroutine band_rcond
+
+   !> band_rcond of an in-house U^T D U factor (band_ldlt): the same norm and
+   !> the same estimate, Higham's iteration as LAPACK's dlacn2 makes it, step
+   !> by step (the same vectors, sums, maxima and stops in the same order, so
+   !> the same number), with the solves, sums and maxima as loops rather than
+   !> calls to LAPACK and BLAS, whose overheads cost more than the arithmetic
+   !> of a small model's estimate, which every step of a run makes.
+   subroutine ldlt_rcond(self, rcond)
+      type(band_matrix_type), intent(inout) :: self
+      real(dp), intent(out) :: rcond
+      !> dlacn2's limit on its main iterations.
+      integer, parameter :: itmax = 5
+      real(dp) :: anorm, column, est, estold, altsgn
+      integer :: i, j, n, kd, iter, jlast
+      logical :: repeated
+      rcond = 0
+      n = self%n
+      kd = self%kd
+      associate (a => self%a, x => self%cond_work(:, 1), isgn => self%cond_sign)
+         ! ||A||_1 from the upper triangle, within the envelope (the entries
+         ! above it are zero, so the sums are band_rcond's).
+         anorm = 0
+         do j = 1, n
+            column = 0
+            do i = self%top(j), j
+               column = column + abs(a(kd + 1 + i - j, j))
+            end do
+            do i = j + 1, min(n, j + kd)
+               if (self%top(i) <= j) column = column + abs(a(kd + 1 + j - i, i))
+            end do
+            anorm = max(anorm, column)
+         end do
+         if (.not. anorm > 0) return
+         do j = 1, n
+            if (.not. self%f(kd + 1, j) > 0) return
+         end do
+         x(1:n) = 1/real(n, dp)
+         call solve(x)
+         if (n == 1) then
+            est = abs(x(1))
+         else
+            est = asum(x)
+            call signs(x, isgn)
+            call solve(x)
+            j = first_largest(x)
+            iter = 2
+            do
+               x(1:n) = 0
+               x(j) = 1
+               call solve(x)
+               estold = est
+               est = asum(x)
+               repeated = .true.
+               do i = 1, n
+                  if (merge(1, -1, x(i) >= 0) /= isgn(i)) then
+                     repeated = .false.
+                     exit
+                  end if
+               end do
+               ! A repeated sign vector (converged), or no growth (cycling).
+               if (repeated .or. est <= estold) exit
+               call signs(x, isgn)
+               call solve(x)
+               jlast = j
+               j = first_largest(x)
+               if (x(jlast) == abs(x(j)) .or. iter >= itmax) exit
+               iter = iter + 1
+            end do
+            ! The alternating vector: a lower bound that catches what the iteration can miss.
+            altsgn = 1
+            do i = 1, n
+               x(i) = altsgn*(1 + real(i - 1, dp)/real(n - 1, dp))
+               altsgn = -altsgn
+            end do
+            call solve(x)
+            est = max(est, 2*(asum(x)/real(3*n, dp)))
+         end if
+         if (est > 0) rcond = (1/anorm)/est
+      end associate
+   contains
+      subroutine solve(b)
+         real(dp), intent(inout) :: b(:)
+         call ldlt_solve_vector(self%f, size(self%f, 1), self%recip, self%top, n, kd, b(1:n))
+      end subroutine solve
+      !> dasum: the magnitudes summed in order.
+      pure real(dp) function asum(b) result(total)
+         real(dp), intent(in) :: b(:)
+         integer :: k
+         total = 0
+         do k = 1, n
+            total = total + abs(b(k))
+         end do
+      end function asum
+      !> idamax: the first index of the largest magnitude.
+      pure integer function first_largest(b) result(at)
+         real(dp), intent(in) :: b(:)
+         integer :: k
+         at = 1
+         do k = 2, n
+            if (abs(b(k)) > abs(b(at))) at = k
+         end do
+      end function first_largest
+      !> b = sign(b) (+1 at zero) and the signs as integers.
+      pure subroutine signs(b, sgn)
+         real(dp), intent(inout) :: b(:)
+         integer, intent(out) :: sgn(:)
+         integer :: k
+         do k = 1, n
+            if (b(k) >= 0) then
+               b(k) = 1
+            else
+               b(k) = -1
+            end if
+            sgn(k) = nint(b(k))
+         end do
+      end subroutine signs
+   end subroutine ldlt_rcond
 
 end module fekap_assembly_band

@@ -432,7 +432,7 @@ contains
                   ! past collinear is then rejected by the branch-jump check).
                   if (i == 0 .and. .not. self%loaded .and. self%conv%mode /= convergence_paper .and. &
                      & .not. root_solved) then
-                     at_predictor = correction <= predictor_margin*self%conv%length .and. &
+                     at_predictor = correction <= predictor_margin*self%predictor_length .and. &
                         & system%assembled_strain < kg_above .and. &
                         & is_converged(self%conv, residual, r0, increment_residual, correction)
                      if (at_predictor) then

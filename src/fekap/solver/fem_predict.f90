@@ -12,7 +12,8 @@ module fekap_solver_fem_predict
    use fekap_assembly_assemble, only: max_strain
    use fekap_solver_fem_setup, only: set_driven
    use fekap_solver_linear_system, only: drive_load_rhs, apply_response
-   use fekap_solver_predictor, only: extrapolate_history, taylor_predict, prediction_none, prediction_smooth
+   use fekap_solver_predictor, only: extrapolate_history, taylor_predict, prediction_none, prediction_smooth, &
+      & predictor_margin
    use fekap_solver_rates, only: near_singular_drop
    use fekap_solver_fem_state, only: fem_core_type
    use fekap_solver_fem_factor, only: refactor_at_accepted
@@ -36,6 +37,7 @@ contains
       integer :: i, made
       self%smooth_prediction = .false.
       self%guard_pending = .false.
+      self%predictor_length = max(self%conv%length, roundoff_length(self)/predictor_margin)
       associate (state => self%state)
          select case (self%model%analysis%predictor)
          case (predictor_previous)
@@ -44,11 +46,11 @@ contains
             if (state%has_acceleration) then
                call taylor_predict(state%q, state%v, state%a, t - state%t, qt)
             else
-               call extrapolate_history(state%history, t, .false., self%conv%length, self%dof_length, qt, made)
+               call extrapolate_history(state%history, t, .false., self%predictor_length, self%dof_length, qt, made)
                if (made == prediction_none) call tangent_predictor(self, t, qt)
             end if
          case default
-            call extrapolate_history(state%history, t, .true., self%conv%length, self%dof_length, qt, made)
+            call extrapolate_history(state%history, t, .true., self%predictor_length, self%dof_length, qt, made)
             self%smooth_prediction = made == prediction_smooth
             self%guard_pending = made /= prediction_none
             if (made == prediction_none) call tangent_predictor(self, t, qt)
@@ -60,6 +62,22 @@ contains
       call set_driven(self, t, qt)
       self%q_predicted = qt
    end subroutine predict
+
+   !> The round-off of the accepted configuration's dofs in lengths: one unit
+   !> of round-off (epsilon) of the largest |q| times its dof's length
+   !> (rotations times the model size). A predictor can be no closer to the
+   !> solution than that, nor a Newton correction from it smaller: rotations
+   !> grow without bound over a run's revolutions (4 pi after two), and
+   !> predictor_margin times the length tolerance falls below their round-off.
+   real(dp) function roundoff_length(self) result(length)
+      class(fem_core_type), intent(in) :: self
+      integer :: i
+      length = 0
+      do i = 1, self%mesh%ndof
+         length = max(length, abs(self%state%q(i))*self%dof_length(i))
+      end do
+      length = epsilon(1.0_dp)*length
+   end function roundoff_length
 
    !> Extrapolating positions over a large rotation (a quarter turn per step)
    !> distorts the links badly, and Newton from there may find another

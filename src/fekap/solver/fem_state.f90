@@ -119,6 +119,11 @@ module fekap_solver_fem_state
       logical :: guard_pending = .false.
       !> Steps advanced so far.
       integer :: advances = 0
+      !> The length tolerance of the step's predictor (the Adams-Bashforth
+      !> choice and the acceptance at the predictor, see predictor_margin): the
+      !> length tolerance, or the round-off of the dofs over predictor_margin
+      !> where that is larger (fem_predict's roundoff_length).
+      real(dp) :: predictor_length = 0
       !> The strain-rate operator B_f and its factor (see the module header),
       !> and whether the square-root form is used (then factor_current refers
       !> to the factor of the stress-free B_f in root).

@@ -17,7 +17,7 @@ module fekap_solver_linear_system
 
    public :: linear_system_type, new_linear_system, assemble_system, assemble_system_residual, factor_system
    public :: system_pivot, residual_norm, newton_correction, apply_correction, drive_response, drive_load_rhs
-   public :: solve_system, apply_response, assemble_second_derivative_at, system_rcond
+   public :: solve_system, apply_response, assemble_second_derivative_at, system_rcond, phase_start, phase_end
 
    !> Tangent, residual and right-hand side of the free equations.
    type :: linear_system_type
