@@ -105,11 +105,20 @@ def a02_crank_errors(n: int, times, angle, rate) -> dict[str, float]:
             "rate_away": float(np.max(rate_error[away])), "last": float(angle[-1])}
 
 
+def spin_up_hub_angle(times) -> np.ndarray:
+    """The hub's rotation at the times: the spin-up deck's drive table (the
+    natural cubic spline through its knots, as FEKAP drives it). Not links.csv's
+    angle, which is the beam's chord direction and so turns with its bending."""
+    import spin_up_deck
+
+    return np.array([spin_up_deck.table_motion(float(t))[0] for t in np.asarray(times)])
+
+
 def spin_up_tip(outdir: Path, tip: str = "T") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Times and the tip's axial stretch and transverse deflection in the hub's
-    frame (the driven link's rotation, links.csv's angle) of a spin-up run."""
-    points, links = columns(outdir / "points.csv", tip), columns(outdir / "links.csv")
-    return hub_frame(points["t"], points["x"], points["y"], links["angle"])
+    frame (the drive's rotation, spin_up_hub_angle) of a spin-up run."""
+    points = columns(outdir / "points.csv", tip)
+    return hub_frame(points["t"], points["x"], points["y"], spin_up_hub_angle(points["t"]))
 
 
 def hub_frame(times, x, y, angle) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -120,8 +120,8 @@ def run_fekap(elements: int, dt: float, rho_inf: float, t_end: float = T_END, be
     result = fb.run_deck(fb.fekap_binary(), deck, work / "out", "--set", f"dt={dt!r}", "--set", f"t_end={t_end!r}")
     if result["rc"] != 0:
         sys.exit(f"fekap failed ({elements} elements, dt {dt}): {result['stderr']}")
-    points, links = dc.columns(work / "out" / "points.csv", "T"), dc.columns(work / "out" / "links.csv")
-    return {"t": points["t"], "angle": links["angle"], "x": points["x"], "y": points["y"],
+    points = dc.columns(work / "out" / "points.csv", "T")
+    return {"t": points["t"], "angle": dc.spin_up_hub_angle(points["t"]), "x": points["x"], "y": points["y"],
             "cpu": result["summary"].get("time in analysis (s)", math.nan)}
 
 

@@ -703,6 +703,10 @@ contains
    !> deck's tolerance relative to the forces in play in the step
    !> (step_force_scale), its length tolerance times the model size, its
    !> iterations; the round-off floor of the mesh's stiffness as the last resort.
+   !> Divergence is a correction longer than the model sizes of
+   !> divergence_length plus the predictor's own move: a first correction may
+   !> undo a long extrapolation (a step far longer than a stiff mode's period,
+   !> where q0 + h v0 + h^2/2 a0 runs off) without Newton diverging.
    function step_contract(self) result(contract)
       type(dynamic_stepper_type), intent(in) :: self
       type(newton_contract_type) :: contract
@@ -711,7 +715,8 @@ contains
       contract%max_iterations = self%model%analysis%max_iter
       contract%force_scale = step_force_scale(self)
       contract%floor = self%residual_floor
-      contract%divergence = divergence_length*self%model_length
+      contract%divergence = divergence_length*self%model_length + &
+         & maxval(abs(self%qt - self%state%q)*self%dof_length)
    end function step_contract
 
    !> The forces in play in a step: the largest Euclidean norm (over all
