@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Instruction counts of FEKAP's fixed benchmark cases (valgrind's callgrind):
 the machine's load cannot move them, so they catch a regression that timings
 on a shared machine would drown.
