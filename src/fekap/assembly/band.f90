@@ -308,9 +308,7 @@ contains
    end subroutine band_ldlt
 
    !> Solve U^T D U x = b in place with the factor of band_ldlt, column by
-   !> column of b: U^T y = b by dot products down the columns of U, then
-   !> U x = D^-1 y by columns of U, both within the envelope top. With U's
-   !> unit diagonal D^-1 is a product by the kept reciprocals, off the chain.
+   !> column of b (ldlt_solve_vector).
    pure subroutine band_ldlt_solve(f, recip, top, n, kd, b)
       real(dp), contiguous, intent(in) :: f(:, :)
       !> 1 / D(j), from band_ldlt.
@@ -320,37 +318,19 @@ contains
       integer, intent(in) :: n, kd
       !> Right-hand sides on entry (columns), solutions on return.
       real(dp), contiguous, intent(inout) :: b(:, :)
-      real(dp) :: s, t
-      integer :: i, j, k, oj
+      integer :: k
       do k = 1, size(b, 2)
-         do j = 1, n
-            oj = kd + 1 - j
-            s = 0
-            !GCC$ unroll 1
-            !GCC$ novector
-            do i = top(j), j - 1
-               s = s + f(oj + i, j)*b(i, k)
-            end do
-            b(j, k) = b(j, k) - s
-         end do
-         b(1:n, k) = b(1:n, k)*recip(1:n)
-         do j = n, 1, -1
-            oj = kd + 1 - j
-            t = b(j, k)
-            !GCC$ unroll 1
-            !GCC$ novector
-            do i = top(j), j - 1
-               b(i, k) = b(i, k) - f(oj + i, j)*t
-            end do
-         end do
+         call ldlt_solve_vector(f, size(f, 1), recip, top, n, kd, b(:, k))
       end do
    end subroutine band_ldlt_solve
 
-   !> band_ldlt_solve for one right-hand side, the same operations in the same
-   !> order, with explicit-shape arrays: a small model's step makes several
-   !> solves (Newton, the drive response, the rates, the condition
-   !> estimate's), and the descriptors and the loop over right-hand sides
-   !> cost as much as the arithmetic of 9 equations.
+   !> Solve U^T D U x = b in place for one right-hand side: U^T y = b by dot
+   !> products down the columns of U, then U x = D^-1 y by columns of U, both
+   !> within the envelope top. With U's unit diagonal D^-1 is a product by the
+   !> kept reciprocals, off the chain. Explicit-shape arrays: a small model's
+   !> step makes several solves (Newton, the drive response, the rates, the
+   !> condition estimate's), and array descriptors would cost as much as the
+   !> arithmetic of 9 equations.
    pure subroutine ldlt_solve_vector(f, ld, recip, top, n, kd, b)
       integer, intent(in) :: ld, n, kd
       real(dp), intent(in) :: f(ld, n), recip(n)

@@ -252,13 +252,8 @@ contains
             exit
          end if
          if (contract%test == test_solved_from .and. trusted .and. correction <= contract%length) then
-            if (r <= contract%tolerance*contract%force_scale) then
-               report%stopped = stop_converged
-               exit
-            else if (r <= contract%floor) then
-               report%stopped = stop_at_floor
-               exit
-            end if
+            report%stopped = accepted(contract, r)
+            if (report%stopped /= 0) exit
          end if
       end do
       if (.not. report%converged()) call analysis_error(error, stop_text(report))
@@ -286,18 +281,27 @@ contains
                return
             end if
             if (report%iterations > 0 .and. trusted .and. report%last_correction <= contract%length) then
-               if (r <= contract%tolerance*contract%force_scale) then
-                  report%stopped = stop_converged
-                  return
-               else if (r <= contract%floor) then
-                  report%stopped = stop_at_floor
-                  return
-               end if
+               report%stopped = accepted(contract, r)
+               if (report%stopped /= 0) return
             end if
          end select
          if (report%iterations >= contract%max_iterations) report%stopped = stop_spent
       end subroutine test_iterate
    end subroutine newton_solve
+
+   !> The residual test of an iterate whose correction passed the length
+   !> test: converged below the tolerance of the forces in play, else at the
+   !> round-off floor as the last resort, else not (0).
+   pure integer function accepted(contract, r) result(stopped)
+      type(newton_contract_type), intent(in) :: contract
+      real(dp), intent(in) :: r
+      stopped = 0
+      if (r <= contract%tolerance*contract%force_scale) then
+         stopped = stop_converged
+      else if (r <= contract%floor) then
+         stopped = stop_at_floor
+      end if
+   end function accepted
 
    !> Whether the solve converged (at the tolerance, or at the round-off floor).
    pure logical function report_converged(self)
