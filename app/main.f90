@@ -8,16 +8,16 @@ program fekap_main
       & effects_dynamics, effects_kinematics
    use fekap_deck, only: read_deck
    use fekap_model_effects, only: check_effects_request, planned_effects
-   use fekap_effects_reaction_stepper, only: reaction_stepper_type, new_reaction_stepper
-   use fekap_effects_free_motion, only: check_free_motion
-   use fekap_solver_determinacy, only: check_determined
-   use fekap_effects_dynamic_stepper, only: dynamic_stepper_type, new_dynamic_stepper, energy_names
-   use fekap_solver_stepper, only: stepper_type
-   use fekap_solver_fem, only: fem_stepper_type, new_fem_stepper
+   use fekap_reactions_reaction_stepper, only: reaction_stepper_type, new_reaction_stepper
+   use fekap_dynamics_free_motion, only: check_free_motion
+   use fekap_fem_determinacy, only: check_determined
+   use fekap_dynamics_dynamic_stepper, only: dynamic_stepper_type, new_dynamic_stepper, energy_names
+   use fekap_stepping_stepper, only: stepper_type
+   use fekap_fem, only: fem_stepper_type, new_fem_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
       & new_cartesian_stepper
    use fekap_stepping_interrupt, only: catch_interrupts, interrupt_signal, interrupt_reads
-   use fekap_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
+   use fekap_driver_run, only: run_units_type, run_analysis, step_count, no_unit, open_replace
    use fekap_output_csv, only: write_mesh_csv, write_mechanism_csv
    use fekap_strings, only: es_text
    use fekap_output_directory, only: prepare_output_directory, make_directory, output_plan_type, add_run_file

@@ -9,7 +9,7 @@ module classical_models
       & find_node, find_link, dof_x, dof_y, dof_rot, joint_pin_in_slot, joint_prismatic
    use fekap_model_drive_law, only: law_type, new_rate_law, new_harmonic_law
    use fekap_model_results, only: step_result_type
-   use fekap_solver_stepper, only: stepper_type
+   use fekap_stepping_stepper, only: stepper_type
    implicit none
    private
 

@@ -1,6 +1,6 @@
 """The code's own checks: the Fortran linter (fortitude, pinned in
 scripts/setup; its settings, and each rule left out with the reason, in
-fpm.toml's [extra.fortitude]) finds nothing in src/ and app/; docs/theory.md's
+fpm.toml's [extra.fortitude]) finds nothing in src/ and app/; docs/architecture.md's
 map of modules matches the modules; no module is over 600 lines without a
 reason at its top.
 
@@ -32,7 +32,7 @@ def test_fortitude_finds_nothing():
 
 
 def test_module_map_is_current():
-    """docs/theory.md's map of modules is what scripts/module_map.py makes of the code."""
+    """docs/architecture.md's map of modules is what scripts/module_map.py makes of the code."""
     r = subprocess.run([sys.executable, "scripts/module_map.py", "--check"], cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
 

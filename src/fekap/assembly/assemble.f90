@@ -8,7 +8,7 @@ module fekap_assembly_assemble
    use fekap_kinds, only: dp
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type, slide_type
-   use fekap_assembly_band, only: band_matrix_type
+   use fekap_linalg_band, only: band_matrix_type
    use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain, max_gauss
    use fekap_assembly_tracking, only: slide_position
    use fekap_contact_slideline, only: slide_force, slide_second_derivative, slide_tie_force, &

@@ -27,7 +27,7 @@ module fekap_assembly_strain_rate
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
    use fekap_assembly_assemble, only: gather
-   use fekap_assembly_lapack, only: band_lu_factor, dgbtrs, dlacn2
+   use fekap_linalg_lapack, only: band_lu_factor, dgbtrs, dlacn2
    implicit none
    private
 

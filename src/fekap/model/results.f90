@@ -51,13 +51,13 @@ module fekap_model_results
       integer, allocatable :: cells(:, :), cell_link(:)
       real(dp), allocatable :: cell_force(:, :)
       !> Kinetostatics (filled only when the run simulates it): the
-      !> reactions (fx, fy, m) of each row (see fekap_effects_kinetostatics:
+      !> reactions (fx, fy, m) of each row (see fekap_reactions_kinetostatics:
       !> drives, supports, then both ends of every link), and whether they are
       !> known at this step (not at a singular configuration).
       logical :: has_reactions = .false.
       real(dp), allocatable :: reactions(:, :)
       !> Dynamics (filled only when the run simulates it): energies, work and
-      !> momenta (see fekap_effects_dynamic_stepper's energy_names).
+      !> momenta (see fekap_dynamics_dynamic_stepper's energy_names).
       logical :: has_energy = .false.
       real(dp), allocatable :: energy(:)
       !> Kinetostatics with OUTPut deflection: the elastic deflection (ux, uy)

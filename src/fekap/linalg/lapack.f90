@@ -1,0 +1,172 @@
+!> Explicit interfaces to the LAPACK routines FEKAP calls, and thin
+!> assumed-shape wrappers of the dense ones that derive the leading dimensions
+!> from the arrays.
+module fekap_linalg_lapack
+   use fekap_kinds, only: dp
+   implicit none
+   private
+
+   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dgeqp3, dlacn2
+   public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
+   public :: band_lu_factor, band_lu_solve
+
+   interface
+      !> Cholesky factorisation of a symmetric positive definite band matrix.
+      pure subroutine dpbtrf(uplo, n, kd, ab, ldab, info)
+         import :: dp
+         implicit none
+         character, intent(in) :: uplo
+         integer, intent(in) :: n, kd, ldab
+         real(dp), intent(inout) :: ab(ldab, *)
+         integer, intent(out) :: info
+      end subroutine dpbtrf
+
+      !> Solve with the factor of dpbtrf.
+      pure subroutine dpbtrs(uplo, n, kd, nrhs, ab, ldab, b, ldb, info)
+         import :: dp
+         implicit none
+         character, intent(in) :: uplo
+         integer, intent(in) :: n, kd, nrhs, ldab, ldb
+         real(dp), intent(in) :: ab(ldab, *)
+         real(dp), intent(inout) :: b(ldb, *)
+         integer, intent(out) :: info
+      end subroutine dpbtrs
+
+      !> LU factorisation with partial pivoting of a general band matrix.
+      pure subroutine dgbtrf(m, n, kl, ku, ab, ldab, ipiv, info)
+         import :: dp
+         implicit none
+         integer, intent(in) :: m, n, kl, ku, ldab
+         real(dp), intent(inout) :: ab(ldab, *)
+         integer, intent(out) :: ipiv(*)
+         integer, intent(out) :: info
+      end subroutine dgbtrf
+
+      !> Solve with the factor of dgbtrf.
+      pure subroutine dgbtrs(trans, n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
+         import :: dp
+         implicit none
+         character, intent(in) :: trans
+         integer, intent(in) :: n, kl, ku, nrhs, ldab, ldb
+         real(dp), intent(in) :: ab(ldab, *)
+         integer, intent(in) :: ipiv(*)
+         real(dp), intent(inout) :: b(ldb, *)
+         integer, intent(out) :: info
+      end subroutine dgbtrs
+
+      !> LU factorisation with partial pivoting of a general (dense) matrix.
+      pure subroutine dgetrf(m, n, a, lda, ipiv, info)
+         import :: dp
+         implicit none
+         integer, intent(in) :: m, n, lda
+         real(dp), intent(inout) :: a(lda, *)
+         integer, intent(out) :: ipiv(*)
+         integer, intent(out) :: info
+      end subroutine dgetrf
+
+      !> Solve with the factor of dgetrf.
+      pure subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+         import :: dp
+         implicit none
+         character, intent(in) :: trans
+         integer, intent(in) :: n, nrhs, lda, ldb
+         real(dp), intent(in) :: a(lda, *)
+         integer, intent(in) :: ipiv(*)
+         real(dp), intent(inout) :: b(ldb, *)
+         integer, intent(out) :: info
+      end subroutine dgetrs
+
+      !> QR factorisation with column pivoting (rank-revealing).
+      subroutine dgeqp3(m, n, a, lda, jpvt, tau, work, lwork, info)
+         import :: dp
+         implicit none
+         integer, intent(in) :: m, n, lda, lwork
+         real(dp), intent(inout) :: a(lda, *)
+         integer, intent(inout) :: jpvt(*)
+         real(dp), intent(out) :: tau(*)
+         real(dp), intent(inout) :: work(*)
+         integer, intent(out) :: info
+      end subroutine dgeqp3
+
+      !> Estimate of the 1-norm of a matrix by reverse communication (Hager and
+      !> Higham; the estimator inside dpbcon, dgbcon and dgecon): call with kase
+      !> = 0, then, while kase /= 0, overwrite x by A x (kase = 1) or A^T x
+      !> (kase = 2) and call again; est is the estimate.
+      pure subroutine dlacn2(n, v, x, isgn, est, kase, isave)
+         import :: dp
+         implicit none
+         integer, intent(in) :: n
+         real(dp), intent(inout) :: v(*), x(*)
+         integer, intent(inout) :: isgn(*)
+         real(dp), intent(inout) :: est
+         integer, intent(inout) :: kase
+         integer, intent(inout) :: isave(3)
+      end subroutine dlacn2
+   end interface
+
+contains
+
+   !> LU factorisation with partial pivoting of the square matrix a (dgetrf).
+   !> info > 0: U(info, info) is exactly zero.
+   subroutine dense_lu_factor(a, ipiv, info)
+      !> The matrix on entry, its L and U factors on return.
+      real(dp), contiguous, intent(inout) :: a(:, :)
+      !> Row interchanges.
+      integer, contiguous, intent(out) :: ipiv(:)
+      integer, intent(out) :: info
+      call dgetrf(size(a, 1), size(a, 2), a, max(1, size(a, 1)), ipiv, info)
+   end subroutine dense_lu_factor
+
+   !> Solve a x = b with the factors from dense_lu_factor (dgetrs); b becomes x.
+   subroutine dense_lu_solve(a, ipiv, b, info)
+      real(dp), contiguous, intent(in) :: a(:, :)
+      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp), contiguous, intent(inout) :: b(:)
+      integer, intent(out) :: info
+      call dgetrs('N', size(a, 1), 1, a, max(1, size(a, 1)), ipiv, b, max(1, size(b)), info)
+   end subroutine dense_lu_solve
+
+   !> LU factorisation with partial pivoting of the square band matrix in ab
+   !> (dgbtrf): kl subdiagonals, ku superdiagonals, A(i, j) at
+   !> ab(kl + ku + 1 + i - j, j) with rows 1:kl of ab free for the fill.
+   !> info > 0: U(info, info) is exactly zero.
+   subroutine band_lu_factor(ab, kl, ku, ipiv, info)
+      !> (2 kl + ku + 1, n): the matrix on entry, its factors on return.
+      real(dp), contiguous, intent(inout) :: ab(:, :)
+      integer, intent(in) :: kl, ku
+      integer, contiguous, intent(out) :: ipiv(:)
+      integer, intent(out) :: info
+      call dgbtrf(size(ab, 2), size(ab, 2), kl, ku, ab, size(ab, 1), ipiv, info)
+   end subroutine band_lu_factor
+
+   !> Solve A x = b with the factors from band_lu_factor (dgbtrs); b becomes x.
+   subroutine band_lu_solve(ab, kl, ku, ipiv, b, info)
+      real(dp), contiguous, intent(in) :: ab(:, :)
+      integer, intent(in) :: kl, ku
+      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp), contiguous, intent(inout) :: b(:)
+      integer, intent(out) :: info
+      call dgbtrs('N', size(ab, 2), kl, ku, 1, ab, size(ab, 1), ipiv, b, max(1, size(b)), info)
+   end subroutine band_lu_solve
+
+   !> QR factorisation with column pivoting of a (dgeqp3): a P = Q R.
+   !> On return the upper triangle of a holds R and jpvt the column order.
+   subroutine dense_pivoted_qr(a, jpvt, info)
+      real(dp), contiguous, intent(inout) :: a(:, :)
+      !> Column k of a P is column jpvt(k) of the original a.
+      integer, contiguous, intent(out) :: jpvt(:)
+      integer, intent(out) :: info
+      real(dp), allocatable :: tau(:), work(:)
+      real(dp) :: query(1)
+      integer :: m, n
+      m = size(a, 1)
+      n = size(a, 2)
+      jpvt = 0
+      allocate (tau(max(1, min(m, n))))
+      call dgeqp3(m, n, a, max(1, m), jpvt, tau, query, -1, info)
+      if (info /= 0) return
+      allocate (work(max(1, int(query(1)))))
+      call dgeqp3(m, n, a, max(1, m), jpvt, tau, work, size(work), info)
+   end subroutine dense_pivoted_qr
+
+end module fekap_linalg_lapack

@@ -1,0 +1,154 @@
+!> Change points of the FEM: configurations where the tangent loses rank
+!> (every bar of a parallelogram chain horizontal, the double crank's
+!> collinear positions). Newton does not iterate there: the stepper detects
+!> a near-singular tangent at the predictor by its condition estimate
+!> (change_verdict), solves the next output time from the last regular state
+!> as one double step, and fills the skipped row for output only from its two
+!> regular neighbours (hermite_fill), its positions then corrected in the
+!> range of the tangent (correct_fill). docs/hard-cases.md (Change points)
+!> has the measurements behind the thresholds.
+module fekap_fem_change_point
+   use fekap_kinds, only: dp
+   use fekap_model_work, only: work_counts_type
+   use fekap_assembly_mesh, only: mesh_type
+   use fekap_fem_linear_system, only: linear_system_type, assemble_system, assemble_system_residual, &
+      & factor_system, residual_norm, newton_correction, apply_correction
+   implicit none
+   private
+
+   public :: change_verdict, response_trusted, hermite_fill, correct_fill, fill_order
+
+   !> A tangent whose reciprocal condition number is below change_drop times
+   !> the largest of the run's accepted configurations is near singular.
+   !> Measured at the predictors (docs/hard-cases.md): the A02 chains' steps
+   !> landing on a change point from 1e-23 (dt = 0.01) to 1.5e-5 (dt = 1/12)
+   !> of the run's best, every other step of the A02 grid and of the decks
+   !> at 8e-3 or more (lambda_min of K goes like the square of the distance
+   !> to the change point).
+   real(dp), parameter, public :: change_drop = 1.0e-4_dp
+   !> A filled row whose tangent's reciprocal condition number is below
+   !> rates_drop times the run's best is singular: its rates are left out.
+   !> Above it (a row near, not on, a change point) they are solved there.
+   real(dp), parameter, public :: rates_drop = 1.0e-10_dp
+   !> The branch-jump check trusts the drive response of a factor whose
+   !> reciprocal condition number is at least response_drop times the run's
+   !> best: the square of the 1e-3 that the study found on B, since lambda_min
+   !> of K goes like sigma_min(B)**2. Below it (at and next to a change point)
+   !> the response's size and signs are arbitrary. Smaller than change_drop:
+   !> the double crank at dt = 2e-4 has 2e-5 one step from its collinear
+   !> configuration, where the response is still right.
+   real(dp), parameter, public :: response_drop = 1.0e-6_dp
+   !> Verdicts of change_verdict.
+   integer, parameter, public :: change_regular = 0, change_near_singular = 1
+   !> Shift of the filled row's position correction, relative to the largest
+   !> diagonal entry of the tangent (Levenberg-Marquardt): the residual has
+   !> no component in the tangent's kernel, so the shift leaves the range
+   !> correction exact, and makes the singular tangent factorable.
+   real(dp), parameter, public :: fill_shift = 1.0e-8_dp
+   !> Corrections of a filled row's positions at most.
+   integer, parameter, public :: fill_iterations = 4
+
+contains
+
+   !> Whether a tangent with reciprocal condition number rcond is near
+   !> singular against the largest of the run so far, reference (a run
+   !> without a reference yet has nothing to compare with: regular, unless
+   !> the factor failed, rcond = 0).
+   pure integer function change_verdict(rcond, reference) result(verdict)
+      real(dp), intent(in) :: rcond, reference
+      verdict = change_regular
+      if (.not. rcond > 0) then
+         verdict = change_near_singular
+      else if (rcond < change_drop*reference) then
+         verdict = change_near_singular
+      end if
+   end function change_verdict
+
+   !> Whether the drive response of a factor with reciprocal condition number
+   !> rcond is trusted against the run's best so far, reference.
+   pure logical function response_trusted(rcond, reference) result(trusted)
+      real(dp), intent(in) :: rcond, reference
+      trusted = rcond > 0 .and. rcond >= response_drop*reference
+   end function response_trusted
+
+   !> The order of the two-sided interpolation that the neighbours' data
+   !> allow: 5 (quintic Hermite) with velocities and accelerations at both,
+   !> 3 (cubic Hermite) with velocities, else 1 (linear).
+   pure integer function fill_order(velocities, accelerations) result(order)
+      logical, intent(in) :: velocities, accelerations
+      order = 1
+      if (velocities) order = 3
+      if (velocities .and. accelerations) order = 5
+   end function fill_order
+
+   !> q(t) by two-sided Hermite interpolation between (t0, q0, v0, a0) and
+   !> (t1, q1, v1, a1), t0 < t < t1, of the given order (fill_order): exact for
+   !> polynomials of that degree. Rates unused by the order may be anything.
+   pure subroutine hermite_fill(order, t0, q0, v0, a0, t1, q1, v1, a1, t, q)
+      integer, intent(in) :: order
+      real(dp), intent(in) :: t0, t1, t
+      real(dp), contiguous, intent(in) :: q0(:), v0(:), a0(:), q1(:), v1(:), a1(:)
+      real(dp), contiguous, intent(out) :: q(:)
+      real(dp) :: h, s, s2, s3, s4, s5
+      h = t1 - t0
+      s = (t - t0)/h
+      s2 = s*s
+      s3 = s2*s
+      s4 = s3*s
+      s5 = s4*s
+      select case (order)
+      case (5)
+         q = (1 - 10*s3 + 15*s4 - 6*s5)*q0 + (10*s3 - 15*s4 + 6*s5)*q1 &
+            & + h*((s - 6*s3 + 8*s4 - 3*s5)*v0 + (-4*s3 + 7*s4 - 3*s5)*v1) &
+            & + h*h*((s2 - 3*s3 + 3*s4 - s5)/2*a0 + (s3 - 2*s4 + s5)/2*a1)
+      case (3)
+         q = (2*s3 - 3*s2 + 1)*q0 + (3*s2 - 2*s3)*q1 + h*((s3 - 2*s2 + s)*v0 + (s3 - s2)*v1)
+      case default
+         q = (1 - s)*q0 + s*q1
+      end select
+   end subroutine hermite_fill
+
+   !> Correct the filled positions q at time t (driven and fixed dofs already
+   !> set) onto the mechanism's configurations by Newton with the shifted
+   !> material tangent K + mu I, mu = shift max diag K (shift = fill_shift on
+   !> a singular tangent; 0, plain Newton, where it is regular enough) (at most
+   !> fill_iterations corrections, until one is below `length`, each dof
+   !> weighted by dof_length). Returns the corrections taken, the last
+   !> correction's length and the residual at the corrected q. The system is
+   !> left holding the shifted factor (not the tangent at q).
+   subroutine correct_fill(system, mesh, q, t, seg, dof_length, length, shift, iterations, correction, residual, &
+      & counts)
+      type(linear_system_type), intent(inout) :: system
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(inout) :: q(:)
+      real(dp), intent(in) :: t, length, shift
+      integer, intent(in) :: seg(:)
+      real(dp), contiguous, intent(in) :: dof_length(:)
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: correction, residual
+      type(work_counts_type), intent(inout) :: counts
+      real(dp) :: mu
+      integer :: info
+      iterations = 0
+      correction = huge(1.0_dp)
+      do while (iterations < fill_iterations)
+         call assemble_system(system, mesh, q, t, seg, huge(1.0_dp), counts)
+         residual = residual_norm(system, mesh)
+         associate (diag => system%kff%a(system%kff%kd + 1, :))
+            if (size(diag) == 0) exit
+            mu = shift*maxval(diag)
+            diag = diag + mu
+         end associate
+         call factor_system(system, info, counts)
+         if (info /= 0) exit
+         call newton_correction(system, mesh, dof_length, correction, counts)
+         call apply_correction(system, mesh, q)
+         iterations = iterations + 1
+         counts%iterations = counts%iterations + 1
+         if (correction <= length) exit
+      end do
+      call assemble_system_residual(system, mesh, q, t, seg, counts)
+      residual = residual_norm(system, mesh)
+   end subroutine correct_fill
+
+end module fekap_fem_change_point

@@ -1,0 +1,598 @@
+!> The paper's finite element method as a stepper: per step, advance the
+!> drives, predict, solve P(q) = 0 on the free dofs by Newton-Raphson with the
+!> symmetric band tangent, check that the converged configuration is a
+!> mechanism configuration (every element unstrained, every slave on its
+!> line, no assembly-mode jump), then solve for velocities (47) and
+!> accelerations (49) with the tangent of the converged configuration. A
+!> step that fails is cut in halves (bounded) and retried.
+!>
+!> This module composes the parts, each a module of its own: setup
+!> (fem_setup, shared with dynamics), data (fem_state), the tangent at the
+!> accepted configuration and the square-root form of exactly constrained
+!> models (fem_factor; docs/theory.md, "Rates at scale"), the predictor
+!> (fem_predict), the checks and rates of a converged configuration
+!> (fem_converged), change points (fem_fill), the step loop shared with the
+!> classical methods (step_control's advance_by_cuts). What stays here is the
+!> Newton iteration of a step (solve_step), the try of a step with the
+!> step-doubling verification that the branch check asks for, and the step
+!> over a change point: they call one another recursively.
+module fekap_fem
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, analysis_error
+   use fekap_model, only: model_type, predictor_previous, predictor_taylor, convergence_paper
+   use fekap_model_results, only: step_result_type
+   use fekap_assembly_mesh, only: describe_dof
+   use fekap_assembly_tracking, only: relocate
+   use fekap_stepping_stepper, only: stepper_type, clock_seconds, phase_timed
+   use fekap_fem_setup, only: start_configuration
+   use fekap_fem_convergence, only: is_converged, converged_by_estimate, estimate_margin, divergence_length
+   use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, factor_system, system_pivot, &
+      & residual_norm, newton_correction
+   use fekap_stepping_predictor, only: predictor_margin
+   use fekap_fem_rates, only: near_singular_drop
+   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
+      & try_ended
+   use fekap_stepping_interrupt, only: interrupt_error
+   use fekap_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
+      & prepend_cuts_note, model_distance, no_convergence_error
+   use fekap_fem_factor, only: refactor_at_accepted, newton_assembly, root_correction, factor_root, &
+      & take_correction, restore_state
+   use fekap_fem_predict, only: predict, guard_extrapolation, drive_increment_residual, record_velocity
+   use fekap_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
+   use fekap_fem_fill, only: check_predictor, interpolate_fill, finish_fill, filled_state, next_output_time
+   implicit none
+   private
+
+   public :: fem_stepper_type, new_fem_stepper, fem_state_type
+
+   !> Newton's tangent leaves out the geometric stiffness at Gauss points
+   !> strained less than this (see solve_step).
+   real(dp), parameter :: geometric_strain = 3.0e-3_dp
+   !> Iterations in a row with the residual below its floor after which
+   !> Newton has stalled at round-off.
+   integer, parameter :: stall_iterations = 3
+   !> A verifying pair of half steps contradicts its step when their results
+   !> differ by more than verify_agreement model sizes (or the admissible
+   !> strain, if larger); see verify_step.
+   real(dp), parameter :: verify_agreement = 1.0e-6_dp
+
+   !> The FEM stepper: the composition of the parts (see the module header)
+   type, extends(fem_core_type) :: fem_stepper_type
+      !> Residual of the last accepted try (see advance_to).
+      real(dp) :: try_residual = 0
+   contains
+      procedure :: start => fem_start
+      procedure :: advance => fem_advance
+   end type fem_stepper_type
+
+contains
+
+   !> Build the mesh, the equation numbering and all storage for a validated model.
+   subroutine new_fem_stepper(self, model)
+      type(fem_stepper_type), intent(out) :: self
+      type(model_type), intent(in) :: model
+      call new_fem_core(self, model)
+   end subroutine new_fem_stepper
+
+   !> The initial configuration (solved for the initial load, if loaded), and
+   !> its velocities and accelerations when asked for.
+   subroutine fem_start(self, result, error)
+      class(fem_stepper_type), intent(inout) :: self
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: clock
+      clock = clock_seconds()
+      self%system%timing = .true.
+      call start_configuration(self, self%state%t, self%state%q, self%seg, error)
+      if (allocated(error)) return
+      self%state%seg = self%seg
+      self%state%history%filled = 0
+      self%factor_current = .false.
+      self%state%has_jump_response = .false.
+      self%has_ahead = .false.
+      result%iterations = 0
+      call assemble_system_residual(self%system, self%mesh, self%state%q, self%state%t, self%seg, self%counts)
+      result%residual = residual_norm(self%system, self%mesh)
+      if (self%loaded .and. result%residual > self%conv%residual_floor) then
+         ! Loads at t_start /= 0: find the loaded configuration first.
+         call solve_step(self, self%state%t, result%iterations, result%residual, error)
+         if (allocated(error)) return
+      else
+         call accept(self, self%state%t, self%state%q)
+      end if
+      if (.not. self%loaded) call start_response(self)
+      call solve_rates(self)
+      call fill_result(self, result)
+      self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
+   end subroutine fem_start
+
+   !> Advance to time t, cutting the step in halves when Newton fails or
+   !> converges to an inadmissible configuration, and verifying suspect steps
+   !> (see advance_to); then the rates and the listing note.
+   subroutine fem_advance(self, t, result, error)
+      class(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      type(step_cuts_type) :: cuts
+      real(dp) :: clock
+      logical :: filled
+      self%advances = self%advances + 1
+      ! The phases are timed on a sample of the steps (and at the start); the
+      ! summary scales them to the run (see phase_seconds).
+      self%system%timing = phase_timed(self%advances)
+      if (self%system%timing) clock = clock_seconds()
+      if (self%has_ahead) then
+         self%has_ahead = .false.
+         if (t == self%ahead%t) then
+            ! The step over a change point solved this time already (with its rates).
+            call restore_state(self, self%ahead)
+            result%iterations = self%ahead_iterations
+            result%residual = self%ahead_residual
+            self%last_cuts = self%ahead_cuts
+            result%cuts = self%last_cuts
+            call fill_result(self, result)
+            if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
+            return
+         end if
+         ! Another time: from the regular state before the change point.
+         call restore_state(self, self%before_change)
+      end if
+      ! The paper's `previous` predictor is the last configuration: its tangent
+      ! says nothing about the new time's.
+      self%detect_change = .not. self%loaded .and. self%model%analysis%predictor /= predictor_previous
+      self%change_found = .false.
+      call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
+      self%detect_change = .false.
+      if (allocated(error)) return
+      if (self%change_found) then
+         call step_over(self, t, result, cuts, filled, error)
+         if (allocated(error)) return
+         if (filled) then
+            if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
+            return
+         end if
+      end if
+      self%last_cuts = cuts%cuts
+      result%cuts = self%last_cuts
+      call solve_rates(self)
+      ! The listing says why the step was cut (the first and the last rejection).
+      call prepend_cuts_note(self%state%note, cuts)
+      call fill_result(self, result)
+      if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
+   end subroutine fem_advance
+
+   !> The step onto time t found its predictor's tangent near singular (a
+   !> change point; detected in solve_step): instead of iterating there, solve
+   !> the next output time from the last regular state as one double step
+   !> (the usual predictor, Newton, branch-jump check and rates), keep that
+   !> state for the next advance, and fill the row at t for output only, from
+   !> both sides: positions by Hermite interpolation through the two regular
+   !> states (quintic with their velocities and accelerations, cubic with
+   !> velocities), corrected onto the mechanism (correct_fill). The filled
+   !> row never enters the predictor's history. Its rates are left out: at a
+   !> bifurcation they are fixed only by the second-order (bifurcation)
+   !> equations, which this does not solve (docs/hard-cases.md). Where the
+   !> tangent at the filled configuration is regular enough (near, not on, a
+   !> change point), the row is solved as without the detection instead
+   !> (filled false), its interpolation being no closer than a nearby branch;
+   !> and so it is if the double step fails.
+   subroutine step_over(self, t, result, cuts, filled, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(step_result_type), intent(inout) :: result
+      type(step_cuts_type), intent(out) :: cuts
+      logical, intent(out) :: filled
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: over_error, near_error
+      type(step_cuts_type) :: over_cuts
+      real(dp), allocatable :: q_fill(:)
+      real(dp) :: rcond, rcond_fill, residual
+      integer :: its, order, info
+      logical :: singular
+      filled = .false.
+      rcond = self%predictor_rcond
+      self%change_found = .false.
+      ! The tangent at the accepted state again (the drive increment's residual scale).
+      self%factor_current = .false.
+      call refactor_at_accepted(self, info)
+      self%before_change = self%state
+      call advance_to(self, next_output_time(self, t), 0, its, residual, over_cuts, over_error)
+      if (allocated(over_error) .or. self%change_found) then
+         ! The double step failed: solve at t itself, as without the detection.
+         self%change_found = .false.
+         call restore_state(self, self%before_change)
+         call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
+         return
+      end if
+      call solve_rates(self)
+      call prepend_cuts_note(self%state%note, over_cuts)
+      self%ahead = self%state
+      self%ahead_iterations = its
+      self%ahead_residual = residual
+      self%ahead_cuts = over_cuts%cuts
+      self%has_ahead = .true.
+      call interpolate_fill(self, t, q_fill, its, residual, order, rcond_fill, singular)
+      if (.not. singular) then
+         ! Near, not on, a change point (the tangent at the filled configuration
+         ! is regular enough): solve the row itself as without the detection,
+         ! from the state before it; the state at the next time stays ahead.
+         call restore_state(self, self%before_change)
+         call advance_to(self, t, 0, result%iterations, result%residual, cuts, near_error)
+         if (.not. allocated(near_error)) then
+            self%change_found = .false.
+            return
+         end if
+         call finish_fill(self, t, q_fill, its, residual, rcond_fill)
+      end if
+      call filled_state(self, t, q_fill, order, rcond, rcond_fill, residual, singular)
+      self%factor_current = .false.
+      result%iterations = its
+      result%residual = residual
+      result%cuts = 0
+      self%last_cuts = 0
+      call fill_result(self, result)
+      filled = .true.
+   end subroutine step_over
+
+   !> Advance the accepted state to time t under step control (the shared
+   !> advance_by_cuts: cut after a failure, grow back after a success), each
+   !> try being fem_try's.
+   recursive subroutine advance_to(self, t, depth, iterations, residual, cuts, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      !> Verification depth: 0 for a step of the run, k for a step halved k times.
+      integer, intent(in) :: depth
+      integer, intent(out) :: iterations
+      !> Residual of the last accepted step (unchanged if none was).
+      real(dp), intent(inout) :: residual
+      type(step_cuts_type), intent(out) :: cuts
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: t_from
+      t_from = self%state%t
+      call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, cuts, iterations, error)
+      if (.not. allocated(error) .and. self%state%t > t_from) residual = self%try_residual
+   end subroutine advance_to
+
+   !> The FEM's try of a step to time t (for advance_by_cuts): Newton
+   !> (solve_step); a step that the branch check finds suspect is verified by
+   !> two half steps (verify_step, which calls advance_to one level deeper),
+   !> and a step they contradict is replaced by them. A change point at the
+   !> predictor ends the advance (step_over takes it from there).
+   recursive subroutine fem_try(stepper, t, depth, iterations, outcome, reason)
+      class(stepper_type), intent(inout) :: stepper
+      real(dp), intent(in) :: t
+      integer, intent(in) :: depth
+      integer, intent(out) :: iterations, outcome
+      type(error_type), allocatable, intent(out) :: reason
+      character(:), allocatable :: rejection
+      real(dp) :: residual
+      integer :: it
+      iterations = 0
+      outcome = try_ended
+      select type (self => stepper)
+      type is (fem_stepper_type)
+         self%verify_depth = depth
+         call solve_step(self, t, iterations, residual, reason)
+         ! Only a run's step, at its first try, checks for a change point.
+         self%detect_change = .false.
+         if (self%change_found) return
+         if (self%verify_pending) then
+            ! The branch-jump check asked for the step to be confirmed by two half steps.
+            self%verify_pending = .false.
+            if (.not. allocated(reason)) then
+               call verify_step(self, t, depth, it, residual, rejection, reason)
+               iterations = iterations + it
+            end if
+         end if
+         if (allocated(reason)) then
+            ! A verification that could not be completed ends every level above
+            ! it at once (cutting there would repeat it); the run's step is cut.
+            if (self%verify_failed .and. depth > 0) return
+            self%verify_failed = .false.
+            outcome = try_failed
+            return
+         end if
+         self%try_residual = residual
+         outcome = try_accepted
+         if (allocated(rejection)) then
+            ! Contradicted by its half steps, which replaced it: a cut step.
+            outcome = try_replaced
+            call analysis_error(reason, rejection)
+         end if
+      end select
+   end subroutine fem_try
+
+   !> An intermediate point of a cut step at time t (for advance_by_cuts, the
+   !> accepted state's time): its rates feed the Taylor predictor only.
+   subroutine fem_between(stepper, t)
+      class(stepper_type), intent(inout) :: stepper
+      real(dp), intent(in) :: t
+      select type (self => stepper)
+      type is (fem_stepper_type)
+         if (self%model%analysis%predictor /= predictor_taylor .or. self%state%t /= t) return
+         call solve_rates(self)
+      end select
+   end subroutine fem_between
+
+   !> Predict and solve P(q) = 0 at time t; accept the configuration if it is
+   !> admissible. Leaves the accepted state untouched on failure.
+   subroutine solve_step(self, t, iterations, residual, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: residual
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: r0, increment_residual, correction, previous, kg_above, stalled_correction, pivot
+      integer :: i, info, pass, at_floor
+      logical :: moved, by_estimate, at_predictor, root_solved
+      character(len=300) :: msg
+      associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof, system => self%system)
+         self%seg = self%state%seg
+         self%predictor_regular = .false.
+         call predict(self, t, qt)
+         ! Scale of the residual: what the drive (and load) increment alone
+         ! produces from the last configuration, to first order -K_fd dq_d +
+         ! dlambda f, with the free-driven block of the last tangent (at the
+         ! accepted configuration within tolerance). It does not depend on the predictor.
+         increment_residual = 0
+         if (self%conv%mode /= convergence_paper .and. self%model%analysis%predictor /= predictor_previous) then
+            call drive_increment_residual(self, t, qt, increment_residual)
+         end if
+         self%factor_current = .false.
+         self%accepted_singular = .false.
+         iterations = 0
+         r0 = 0
+         previous = 0
+         at_floor = 0
+         stalled_correction = 0
+         ! Newton's tangent leaves out the geometric stiffness where the iterate
+         ! is strained less than geometric_strain. At a mechanism configuration
+         ! the stresses vanish, so near it the material tangent is the exact
+         ! tangent to first order and convergence stays quadratic (Gauss-Newton
+         ! on a zero-residual problem), while the geometric stiffness of a
+         ! predictor's small spurious strains, which can exceed the bending
+         ! stiffness of slender links, no longer bends the path of the
+         ! iteration (docs/performance.md has the iteration counts). Far from
+         ! it (large strains) the full tangent is the more robust.
+         kg_above = merge(0.0_dp, geometric_strain, self%loaded)
+         ! Newton; then, if a slave has slid past its master segment, move it on
+         ! to the neighbouring segment and iterate again from there; then, if
+         ! the iteration stopped on its estimate, check it (see below).
+         verification: do
+            by_estimate = .false.
+            relocations: do pass = 0, size(mesh%slides)*8
+               at_predictor = .false.
+               do i = 0, self%model%analysis%max_iter
+                  ! A signal ends the step here (a slow step would delay the stop).
+                  call interrupt_error(error)
+                  if (allocated(error)) return
+                  call newton_assembly(self, qt, t, kg_above)
+                  ! The predictor's guard, once per step: it needs the strains of this first assembly.
+                  if (self%guard_pending) then
+                     self%guard_pending = .false.
+                     if (guard_extrapolation(self, t, qt)) call newton_assembly(self, qt, t, kg_above)
+                  end if
+                  residual = residual_norm(system, mesh)
+                  if (i == 0) then
+                     r0 = residual
+                     if (self%model%analysis%predictor == predictor_previous) increment_residual = r0
+                  end if
+                  if (self%conv%mode == convergence_paper) then
+                     if (is_converged(self%conv, residual, r0, increment_residual, 0.0_dp)) exit
+                  end if
+                  if (i == self%model%analysis%max_iter) then
+                     call no_convergence_error(t, i, residual, error)
+                     return
+                  end if
+                  root_solved = .false.
+                  if (self%root_form .and. system%assembled_strain < kg_above) then
+                     call root_correction(self, qt, .false., correction, root_solved)
+                     ! B_f singular at the iterate: K's Newton step (its tangent was not assembled).
+                     if (.not. root_solved) call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
+                  end if
+                  if (.not. root_solved) call factor_system(system, info, self%counts)
+                  if (root_solved) info = 0
+                  if (i == 0 .and. self%detect_change) then
+                     ! A change point at the predictor: Newton does not iterate on a
+                     ! near-singular tangent (see step_over).
+                     call check_predictor(self, root_solved, info)
+                     if (self%change_found) return
+                  end if
+                  if (.not. root_solved .and. info > 0 .and. kg_above > 0) then
+                     ! The material tangent is singular at a stationary configuration;
+                     ! the geometric stiffness of the iterate's stresses may still
+                     ! carry Newton there (full Newton from here on in this step).
+                     kg_above = 0
+                     call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
+                     residual = residual_norm(system, mesh)
+                     call factor_system(system, info, self%counts)
+                  end if
+                  if (info > 0) then
+                     write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
+                     call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
+                     return
+                  end if
+                  if (.not. root_solved) call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+                  if (correction > divergence_length*self%model_length) then
+                     write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
+                     call analysis_error(error, trim(msg))
+                     return
+                  end if
+                  ! Converged where this pass starts (the predictor, or an
+                  ! iterate that a check below corrected): a first correction
+                  ! below predictor_margin times the length tolerance (at
+                  ! round-off with the default tolerance) leaves it as it is,
+                  ! and the tangent just factored, material only (every Gauss
+                  ! point strained less than kg_above), is the tangent at the
+                  ! accepted configuration: the branch-jump check and the rates
+                  ! need no assembly and factorisation of their own. Not near a
+                  ! stationary configuration: the residual there hardly sees an
+                  ! error along the near-singular direction (a predictor kept
+                  ! past collinear is then rejected by the branch-jump check).
+                  if (i == 0 .and. .not. self%loaded .and. self%conv%mode /= convergence_paper .and. &
+                     & .not. root_solved) then
+                     at_predictor = correction <= predictor_margin*self%predictor_length .and. &
+                        & system%assembled_strain < kg_above .and. &
+                        & is_converged(self%conv, residual, r0, increment_residual, correction)
+                     if (at_predictor) then
+                        call system_pivot(system, pivot)
+                        at_predictor = pivot >= near_singular_drop*self%state%reference_pivot
+                     end if
+                     if (at_predictor) exit
+                  end if
+                  call take_correction(self, qt, iterations)
+                  if (self%conv%mode /= convergence_paper) then
+                     if (is_converged(self%conv, residual, r0, increment_residual, correction)) exit
+                     by_estimate = .not. self%loaded
+                     if (by_estimate) by_estimate = converged_by_estimate(self%conv, self%model_length, &
+                        & self%newton_constant, residual, r0, increment_residual, correction, previous)
+                     if (by_estimate) exit
+                     ! Round-off: a residual at its floor for stall_iterations
+                     ! iterations gives corrections that are noise (the tangent's
+                     ! sensitivity times the round-off), so the length test cannot
+                     ! be met; the last correction is the accuracy left, reported
+                     ! in the listing.
+                     if (residual <= self%conv%residual_floor) then
+                        at_floor = at_floor + 1
+                     else
+                        at_floor = 0
+                     end if
+                     if (at_floor >= stall_iterations) then
+                        stalled_correction = correction
+                        exit
+                     end if
+                  end if
+                  previous = correction
+               end do
+               if (size(mesh%slides) == 0) exit relocations
+               call relocate(mesh, self%model, t, qt, self%seg, moved, error)
+               if (allocated(error)) return
+               if (.not. moved) exit relocations
+            end do relocations
+            if (self%loaded .or. at_predictor) exit verification
+            ! The material tangent at the new configuration: the branch-jump
+            ! check's response (and from it the predictor's velocity) and, once
+            ! accepted, the rates' tangent. The last Newton factor, one correction
+            ! away, would give rates off by that correction times the ratio of
+            ! axial to bending stiffness (EA L^2 / EI; docs/performance.md).
+            call assemble_system(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
+            ! The residual reported for the step is the one at the accepted configuration.
+            residual = residual_norm(system, mesh)
+            if (self%root_form) then
+               ! The estimate is checked by one more correction of B_f; then the
+               ! factor of the stress-free B_f at qt serves as K's does below.
+               root_solved = .false.
+               if (by_estimate) call root_correction(self, qt, .true., correction, root_solved)
+               if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
+                  call factor_root(self, qt, self%seg, info)
+                  exit verification
+               end if
+            else
+               call factor_system(system, info, self%counts)
+               if (.not. by_estimate .or. info /= 0) exit verification
+               ! A stop on the estimate is checked with this factor (one back
+               ! substitution): the correction it gives must pass the estimate's own
+               ! margin, or it is applied as one more Newton iteration and Newton
+               ! goes on (with a stiff slideline penalty the estimate can miss).
+               call newton_correction(system, mesh, self%dof_length, correction, self%counts)
+               if (correction <= estimate_margin*self%conv%length) exit verification
+            end if
+            call take_correction(self, qt, iterations)
+            if (iterations >= self%model%analysis%max_iter) then
+               call no_convergence_error(t, iterations, residual, error)
+               return
+            end if
+            previous = correction
+         end do verification
+         if (.not. self%loaded) then
+            call check_mechanism(self, t, qt, error)
+            if (allocated(error)) return
+            call branch_jump(self, t, qt, info == 0, error)
+            if (allocated(error)) return
+            self%factor_current = info == 0
+            self%accepted_singular = info /= 0
+         end if
+         call accept(self, t, qt)
+         if (stalled_correction > 0) then
+            write (msg, '(a,es12.5,a,es9.2,a,es9.2,a)') 't = ', t, ': Newton stopped at the round-off floor of the '// &
+               & 'residual (', residual, '); the last correction, ', stalled_correction, &
+               & ', bounds the error of this configuration'
+            self%state%note = trim(msg)
+         end if
+         ! The velocity for the predictor's history comes from the branch-jump
+         ! check's response (the same whatever rates the run computes, so
+         ! positions do not depend on them).
+         if (.not. self%loaded) call record_velocity(self)
+      end associate
+   end subroutine solve_step
+
+   !> Step-doubling verification of a step to time t that the branch check
+   !> found suspect (a hinged pair crossed collinear turning by more than
+   !> verify_turn): the step is accepted, the state before it is in
+   !> self%verify(depth). The same interval is solved again from that state as
+   !> two half steps (advance_to one level deeper: cut if they fail, verified
+   !> if suspect) and the results are compared. The state after the half
+   !> steps stays: on agreement it is the same configuration to the tolerance;
+   !> otherwise the step was a jump and `rejection` says so. If the half steps
+   !> cannot be solved, the state before the step is restored and the step is
+   !> rejected (error). A jump over a near-toggle turns the pair that flips by
+   !> its distances from collinear at both ends, so it stays suspect however
+   !> often it is halved, while a real crossing turns less with every halving.
+   recursive subroutine verify_step(self, t, depth, iterations, residual, rejection, error)
+      type(fem_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      !> Verification depth of the step (0: a step of the run).
+      integer, intent(in) :: depth
+      !> Newton iterations of the half steps (and of their verification).
+      integer, intent(out) :: iterations
+      !> Residual of the last half step.
+      real(dp), intent(inout) :: residual
+      !> Why the step was replaced by its half steps (not allocated if it was confirmed).
+      character(:), allocatable, intent(out) :: rejection
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: half_error
+      type(step_cuts_type) :: half_cuts
+      character(:), allocatable :: pair
+      real(dp), allocatable :: q_whole(:)
+      real(dp) :: t_end(2), distance
+      integer :: half, it, worst_dof
+      character(len=200) :: msg
+      q_whole = self%state%q
+      call restore_state(self, self%verification(depth)%before)
+      associate (c => self%verification(depth)%crossing)
+         pair = 'links '//self%model%links(c(1))%name//' and '//self%model%links(c(2))%name//' at node '// &
+            & self%model%nodes(c(3))%name
+      end associate
+      t_end = [self%state%t + (t - self%state%t)/2, t]
+      iterations = 0
+      do half = 1, 2
+         call advance_to(self, t_end(half), depth + 1, it, residual, half_cuts, half_error)
+         iterations = iterations + it
+         if (allocated(half_error)) exit
+         ! The midpoint's rates feed the Taylor predictor, as at a cut step's intermediate points.
+         if (half == 1 .and. self%model%analysis%predictor == predictor_taylor) call solve_rates(self)
+      end do
+      if (allocated(half_error)) then
+         call restore_state(self, self%verification(depth)%before)
+         self%verify_failed = .true.
+         if (depth > 0) then
+            call move_alloc(half_error, error)
+         else
+            write (msg, '(a,es12.5,a,f7.4,a)') 't = ', t, ': possible assembly-mode jump rejected ('//pair// &
+               & ' crossed collinear turning ', self%verification(depth)%turn, &
+               & ' rad; two half steps could not confirm it: '
+            call analysis_error(error, trim(msg)//' '//half_error%message//')')
+         end if
+         return
+      end if
+      call model_distance(self, q_whole, self%state%q, distance, worst_dof)
+      if (distance > max(verify_agreement, self%admissible_strain)) then
+         write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, ': assembly-mode jump rejected (the step ends ', distance, &
+            & ' model sizes from where two half steps end, at'
+         rejection = trim(msg)//' '//describe_dof(self%mesh, self%model, worst_dof)//'; '//pair// &
+            & ' crossed collinear); the half steps replace it'
+      end if
+   end subroutine verify_step
+
+end module fekap_fem

@@ -1,0 +1,199 @@
+!> The FEM's tangent at the accepted configuration and the square-root
+!> form's solves: whether the system (or the strain-rate operator B_f) holds
+!> the factor at the accepted configuration and refactoring it there when
+!> not; its pivot ratio, condition estimate and drive response on K's scale
+!> whichever form holds it; a Newton iteration's assembly and, in the
+!> square-root form, its correction from B_f (docs/theory.md, "Rates at
+!> scale"); the tangent at a change point's filled row; and the return to a
+!> saved accepted state.
+module fekap_fem_factor
+   use fekap_kinds, only: dp
+   use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, factor_system, system_pivot, &
+      & newton_correction, apply_correction, drive_response, system_rcond, phase_start, phase_end
+   use fekap_fem_rates, only: root_drive_response
+   use fekap_assembly_strain_rate, only: assemble_strain_rate, factor_strain_rate, solve_strain_rate, &
+      & strain_rate_rcond
+   use fekap_fem_state, only: fem_state_type, fem_core_type
+   implicit none
+   private
+
+   public :: refactor_at_accepted, newton_assembly, root_correction, factor_root, accepted_pivot
+   public :: accepted_rcond, accepted_response, fill_tangent, take_correction, restore_state
+
+contains
+
+   !> Make the system hold the factor of the tangent at the accepted
+   !> configuration, unless it does already; info > 0 names the equation where
+   !> it is singular. For a kinematic analysis this is the material tangent
+   !> (46): the last Newton iterate's tangent will not do, because its
+   !> residual stresses make a geometric stiffness comparable to the bending
+   !> stiffness EI/L^3 of slender links, which spoils accelerations. A loaded
+   !> model is stressed by design and uses the full tangent.
+   subroutine refactor_at_accepted(self, info)
+      class(fem_core_type), intent(inout) :: self
+      integer, intent(out) :: info
+      info = 0
+      if (self%factor_current) return
+      call assemble_system(self%system, self%mesh, self%state%q, self%state%t, self%seg, &
+         & merge(0.0_dp, huge(1.0_dp), self%loaded), self%counts)
+      if (self%root_form) then
+         call factor_root(self, self%state%q, self%state%seg, info)
+      else
+         call factor_system(self%system, info, self%counts)
+      end if
+      self%factor_current = info == 0
+      self%accepted_singular = info /= 0
+   end subroutine refactor_at_accepted
+
+   !> The assembly of a Newton iteration at qt: the residual and the tangent
+   !> (K form), or the residual, B and the strains (square-root form), with
+   !> the largest element strain in the system either way. The square-root
+   !> form's correction is Newton's with the material tangent (K = B^T W B,
+   !> B_f square), which is the K form's below kg_above; an iterate strained
+   !> more takes the K form's full Newton step, as before (its path, e.g.
+   !> from a poor predictor, stays the one the branch check was built on),
+   !> and K is assembled too.
+   subroutine newton_assembly(self, qt, t, kg_above)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: qt(:)
+      real(dp), intent(in) :: t, kg_above
+      if (.not. self%root_form) then
+         call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
+         return
+      end if
+      call assemble_system_residual(self%system, self%mesh, qt, t, self%seg, self%counts)
+      call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work, &
+         & self%system%assembled_strain, self%system%assembled_element)
+      if (self%system%assembled_strain >= kg_above) then
+         call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
+      end if
+   end subroutine newton_assembly
+
+   !> The Newton correction of the square-root form at qt: B_f dq = -eps with
+   !> B the exact gradient of the strains and gaps eps at qt (assembled here,
+   !> or by newton_assembly with eps in root_work), into the system's
+   !> right-hand side (as newton_correction), and its length; solved =
+   !> .false. if B_f is singular there (the caller uses K).
+   subroutine root_correction(self, qt, assemble, correction, solved)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: qt(:)
+      logical, intent(in) :: assemble
+      real(dp), intent(out) :: correction
+      logical, intent(out) :: solved
+      integer :: info, k
+      correction = 0
+      if (assemble) call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
+      call timed_root_factor(self, info)
+      solved = info == 0
+      if (.not. solved) return
+      self%root_work = -self%root_work
+      call solve_strain_rate(self%root, self%root_work)
+      self%system%rhs(:, 1) = self%root_work
+      do k = 1, self%mesh%nfree
+         correction = max(correction, abs(self%root_work(k))*self%dof_length(self%mesh%eq_dof(k)))
+      end do
+   end subroutine root_correction
+
+   !> Assemble and factor the stress-free B at q (slidelines on seg): the
+   !> square-root form's factor at a configuration; info > 0 if B_f is singular there.
+   subroutine factor_root(self, q, seg, info)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      integer, intent(out) :: info
+      call assemble_strain_rate(self%root, self%mesh, q, seg, .true.)
+      call timed_root_factor(self, info)
+   end subroutine factor_root
+
+   !> The band LU of the assembled B_f, timed as the system's factorisations
+   !> are (the listing's factorisation time is either form's).
+   subroutine timed_root_factor(self, info)
+      class(fem_core_type), intent(inout) :: self
+      integer, intent(out) :: info
+      real(dp) :: clock
+      clock = phase_start(self%system)
+      call factor_strain_rate(self%root, info)
+      call phase_end(self%system, clock, self%counts%seconds_factorisation)
+   end subroutine timed_root_factor
+
+   !> The pivot ratio of the factor at the accepted configuration (B_f's on
+   !> K's scale in the square-root form, else K's).
+   real(dp) function accepted_pivot(self) result(ratio)
+      class(fem_core_type), intent(inout) :: self
+      if (self%root_form) then
+         ratio = self%root%pivot_ratio
+      else
+         call system_pivot(self%system, ratio)
+      end if
+   end function accepted_pivot
+
+   !> The condition estimate of the factor at the accepted configuration, on
+   !> K's scale: B_f's squared in the square-root form, else K's.
+   subroutine accepted_rcond(self, rcond)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), intent(out) :: rcond
+      if (self%root_form) then
+         call strain_rate_rcond(self%root, rcond)
+      else
+         call system_rcond(self%system, rcond, self%counts)
+      end if
+   end subroutine accepted_rcond
+
+   !> The drive response at the accepted configuration, whose factor the
+   !> system (or root) holds: from B_f in the square-root form, else from K_ff.
+   subroutine accepted_response(self, resp)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(inout) :: resp(:, :)
+      if (self%root_form) then
+         call root_drive_response(self%root, self%mesh, resp, self%root_work)
+      else
+         call drive_response(self%system, self%mesh, resp, self%counts)
+      end if
+   end subroutine accepted_response
+
+   !> Assemble and factor the material tangent at the filled configuration q
+   !> at time t; its condition estimate (0 if singular), B_f's squared in the
+   !> square-root form.
+   subroutine fill_tangent(self, q, t, rcond)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: q(:)
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: rcond
+      integer :: info
+      integer :: root_info
+      call assemble_system(self%system, self%mesh, q, t, self%seg, huge(1.0_dp), self%counts)
+      call factor_system(self%system, info, self%counts)
+      self%factor_current = .false.
+      rcond = 0
+      if (self%root_form) then
+         ! On the scale of the run's best, which is B_f's in the square-root form.
+         call factor_root(self, q, self%seg, root_info)
+         if (root_info == 0) call strain_rate_rcond(self%root, rcond)
+      else if (info == 0) then
+         call system_rcond(self%system, rcond, self%counts)
+      end if
+   end subroutine fill_tangent
+
+   !> Add the correction in the system's right-hand side to q: one Newton iteration more.
+   subroutine take_correction(self, q, iterations)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(inout) :: q(:)
+      integer, intent(inout) :: iterations
+      call apply_correction(self%system, self%mesh, q)
+      iterations = iterations + 1
+      self%counts%iterations = self%counts%iterations + 1
+   end subroutine take_correction
+
+   !> Make `before` the accepted state again; the tangent (and its free-driven
+   !> block, which scales the convergence test) is refactored there.
+   subroutine restore_state(self, before)
+      class(fem_core_type), intent(inout) :: self
+      type(fem_state_type), intent(in) :: before
+      integer :: info
+      self%state = before
+      self%seg = before%seg
+      self%factor_current = .false.
+      call refactor_at_accepted(self, info)
+   end subroutine restore_state
+
+end module fekap_fem_factor

@@ -1,0 +1,284 @@
+!> The FEM stepper's data: the accepted state (fem_state_type, one type so
+!> that saving and restoring it is one assignment), the steps awaiting
+!> verification, and the stepper's storage and settings (fem_core_type,
+!> allocated once by new_fem_core), with what a step does to them at its
+!> end: accept a configuration (push it on the predictor's history) and fill
+!> the step's result. The modules fem_factor, fem_predict, fem_converged and
+!> fem_fill act on fem_core_type; fekap_fem composes them.
+module fekap_fem_state
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, analysis_error
+   use fekap_model, only: model_type, solver_dense, effects_kinematics
+   use fekap_model_effects, only: planned_effects
+   use fekap_model_results, only: step_result_type, note_length, has_note
+   use fekap_fem_setup, only: fem_base_type, new_fem_base, mesh_plan_line
+   use fekap_fem_convergence, only: convergence_type
+   use fekap_stepping_predictor, only: predictor_history_type, new_predictor_history
+   use fekap_fem_branch, only: branch_check_type, new_branch_check, max_verify_depth
+   use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate
+   use fekap_fem_fields, only: fill_nodes_links, fill_fields
+   use fekap_stepping_step_control, only: step_cuts_type
+   use fekap_strings, only: es_text
+   implicit none
+   private
+
+   public :: fem_state_type, verification_type, fem_core_type, new_fem_core, accept, fill_result
+   public :: note_response_pivot, prepend_cuts_note, model_distance, no_convergence_error
+
+   !> Element strain above which a converged configuration is not a mechanism
+   !> configuration but a self-stressed equilibrium.
+   !> It follows the Newton tolerance (a loose paper-style test leaves strains
+   !> near the tolerance) but never reaches the strains of a self-stressed
+   !> state, which are of order 0.1.
+   real(dp), parameter :: min_admissible_strain = 1.0e-8_dp, max_admissible_strain = 1.0e-3_dp
+
+   !> The accepted state of the stepper: everything a step changes, so that
+   !> step-doubling verification saves and restores it by one assignment.
+   type :: fem_state_type
+      !> Time, configuration, velocity and acceleration over all dofs.
+      real(dp) :: t = 0
+      real(dp), allocatable :: q(:), v(:), a(:)
+      !> Whether v (and a) belong to the configuration.
+      logical :: has_velocity = .false., has_acceleration = .false.
+      !> The last accepted configurations, for the predictor.
+      type(predictor_history_type) :: history
+      !> Master segment of each slideline.
+      integer, allocatable :: seg(:)
+      !> Linear response of every dof to unit changes of the drives, (ndof,
+      !> ndriven), kept by the branch-jump check whatever rates the run
+      !> computes, and whether it is known.
+      real(dp), allocatable :: jump_response(:, :)
+      logical :: has_jump_response = .false.
+      !> Largest pivot ratio of a tangent at an accepted configuration so far
+      !> (the reference for singular and near-singular configurations).
+      real(dp) :: reference_pivot = 0
+      !> Largest reciprocal condition number (system_rcond) of the material
+      !> tangent at an accepted configuration so far: the reference of the
+      !> change-point detection and of the trust in a drive response.
+      real(dp) :: reference_rcond = 0
+      !> Remark on the configuration for the listing (empty if none).
+      character(len=note_length) :: note = ''
+   end type fem_state_type
+
+   !> A step awaiting verification: the state before it, and the hinged pair
+   !> that crossed collinear (link, link, node) with its turn, for the messages.
+   type :: verification_type
+      type(fem_state_type) :: before
+      integer :: crossing(3) = 0
+      real(dp) :: turn = 0
+   end type verification_type
+
+   !> The model, mesh, linear system, drives' start values and scales are
+   !> fem_base_type's (new_fem_base), as the dynamics stepper's.
+   type, abstract, extends(fem_base_type) :: fem_core_type
+      type(convergence_type) :: conv
+      type(branch_check_type) :: branch
+      type(fem_state_type) :: state
+      !> Whether the system holds the factor of the tangent at (within
+      !> tolerance of) the accepted configuration, and whether factoring the
+      !> tangent there failed (a singular configuration).
+      logical :: factor_current = .false., accepted_singular = .false.
+      !> Quadratic-convergence constant M of Newton (c(k+1) = M c(k)**2) measured
+      !> in the last step that showed it, for the estimated stop.
+      real(dp) :: newton_constant = 0
+      !> The last predictor, and whether it was a smooth (Hermite or Adams)
+      !> extrapolation of the history.
+      real(dp), allocatable :: q_predicted(:)
+      logical :: smooth_prediction = .false.
+      !> Pivot ratio of the factor behind the last drive response.
+      real(dp) :: response_pivot = 0
+      !> Whether the model has external loads (a flexible, stressed analysis).
+      logical :: loaded = .false.
+      !> Work over the dofs: a change or rate of the loads (mesh%loads).
+      real(dp), allocatable :: load_work(:)
+      !> Work arrays over the dofs, allocated once (nothing is allocated in the
+      !> step loop): the iterate, scratch, and the responses to a step's drive
+      !> increment at its two ends.
+      real(dp), allocatable :: qt(:), work(:), dq_new(:), dq_old(:)
+      !> The drives' increment over a step.
+      real(dp), allocatable :: drive_step(:)
+      !> Master segment of each slideline during the step.
+      integer, allocatable :: seg(:)
+      !> The drive response at the new configuration (swapped with the state's).
+      real(dp), allocatable :: jump_response_new(:, :)
+      !> Step cuts in the last advance, for the listing.
+      integer :: last_cuts = 0
+      !> Element strain (and gap per model size) above which a converged
+      !> configuration is rejected: min(1e-3, max(1e-8, 100 tol)).
+      real(dp) :: admissible_strain = min_admissible_strain
+      !> Whether the step just accepted awaits step-doubling verification, and
+      !> the number of halvings of the step being solved (0: a step of the caller's).
+      logical :: verify_pending = .false.
+      integer :: verify_depth = 0
+      !> Whether a verification could not be completed (see advance_to).
+      logical :: verify_failed = .false.
+      !> The steps awaiting verification at each depth.
+      type(verification_type) :: verification(0:max_verify_depth)
+      !> Whether the predictor extrapolated: guard_extrapolation then checks it
+      !> with the strains of the step's first assembly.
+      logical :: guard_pending = .false.
+      !> Steps advanced so far.
+      integer :: advances = 0
+      !> The length tolerance of the step's predictor (the Adams-Bashforth
+      !> choice and the acceptance at the predictor, see predictor_margin): the
+      !> length tolerance, or the round-off of the dofs over predictor_margin
+      !> where that is larger (fem_predict's roundoff_length).
+      real(dp) :: predictor_length = 0
+      !> The strain-rate operator B_f and its factor (see the module header),
+      !> and whether the square-root form is used (then factor_current refers
+      !> to the factor of the stress-free B_f in root).
+      type(strain_rate_type) :: root
+      logical :: root_form = .false.
+      !> Scratch over the equations for the square-root form's solves.
+      real(dp), allocatable :: root_work(:)
+      !> Change points (see step_over): whether the step being solved checks its
+      !> predictor's tangent, whether it found it near singular, and that
+      !> tangent's condition estimate.
+      logical :: detect_change = .false., change_found = .false.
+      real(dp) :: predictor_rcond = 0
+      !> Whether this step's predictor was checked and found regular: its
+      !> estimate then stands for the accepted configuration's in the
+      !> branch-jump check (one estimate a step, not two).
+      logical :: predictor_regular = .false.
+      !> The regular states on either side of a change point stepped over: the
+      !> state before it, and the one solved at the next output time, kept for
+      !> the next advance with its iterations, residual and cuts.
+      type(fem_state_type) :: before_change, ahead
+      logical :: has_ahead = .false.
+      integer :: ahead_iterations = 0, ahead_cuts = 0
+      real(dp) :: ahead_residual = 0
+   contains
+      procedure :: plan_text => fem_plan_text
+   end type fem_core_type
+
+contains
+
+   !> Build the mesh, the equation numbering and all storage for a validated model.
+   subroutine new_fem_core(self, model)
+      class(fem_core_type), intent(inout) :: self
+      type(model_type), intent(in) :: model
+      call new_fem_base(self, model, dense=model%analysis%solver == solver_dense)
+      associate (n => self%mesh%ndof, nd => self%mesh%ndriven, state => self%state)
+         allocate (self%drive_step(nd), source=0.0_dp)
+         allocate (state%q(n), state%v(n), state%a(n), self%qt(n), self%work(n), self%dq_new(n), self%dq_old(n), &
+            & source=0.0_dp)
+         call new_predictor_history(state%history, n)
+         allocate (self%q_predicted(n), source=0.0_dp)
+         allocate (state%jump_response(n, nd), self%jump_response_new(n, nd), source=0.0_dp)
+         allocate (self%seg(size(self%mesh%slides)), state%seg(size(self%mesh%slides)), source=1)
+      end associate
+      self%loaded = self%mesh%loads%is_loaded()
+      allocate (self%load_work(self%mesh%ndof), source=0.0_dp)
+      call new_strain_rate(self%root, self%mesh)
+      ! Kinetostatics solves its deflection with the factor of K at the accepted configuration.
+      self%root_form = self%root%applies .and. .not. self%loaded .and. model%analysis%solver /= solver_dense .and. &
+         & planned_effects(model) == effects_kinematics
+      allocate (self%root_work(self%mesh%nfree), source=0.0_dp)
+      self%conv%mode = model%analysis%convergence
+      self%conv%tol = model%analysis%tol
+      self%conv%length = model%analysis%length_tol*self%model_length
+      self%admissible_strain = min(max_admissible_strain, max(min_admissible_strain, 100*model%analysis%tol))
+      call new_branch_check(self%branch, model, self%mesh)
+      self%conv%residual_floor = self%residual_floor
+   end subroutine new_fem_core
+
+   !> The mesh for the listing's plan: its size, band and slideline penalties.
+   function fem_plan_text(self) result(text)
+      class(fem_core_type), intent(in) :: self
+      character(:), allocatable :: text
+      character(len=160) :: line
+      integer :: i
+      text = mesh_plan_line(self)
+      do i = 1, size(self%mesh%slides)
+         write (line, '(a,a,a,a)') 'slideline '//self%model%slidelines(i)%name//': penalty ', &
+            & es_text(self%mesh%slides(i)%kp, 12, 5), ', rotational tie ', es_text(self%mesh%slides(i)%kr, 12, 5)
+         text = text//new_line('a')//'  '//trim(line)
+      end do
+   end function fem_plan_text
+
+   !> Make q at time t the accepted configuration and push it on the history.
+   subroutine accept(self, t, q)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      real(dp), contiguous, intent(in) :: q(:)
+      associate (state => self%state)
+         call state%history%push(q, t)
+         state%q = q
+         state%t = t
+         state%seg = self%seg
+         if (has_note(state%note)) state%note = ''
+         state%has_velocity = .false.
+         state%has_acceleration = .false.
+      end associate
+      self%counts%steps = self%counts%steps + 1
+   end subroutine accept
+
+   !> The result of the accepted state: nodes and links, and the mesh's
+   !> fields when VTK output is asked for.
+   subroutine fill_result(self, result)
+      class(fem_core_type), intent(in) :: self
+      type(step_result_type), intent(inout) :: result
+      associate (state => self%state)
+         result%t = state%t
+         if (has_note(state%note) .or. has_note(result%note)) result%note = state%note
+         result%has_velocity = state%has_velocity
+         result%has_acceleration = state%has_acceleration
+         call fill_nodes_links(self%mesh, self%model, state%q, state%v, state%a, result)
+         if (self%model%output%vtk) call fill_fields(self%mesh, state%q, state%v, state%a, result)
+      end associate
+   end subroutine fill_result
+
+   !> Record the pivot ratio of the factor behind a drive response (0 if
+   !> none) in the run's reference: the predictor trusts a response as a
+   !> velocity only away from stationary configurations.
+   subroutine note_response_pivot(self, ratio)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), intent(in) :: ratio
+      self%response_pivot = ratio
+      self%state%reference_pivot = max(self%state%reference_pivot, ratio)
+   end subroutine note_response_pivot
+   !> Put the note of a cut step (why it was cut: the first and the last
+   !> rejection) before the configuration's own note, if it was cut.
+   subroutine prepend_cuts_note(note, cuts)
+      character(len=note_length), intent(inout) :: note
+      type(step_cuts_type), intent(in) :: cuts
+      if (.not. allocated(cuts%first)) return
+      if (has_note(note)) then
+         note = cuts%note()//'; '//trim(note)
+      else
+         note = cuts%note()
+      end if
+   end subroutine prepend_cuts_note
+
+   !> The largest distance between two configurations over the dofs, in model
+   !> sizes (rotations times the model size), and the dof where it is.
+   pure subroutine model_distance(self, qa, qb, distance, worst_dof)
+      class(fem_core_type), intent(in) :: self
+      real(dp), intent(in) :: qa(:), qb(:)
+      real(dp), intent(out) :: distance
+      integer, intent(out) :: worst_dof
+      real(dp) :: d
+      integer :: i
+      distance = 0
+      worst_dof = 1
+      do i = 1, self%mesh%ndof
+         d = abs(qa(i) - qb(i))*self%dof_length(i)/self%model_length
+         if (d > distance) then
+            distance = d
+            worst_dof = i
+         end if
+      end do
+   end subroutine model_distance
+
+   !> The error of a step at time t whose Newton iteration did not converge.
+   pure subroutine no_convergence_error(t, iterations, residual, error)
+      real(dp), intent(in) :: t, residual
+      integer, intent(in) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      character(len=120) :: msg
+      write (msg, '(a,es12.5,a,i0,a,es9.2)') 't = ', t, ': Newton did not converge in ', iterations, &
+         & ' iterations (residual ', residual
+      call analysis_error(error, trim(msg)//')')
+   end subroutine no_convergence_error
+
+end module fekap_fem_state

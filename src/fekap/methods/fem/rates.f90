@@ -1,0 +1,190 @@
+!> Velocities and accelerations of an accepted FEM configuration, (47) and
+!> (48)-(53), with the factor of the tangent there, and what the factor's
+!> pivot ratio says about the configuration: singular (no rates), near a
+!> stationary configuration (ill-conditioned rates), or regular. An exactly
+!> constrained mechanism solves them in the square-root form instead, with
+!> the band LU of its stress-free strain-rate operator B_f and one step of
+!> refinement (root_velocities, root_accelerations; docs/theory.md, "Rates
+!> at scale").
+module fekap_fem_rates
+   use fekap_kinds, only: dp
+   use fekap_model_work, only: work_counts_type
+   use fekap_model_results, only: note_length
+   use fekap_assembly_mesh, only: mesh_type
+   use fekap_fem_linear_system, only: linear_system_type, drive_load_rhs, solve_system, assemble_second_derivative_at
+   use fekap_assembly_strain_rate, only: strain_rate_type, solve_strain_rate, strain_rates, strain_accelerations
+   implicit none
+   private
+
+   public :: pivot_note, solve_velocities, solve_accelerations
+   public :: root_velocities, root_accelerations, root_drive_response
+
+   !> Solves of a rate in the square-root form: the plain solve and one
+   !> refinement whose residual is the element strain rates (one more gains
+   !> nothing: the error is then at the floor of the positions' round-off).
+   integer, parameter :: root_passes = 2
+
+   !> Pivot ratios (see band_pivot_ratio) below which the tangent at a
+   !> configuration counts as singular or as near-singular (a warning),
+   !> relative to the largest ratio met so far in the run: the ratio itself
+   !> also reflects the elements' bending-to-shear stiffness (4 EI / (kGA
+   !> L^2), see docs/performance.md for its range), so only its drop means a
+   !> stationary configuration. Below singular_floor the factor is singular to
+   !> round-off whatever the reference.
+   real(dp), parameter, public :: singular_drop = 1.0e-10_dp, near_singular_drop = 1.0e-3_dp, &
+      & singular_floor = 1.0e-16_dp
+
+contains
+
+   !> The listing's note on a configuration at time t whose tangent has the
+   !> pivot ratio `ratio` against the run's largest, `reference` ('' if
+   !> regular), and whether rates can be solved there (not singular).
+   !> velocities: the run asks for rates (the note says what happens to them).
+   subroutine pivot_note(t, ratio, reference, velocities, note, regular)
+      real(dp), intent(in) :: t, ratio, reference
+      logical, intent(in) :: velocities
+      character(len=note_length), intent(inout) :: note
+      logical, intent(out) :: regular
+      character(len=160) :: text
+      character(:), allocatable :: consequence
+      regular = .true.
+      if (ratio < singular_drop*reference .or. ratio < singular_floor) then
+         consequence = ''
+         if (velocities) consequence = ': velocities and accelerations are left out of this step'
+         write (text, '(a,es12.5,a)') 't = ', t, ': singular configuration (the tangent has no inverse)'
+         note = trim(text)//consequence
+         regular = .false.
+      else if (ratio < near_singular_drop*reference) then
+         consequence = ')'
+         if (velocities) consequence = '): velocities and accelerations are ill-conditioned'
+         write (text, '(a,es12.5,a,es9.2)') 't = ', t, ': near a stationary configuration (pivot ratio ', ratio
+         note = trim(text)//consequence
+      end if
+   end subroutine pivot_note
+
+   !> Velocities K v_f = -K_fd v_d + f' (47) with the factor in the system;
+   !> f' the loads' rate over all dofs, when loaded (f_ext for the load factor t).
+   subroutine solve_velocities(system, mesh, vd, v, counts, load_rate)
+      type(linear_system_type), intent(inout) :: system
+      type(mesh_type), intent(in) :: mesh
+      !> The drives' rates.
+      real(dp), contiguous, intent(in) :: vd(:)
+      real(dp), contiguous, intent(out) :: v(:)
+      type(work_counts_type), intent(inout) :: counts
+      real(dp), intent(in), optional :: load_rate(:)
+      integer :: k
+      v = 0
+      v(mesh%driven_dof) = vd
+      call drive_load_rhs(system, mesh, vd, load_rate)
+      call solve_system(system, counts)
+      do k = 1, mesh%nfree
+         v(mesh%eq_dof(k)) = system%rhs(k, 1)
+      end do
+   end subroutine solve_velocities
+
+   !> Accelerations K a_f = -K_fd a_d - d2P[v, v] + f'' (48)-(53) at q with
+   !> velocities v, with the factor in the system, which must be that of the
+   !> tangent at q: its last tangent assembly, whose section angles it keeps,
+   !> was at q. work is scratch over the dofs; f'' the loads' second rate over
+   !> all dofs, when a load has a law (0 for the load factor t).
+   subroutine solve_accelerations(system, mesh, q, v, seg, ad, a, work, counts, load_rate2)
+      type(linear_system_type), intent(inout) :: system
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: q(:), v(:)
+      !> Master segment of each slideline at q.
+      integer, intent(in) :: seg(:)
+      !> The drives' second rates.
+      real(dp), contiguous, intent(in) :: ad(:)
+      real(dp), contiguous, intent(out) :: a(:)
+      real(dp), contiguous, intent(inout) :: work(:)
+      type(work_counts_type), intent(inout) :: counts
+      real(dp), intent(in), optional :: load_rate2(:)
+      integer :: k
+      call assemble_second_derivative_at(system, mesh, q, v, seg, work, counts)
+      a = 0
+      a(mesh%driven_dof) = ad
+      call drive_load_rhs(system, mesh, ad, load_rate2)
+      do k = 1, mesh%nfree
+         system%rhs(k, 1) = system%rhs(k, 1) - work(mesh%eq_dof(k))
+      end do
+      call solve_system(system, counts)
+      do k = 1, mesh%nfree
+         a(mesh%eq_dof(k)) = system%rhs(k, 1)
+      end do
+   end subroutine solve_accelerations
+
+   !> Velocities of an exactly constrained mechanism: B_f v_f = -B_d v_d with
+   !> the factor of the stress-free B in `root`, then one refinement
+   !> B_f dv = -B v with the strain rates B v computed element by element
+   !> from nodal differences. work is scratch over the equations.
+   subroutine root_velocities(root, mesh, vd, v, work)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      !> The drives' rates.
+      real(dp), contiguous, intent(in) :: vd(:)
+      real(dp), contiguous, intent(out) :: v(:)
+      real(dp), contiguous, intent(inout) :: work(:)
+      integer :: pass
+      v = 0
+      v(mesh%driven_dof) = vd
+      do pass = 1, root_passes
+         call strain_rates(root, mesh, v, work)
+         call add_root_correction(root, mesh, work, v)
+      end do
+   end subroutine root_velocities
+
+   !> Accelerations of an exactly constrained mechanism: B_f a_f = -B_d a_d -
+   !> eps2(v) (the strains' second rates vanish) with the factor of the
+   !> stress-free B in `root`, then one refinement with the residual
+   !> B a + eps2(v) element by element (strain_accelerations).
+   subroutine root_accelerations(root, mesh, v, ad, a, work)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: v(:)
+      !> The drives' second rates.
+      real(dp), contiguous, intent(in) :: ad(:)
+      real(dp), contiguous, intent(out) :: a(:)
+      real(dp), contiguous, intent(inout) :: work(:)
+      integer :: pass
+      a = 0
+      a(mesh%driven_dof) = ad
+      do pass = 1, root_passes
+         call strain_accelerations(root, mesh, v, a, work)
+         call add_root_correction(root, mesh, work, a)
+      end do
+   end subroutine root_accelerations
+
+   !> Linear response of every dof to unit changes of the drives (as
+   !> drive_response): R_f = -B_f^-1 B_d with the factor in `root`, 1 on the
+   !> drive's own dof; the other entries of resp are left as they are (zero).
+   subroutine root_drive_response(root, mesh, resp, work)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(inout) :: resp(:, :)
+      real(dp), contiguous, intent(inout) :: work(:)
+      integer :: j, k
+      do j = 1, mesh%ndriven
+         work = -root%bd(:, j)
+         call solve_strain_rate(root, work)
+         do k = 1, mesh%nfree
+            resp(mesh%eq_dof(k), j) = work(k)
+         end do
+         resp(mesh%driven_dof(j), j) = 1
+      end do
+   end subroutine root_drive_response
+
+   !> x_f += -B_f^-1 r: the correction of the free dofs of x for the residual
+   !> r (over B_f's rows, overwritten), with the factor in root.
+   subroutine add_root_correction(root, mesh, r, x)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(inout) :: r(:), x(:)
+      integer :: k
+      r = -r
+      call solve_strain_rate(root, r)
+      do k = 1, mesh%nfree
+         x(mesh%eq_dof(k)) = x(mesh%eq_dof(k)) + r(k)
+      end do
+   end subroutine add_root_correction
+
+end module fekap_fem_rates
