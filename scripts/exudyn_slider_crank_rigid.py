@@ -23,9 +23,9 @@ are printed with their ratios.
 Timing: CPU time for both (FEKAP: the child process's user + system time; Exudyn:
 time.process_time() around SolveDynamic) of runs over 0.2 s (TIMED: the crank turns 4.8
 times), the least of R runs (default 5, the two codes alternately), each less the least of
-R one-step runs (FEKAP: reading, set-up, start and
-output files; Exudyn: its solver's set-up and start accelerations); both store the three
-points every 0.4 ms only. Exudyn runs with its default linear solver (dense LU) and with
+R one-step runs (FEKAP: reading, set-up, start and output files; Exudyn: its solver's
+set-up and start accelerations); both store every 0.4 ms only (FEKAP its CSV files, Exudyn
+its three sensors). Exudyn runs with its default linear solver (dense LU) and with
 EigenSparse, and the faster of the two counts (the dense one up to 8 rod elements, the
 sparse one from 16). And instructions (valgrind --tool=callgrind), which the shared
 machine's load does not move, of the chosen runs of both codes, each less a one-step run's
@@ -47,7 +47,6 @@ import argparse
 import csv
 import json
 import math
-import os
 import re
 import resource
 import shutil
