@@ -15,9 +15,10 @@ and as dt halves (mesh fixed) the differences of successive runs fall at the obs
 order 2 (generalized-alpha and the linear Reissner element with one Gauss point are both
 second order), and the mesh's extrapolation lands on Exudyn's converged answer.
 
-The midpoint deflection is the distance of node M from the line AB. The refinement runs
-start as the benchmark (and Exudyn) does, from the undeformed rod (`start unstrained`);
-the deck's `start consistent` is checked against it."""
+The midpoint deflection is the distance of node M from the line AB. The mesh's runs start
+as the benchmark (and Exudyn) does, from the undeformed rod (`start unstrained`), the
+step's runs from the deck's `start consistent` (why: there); the two starts are checked
+against each other."""
 
 from __future__ import annotations
 
