@@ -1,4 +1,3 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Compare several FEKAP runs (or exact solutions) point by point.
 
     scripts/compare.py RUN1 RUN2 [RUN...] [--labels a,b,c] [--point P]
@@ -20,8 +19,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-import fekap_csv as fc
-import fekap_stream as fs
+from fekap import read as fc
+from fekap import stream as fs
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -159,7 +158,7 @@ def plot_comparison(sources: list[Source], point: str, quantity: str, title: str
     """Path of ``point`` for every run, the quantity against t, and its differences from the
     first run (of the runs written at its times; the panel says which are left out).
 
-    ``mech`` (fekap_stream.Mechanism, optional) labels the axes with the deck's units;
+    ``mech`` (fekap.stream.Mechanism, optional) labels the axes with the deck's units;
     ``title`` and ``note`` (which cases are shown) head the figure."""
     plt = fc.pyplot()
     fig = plt.figure(figsize=(13, 6.4))

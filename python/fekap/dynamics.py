@@ -5,7 +5,7 @@ exudyn_a02.py):
 
 - the stiff pendulum's first pass through the bottom (time and speed, by the
   cubic Hermite interpolant of x through the two steps around it);
-- the A02 N-four-bar's first crank against its exact motion (a02_exact.py);
+- the A02 N-four-bar's first crank against its exact motion (fekap.exact.a02);
 - the spin-up beam's tip in the hub's frame (axial stretch, transverse
   deflection).
 
@@ -14,13 +14,13 @@ numpy only: the Exudyn scripts import it in their own environment too.
 
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
 
 import numpy as np
 
-import a02_exact
+from fekap import read
+from fekap.exact import a02 as a02_exact
 
 #: The rigid pendulum (L = 1, g = 9.81) released from the horizontal: T/4 and the speed there.
 BOTTOM_TIME = 0.591960487
@@ -34,17 +34,12 @@ SPIN_UP_LENGTH = 10.0
 
 
 def columns(path: Path, point: str | None = None) -> dict[str, np.ndarray]:
-    """The numeric columns of a CSV file (points.csv: the rows of one point), as arrays."""
-    with open(path, newline="") as handle:
-        rows = [row for row in csv.DictReader(handle) if point is None or row.get("point") == point]
-    if not rows:
+    """The columns of a run's CSV file (points.csv: the rows of one point) as arrays; an
+    error when there is no such row."""
+    table = read.columns(path, **({"point": point} if point else {}))
+    if table["t"].size == 0:
         raise ValueError(f"{path}: no rows" + (f" for point {point}" if point else ""))
-    out = {}
-    for key in rows[0]:
-        if key in ("point", "link"):
-            continue
-        out[key] = np.array([float(row[key]) if row[key] not in ("", None) else math.nan for row in rows])
-    return out
+    return table
 
 
 def bottom_pass(outdir: Path, point: str = "B") -> tuple[float, float]:
@@ -82,7 +77,7 @@ def a02_errors(outdir: Path, n: int) -> dict[str, float]:
 
 def a02_crank_errors(n: int, times, angle, rate) -> dict[str, float]:
     """The first crank's angle and rate at the times against the exact motion
-    of the chain of n four-bars (a02_exact.py: the energy integral and its
+    of the chain of n four-bars (fekap.exact.a02: the energy integral and its
     quadrature):
 
     - ``angle``, ``rate``: the worst angle (rad) and rate (rad/s) errors at the
@@ -109,7 +104,7 @@ def spin_up_hub_angle(times) -> np.ndarray:
     """The hub's rotation at the times: the spin-up deck's drive table (the
     natural cubic spline through its knots, as FEKAP drives it). Not links.csv's
     angle, which is the beam's chord direction and so turns with its bending."""
-    import spin_up_deck
+    from fekap.models import spin_up as spin_up_deck
 
     return np.array([spin_up_deck.table_motion(float(t))[0] for t in np.asarray(times)])
 

@@ -1,4 +1,3 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Plot the results of a FEKAP run.
 
     scripts/plot.py OUTDIR [--only KIND ...] [--animate [auto|mp4|gif]] [--instants N]
@@ -34,7 +33,7 @@ Every figure carries the deck's title and units on its axes (the deck's OUTPut `
 deck without one has its lengths labelled "length" and its times "time"). Statics runs are
 plotted against the load factor λ, their rates as derivatives by it. Titles and names are drawn
 as plain text (no mathtext: a $ is a dollar). Runs of any length are read in streaming fashion and each curve is decimated to
-a few thousand points keeping every extremum (fekap_stream.py). A quantity constant to
+a few thousand points keeping every extremum (fekap.stream). A quantity constant to
 round-off is drawn as a flat line and labelled so, instead of autoscaled noise.
 
 Kinds for --only: paths, history, velocity, acceleration, angles, iterations, energy, reactions,
@@ -54,8 +53,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-import fekap_csv as fc
-import fekap_stream as fs
+from fekap import read as fc
+from fekap import stream as fs
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -429,7 +428,7 @@ def draw_ground(ax, run: Run, size: float) -> None:
         for k in range(5):
             u = x - 1.1 * h + k * 0.5 * h
             ax.plot([u, u - 0.35 * h], [y - h, y - 1.4 * h], color="0.35", lw=0.8, zorder=1.5)
-    for index, (name, slave, x1, y1, x2, y2) in enumerate(run.mech.guides):
+    for _name, slave, x1, y1, x2, y2 in run.mech.guides:
         ax.plot([x1, x2], [y1, y2], color="0.25", lw=4.5, alpha=0.35, solid_capstyle="butt",
                 zorder=1.2, label=f"ground guide of {slave}")
 
@@ -612,7 +611,7 @@ def plot_paths(run: Run, at: float | None = None) -> Figure:
     norm = Normalize(t_first, t_last if t_last > t_first else t_first + 1)
     # viridis without its palest yellows (faint on white).
     cmap = ListedColormap(plt.get_cmap("viridis")(np.linspace(0.0, 0.85, 256)), name="instants")
-    for step, t, where in instants:
+    for _step, t, where in instants:
         draw_links(ax, run, where, cmap(norm(t)), 0.85, None)
     if instants:
         draw_loads_and_masses(ax, run, instants[-1][2])

@@ -1,11 +1,19 @@
-"""Read the CSV files of a FEKAP output directory.
+"""Read the files of a FEKAP output directory whole (python/fekap/stream.py reads them in
+blocks and reduces them, for the plots of runs of any length).
 
-A FEKAP run writes into its output directory:
+A FEKAP run writes into its output directory (README.md, "What a run writes"):
 
 - ``points.csv``: ``step,t,point,x,y[,vx,vy[,ax,ay]]``, one row per tracked point per step;
 - ``links.csv``: ``step,t,link,angle[,omega[,alpha]]`` (angles in radians, unwrapped);
-- ``steps.csv``: ``step,t,iterations,residual[,...]`` (unknown columns are ignored);
-- ``mesh.csv`` (optional): ``link,node1,node2``, the end points of each link by point name.
+- ``steps.csv``: ``step,t,iterations,residual,cuts[,floor]``;
+- ``nodes.csv``: ``step,t,A.x,A.y,...``, every node (and meshed links' interior points) per step;
+- ``reactions.csv``: ``step,t,kind,link,node,fx,fy,m``; ``energy.csv``: ``step,t,kinetic,...``;
+  ``deflection.csv``: ``step,t,node,ux,uy``;
+- ``mesh.csv``: ``link,node1,node2``, the end points of each link by point name.
+
+Any of them: :func:`rows` (dictionaries, as text or numbers) and :func:`columns` (numpy
+arrays, rows selected by a name); the plots' forms: :func:`load_run` (points, links, steps
+and mesh as one :class:`Series` per point and link).
 
 Everything here raises :class:`UsageError` with a one-line message for anything a user can
 get wrong (missing files, bad numbers, missing columns), so that the scripts can print it and
@@ -135,6 +143,50 @@ def read_table(path: Path, names: tuple[str, ...], required: tuple[str, ...]
         else:
             arrays[name] = np.array(values, dtype=float)
     return header, arrays
+
+
+#: The text columns of FEKAP's CSV files (names of points, links and nodes, the kind of a
+#: reaction); every other column is a number.
+TEXT_COLUMNS = ("point", "link", "node", "kind", "node1", "node2")
+#: The columns of whole numbers.
+INTEGER_COLUMNS = ("step", "iterations", "cuts", "floor")
+
+
+def rows(path: Path, numbers: bool = False, **where: str) -> list[dict]:
+    """The rows of a CSV file FEKAP writes, as dictionaries by column name, in file order.
+
+    ``where`` keeps the rows whose text columns have the given values (``rows(p, point="C")``).
+    The fields are the text as written, or with ``numbers`` numbers: int in INTEGER_COLUMNS,
+    float in the others, None for an empty field (a rate not computed at a singular
+    configuration); the text columns stay text.
+    """
+    with open(path, newline="", encoding="utf-8") as handle:
+        found = [row for row in csv.DictReader(handle)
+                 if all(row.get(name) == value for name, value in where.items())]
+    if not numbers:
+        return found
+
+    def number(name: str, field: str):
+        if name in TEXT_COLUMNS:
+            return field
+        if not field.strip():
+            return None
+        return int(field) if name in INTEGER_COLUMNS else parse_number(field)
+
+    return [{name: number(name, field) for name, field in row.items()} for row in found]
+
+
+def columns(path: Path, **where: str) -> dict[str, np.ndarray]:
+    """The columns of a CSV file FEKAP writes as numpy arrays (``step`` of ints, the text
+    columns of strings, every other of floats, NaN for an empty field), with the rows whose
+    text columns have the values of ``where`` (``columns(p, point="T")``)."""
+    header, table = read_table(Path(path), TEXT_COLUMNS, ())
+    keep = np.ones(len(table[header[0]]) if header else 0, dtype=bool)
+    for name, value in where.items():
+        if name not in table:
+            raise UsageError(f"{path}: no column {name} in header '{','.join(header)}'")
+        keep &= table[name] == value
+    return {name: values[keep] for name, values in table.items()}
 
 
 @dataclass(frozen=True)

@@ -1,17 +1,17 @@
-"""Shared pieces of FEKAP's benchmark and study scripts: the executable, running
-a deck, reading the listing's SUMMARY and PLAN, and rewriting generated blocks
-of the docs between markers."""
+"""The fekap executable and running it: finding the executable (one rule for the
+scripts, the studies and the tests), running a deck, reading the listing's SUMMARY
+and PLAN; and the studies' shared pieces (the Exudyn environment, rewriting generated
+blocks of the docs between markers, the machine's description)."""
 
 from __future__ import annotations
 
-import csv
 import os
 import re
 import subprocess
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 RELEASE_BIN = ROOT / "build" / "local" / "bin" / "fekap"
 #: The comparison scripts' own environment with Exudyn (scripts/exudyn_*.py).
 EXUDYN_VENV = ROOT / "build" / "venv-exudyn"
@@ -19,11 +19,21 @@ EXUDYN_PACKAGES = ("exudyn==1.13.6", "numpy==2.4.6")
 
 
 def fekap_binary(explicit: str | None = None) -> str:
-    """The fekap executable: an explicit path, else $FEKAP_BIN, else the release build."""
+    """The fekap executable, one rule for the scripts, the studies and the tests: an explicit
+    path (a --bin or --fekap option), else $FEKAP_BIN (scripts/test sets it to its checking
+    build), else the release build of scripts/build (build/local/bin/fekap)."""
     for candidate in (explicit, os.environ.get("FEKAP_BIN"), str(RELEASE_BIN)):
         if candidate and Path(candidate).is_file():
             return str(Path(candidate).resolve())
     raise SystemExit("no fekap executable: run scripts/build first (or set FEKAP_BIN)")
+
+
+def run_fekap(*args: str, binary: str | None = None, cwd: Path = ROOT, timeout: float = 300,
+              input: str | None = None) -> subprocess.CompletedProcess:
+    """Run fekap with ``args`` (from the repository root unless ``cwd``), its output captured
+    as text."""
+    return subprocess.run([fekap_binary(binary), *map(str, args)], cwd=cwd, capture_output=True, text=True,
+                          timeout=timeout, input=input)
 
 
 def in_exudyn_venv(script: str, argv: list[str]) -> None:
@@ -40,6 +50,10 @@ def in_exudyn_venv(script: str, argv: list[str]) -> None:
         print(f"making {EXUDYN_VENV} with {', '.join(EXUDYN_PACKAGES)} from PyPI ...", file=sys.stderr)
         subprocess.run([sys.executable, "-m", "venv", str(EXUDYN_VENV)], check=True)
         subprocess.run([str(python), "-m", "pip", "install", "-q", *EXUDYN_PACKAGES], check=True)
+    # The scripts import this package: installed there too, in editable mode, as in build/venv.
+    if subprocess.run([str(python), "-c", "import fekap"], capture_output=True).returncode != 0:
+        subprocess.run([str(python), "-m", "pip", "install", "-q", "--no-deps", "-e", str(ROOT / "python")],
+                       check=True)
     os.execv(str(python), [str(python), script, *argv])
 
 
@@ -108,21 +122,6 @@ def read_listing(path: Path) -> dict:
     if match:
         plan["equations"] = int(match.group(1))
     return {"summary": summary, "plan": plan}
-
-
-def steps(outdir: Path) -> list[dict]:
-    """steps.csv as a list of rows with numbers."""
-    with open(outdir / "steps.csv", newline="") as handle:
-        return [{"step": int(r["step"]), "t": float(r["t"]), "iterations": int(r["iterations"]),
-                 "residual": float(r["residual"]), "cuts": int(r["cuts"])} for r in csv.DictReader(handle)]
-
-
-def points(outdir: Path, name: str) -> list[dict]:
-    """Rows of points.csv for one point, with numbers (empty fields are None)."""
-    with open(outdir / "points.csv", newline="") as handle:
-        rows = [r for r in csv.DictReader(handle) if r["point"] == name]
-    return [{k: (float(v) if v not in ("", None) else None) for k, v in r.items() if k != "point"}
-            for r in rows]
 
 
 def replace_block(path: Path, name: str, content: str) -> None:

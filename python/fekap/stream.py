@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fekap_csv import UsageError, parse_number
+from fekap.read import UsageError, parse_number
 
 #: Buckets per series: a curve has at most about three times as many points.
 MAX_BUCKETS = 1500

@@ -1,4 +1,4 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """Accuracy against cost: FEKAP runs on decks with exact answers, sweeping one
 setting at a time, recording the largest error against the exact answer and
 the time the run took.
@@ -21,7 +21,7 @@ Studies (deck, what is swept, the exact answer):
              its first bottom pass against T/4 = 0.591960487 s and 4.429446918 m/s,
              generalized-alpha with rho_inf 0.5, 0.8, 1; the A02 chain, N = 2,
              over 4 s: the first crank's angle and rate against the exact
-             motion (scripts/a02_exact.py, the energy integral's quadrature)
+             motion (python/fekap/exact/a02.py, the energy integral's quadrature)
              before the first change point (t <= 0.7 s: the integrator's
              error, with its observed order) and over the 4 s (with the
              change points, where the elastic bars take a kick), generalized-alpha (GA) and energy-momentum (EM) with
@@ -43,7 +43,7 @@ mean analysis time, median CPU time.
 Writes docs/performance/accuracy.png, docs/performance/accuracy.json and the
 table between the accuracy markers of docs/performance.md.
 
-Usage: python3 scripts/accuracy_study.py [--short] [--dynamics] [--bin FEKAP] [--repeat N]
+Usage: studies/accuracy/accuracy_study.py [--short] [--dynamics] [--bin FEKAP] [--repeat N]
   --short: a few points per study, prints the table, writes no docs.
   --dynamics: the dynamics table alone.
 """
@@ -60,13 +60,12 @@ import statistics
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import fekap_bench as fb  # noqa: E402
+import numpy as np
 
-sys.path.insert(0, str(fb.ROOT / "test" / "app"))
-from test_examples import fourbar_exact  # noqa: E402  (hyper-dual closed form of Example 1)
-import dynamics_checks as dc  # noqa: E402  (the benchmarks' answers from a run's CSV files)
-import numpy as np  # noqa: E402
+from fekap import dynamics as dc  # the benchmarks' answers from a run's CSV files
+from fekap import read
+from fekap import run as fb
+from fekap.exact.fourbar import fourbar_exact  # hyper-dual closed form of Example 1
 
 
 def slider_exact(t: float) -> tuple[float, float]:
@@ -139,7 +138,7 @@ def run(binary: str, work: Path, deck: str, analysis: dict | None = None, text_e
 
 
 def position_error(outdir: Path, point: str, exact) -> float:
-    rows = fb.points(outdir, point)
+    rows = read.rows(outdir / "points.csv", True, point=point)
     return max(math.hypot(r["x"] - exact(r["t"])[0], r["y"] - exact(r["t"])[1]) for r in rows)
 
 
@@ -149,7 +148,7 @@ def fourbar_errors(outdir: Path) -> dict:
     errors = {"position": 0.0, "velocity": 0.0, "acceleration": 0.0}
     scales = {"velocity": 0.0, "acceleration": 0.0}
     for index, point in enumerate(("B", "C")):
-        for r in fb.points(outdir, point):
+        for r in read.rows(outdir / "points.csv", True, point=point):
             e = fourbar_exact(r["t"])[index]
             errors["position"] = max(errors["position"], math.hypot(r["x"] - e[0].f, r["y"] - e[1].f))
             for key, kx, ky, part in (("velocity", "vx", "vy", "d"), ("acceleration", "ax", "ay", "dd")):
@@ -218,7 +217,7 @@ def measure(binary: str, work: Path, item: tuple, repeat: int) -> dict:
             if kind == "fourbar":
                 errors = fourbar_errors(result["outdir"])
             elif kind == "peaucellier":
-                errors = {"position": max(abs(r["x"] - 2.7) for r in fb.points(result["outdir"], "P"))}
+                errors = {"position": max(abs(r["x"] - 2.7) for r in read.rows(result["outdir"] / "points.csv", True, point="P"))}
             elif kind == "slider":
                 errors = {"position": position_error(result["outdir"], "B", slider_exact)}
             elif kind == "quick-return":
@@ -232,14 +231,14 @@ def measure(binary: str, work: Path, item: tuple, repeat: int) -> dict:
 
 
 def pendulum_errors(outdir: Path) -> dict:
-    """Errors of the first bottom pass: time and speed (dynamics_checks.bottom_pass)."""
+    """Errors of the first bottom pass: time and speed (fekap.dynamics.bottom_pass)."""
     t, speed = dc.bottom_pass(outdir)
     return {"error": abs(t - dc.BOTTOM_TIME), "second": abs(speed - dc.BOTTOM_SPEED)}
 
 
 def a02_errors(outdir: Path, n: int = 2) -> dict:
     """Largest errors of the first crank's angle (rad) and rate (rad/s)
-    against the exact motion (dynamics_checks.a02_errors): before the first
+    against the exact motion (fekap.dynamics.a02_errors): before the first
     change point (the integrator's error: error, second) and over the run
     (angle_all, rate_all: with the change points, where the elastic bars'
     stiff modes take a kick that the rigid answer has not)."""

@@ -1,4 +1,4 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """FEKAP's performance benchmarks (run through scripts/bench, which builds the
 release binary first).
 
@@ -17,7 +17,7 @@ release binary first).
 
    Neither includes reading the deck or starting the process.
 
-2. Scale: scissor lifts of N cells (scripts/scissor.py), time per
+2. Scale: scissor lifts of N cells (python/fekap/models/scissor.py), time per
    configuration, peak RSS and half-bandwidth for N = 10 ... 10,000 with the
    band solver, and with a dense LU (ANALysis `solver dense`) where feasible.
 
@@ -25,7 +25,7 @@ release binary first).
    time, and the process's CPU time less a one-step run's) and Newton iterations per step of the
    flexible slider-crank and the A02 chain N = 40, and Exudyn's CPU time and
    iterations per step on the same slider-crank when build/venv-exudyn exists
-   (scripts/exudyn_slider_crank.py --cost), with the speed ratios at equal
+   (studies/exudyn/exudyn_slider_crank.py --cost), with the speed ratios at equal
    accuracy of the last study it recorded (docs/dynamics/exudyn-slider-crank.json).
    Its line, before the last:
 
@@ -41,7 +41,7 @@ time, full kinematics, CSV of B and C written.)
 Without --quick the figures also go to docs/performance.md (between the
 bench markers), docs/performance/bench.json and docs/performance/scissor.png.
 
-4. Instructions (scripts/bench_instructions.py): the marginal user-space
+4. Instructions (studies/bench/bench_instructions.py): the marginal user-space
    instructions per configuration of a fixed set of cases under valgrind's
    callgrind (Example 1 P and P+V+A, with the listing alone and with the
    deck's CSV files; the scissor lift at N = 100 and 1,000; a dynamics step of
@@ -70,10 +70,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import bench_instructions as bi  # noqa: E402
-import fekap_bench as fb  # noqa: E402
-import scissor  # noqa: E402
+from fekap import run as fb
+from fekap.models import scissor
+
+import bench_instructions as bi
 
 COMPUTE = {
     "positions": "positions",
@@ -234,7 +234,7 @@ def children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-#: Exudyn's side of the slider-crank (scripts/exudyn_slider_crank.py, in its own
+#: Exudyn's side of the slider-crank (studies/exudyn/exudyn_slider_crank.py, in its own
 #: environment) and the last equal-accuracy study it recorded.
 EXUDYN_PYTHON = fb.ROOT / "build" / "venv-exudyn" / "bin" / "python"
 EXUDYN_STUDY = fb.ROOT / "docs" / "dynamics" / "exudyn-slider-crank.json"
@@ -243,7 +243,7 @@ EXUDYN_STUDY = fb.ROOT / "docs" / "dynamics" / "exudyn-slider-crank.json"
 def exudyn_case(quick: bool, repeat: int) -> dict | None:
     """Exudyn's CPU microseconds and Newton iterations per step on the
     slider-crank at the deck's dt (median of `repeat` runs, as FEKAP's); None without
-    build/venv-exudyn (made by the first run of scripts/exudyn_slider_crank.py)."""
+    build/venv-exudyn (made by the first run of studies/exudyn/exudyn_slider_crank.py)."""
     if not EXUDYN_PYTHON.is_file():
         return None
     t_end = DYNAMICS["slider-crank"][1 if quick else 2]["t_end"]
@@ -325,7 +325,7 @@ def dynamics_section(binary: str, work: Path, quick: bool, repeat: int) -> tuple
     """Section 3: the dynamics decks' cost per step, Exudyn's on the
     slider-crank, and the equal-accuracy ratios of the last study; printed."""
     print("\nDynamics (decks/dynamics, generalized-alpha rho_inf 0.8; Exudyn on the slider-crank: "
-          "scripts/exudyn_slider_crank.py)")
+          "studies/exudyn/exudyn_slider_crank.py)")
     dynamics = {name: dynamics_case(binary, work, name, quick, repeat) for name in DYNAMICS}
     for name, c in dynamics.items():
         print(f"  {name:14s} {c['equations']:5.0f} equations, {c['steps']:6.0f} steps: {c['us_per_step']:9.1f} us "
@@ -337,10 +337,10 @@ def dynamics_section(binary: str, work: Path, quick: bool, repeat: int) -> tuple
               f"{exudyn['iterations_per_step']:.2f} Newton iterations per step "
               f"({exudyn['us_per_step'] / dynamics['slider-crank']['cpu_us_per_step']:.1f} x FEKAP's CPU per step)")
     else:
-        print("  slider-crank, Exudyn: not run (no build/venv-exudyn: scripts/exudyn_slider_crank.py makes it)")
+        print("  slider-crank, Exudyn: not run (no build/venv-exudyn: studies/exudyn/exudyn_slider_crank.py makes it)")
     equal = json.loads(EXUDYN_STUDY.read_text())["equal_error"] if EXUDYN_STUDY.is_file() else []
     if equal:
-        print("  at equal accuracy (docs/dynamics.md, scripts/exudyn_slider_crank.py --study): Exudyn / FEKAP CPU "
+        print("  at equal accuracy (docs/dynamics.md, studies/exudyn/exudyn_slider_crank.py --study): Exudyn / FEKAP CPU "
               + ", ".join(f"{e['ratio']:.1f} x at {e['error']:.0e} m" for e in equal))
     return dynamics, exudyn, equal
 

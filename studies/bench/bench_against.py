@@ -1,4 +1,4 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """Two fekap executables on the same cases of Example 1, taking turns: a
 before/after comparison on a shared machine whose speed drifts over minutes
 (a slow spell then falls on both alike). Full kinematics at dt (default
@@ -6,11 +6,11 @@ before/after comparison on a shared machine whose speed drifts over minutes
 (track B C), --repeat rounds (default 9); prints the medians and ranges of
 the analysis and total time per configuration and the ratio of the medians.
 
-Usage: python3 scripts/bench_against.py BEFORE AFTER [--dt DT] [--repeat N]
+Usage: studies/bench/bench_against.py BEFORE AFTER [--dt DT] [--repeat N]
 
 To compare with an earlier commit:
   git worktree add /tmp/fekap-old REV && (cd /tmp/fekap-old && fpm build --profile release)
-  python3 scripts/bench_against.py /tmp/fekap-old/build/gfortran_*/app/fekap build/local/bin/fekap
+  studies/bench/bench_against.py /tmp/fekap-old/build/gfortran_*/app/fekap build/local/bin/fekap
 """
 
 from __future__ import annotations
@@ -18,12 +18,10 @@ from __future__ import annotations
 import argparse
 import shutil
 import statistics
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import fekap_bench as fb  # noqa: E402
-from bench import FILES, fourbar_deck, fourbar_run  # noqa: E402
+from fekap import run as fb
+
+from bench import FILES, fourbar_deck, fourbar_run
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,4 +1,4 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """Throughput of fekap-batch: cases per second for N short cases (default 1,000:
 decks/sweeps/fourbar-crank.deck, one crank turn at dt = 0.05, 20 steps, each
 case its own crank length) run three ways:
@@ -8,7 +8,7 @@ case its own crank length) run three ways:
   batch      scripts/fekap-batch on a LocalCluster (one worker per core),
              cluster start and stop, hashing, case.json and summary included.
 
-    python3 scripts/bench_batch.py [N] [--fekap PATH]
+    studies/bench/bench_batch.py [N] [--fekap PATH]
 
 Prints the figures; docs/performance.md quotes them. Not a test: it times."""
 
@@ -24,7 +24,7 @@ import threading
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DECK = ROOT / "decks" / "sweeps" / "fourbar-crank.deck"
 
 
@@ -62,9 +62,8 @@ def main() -> int:
         sweep.write_text(f'decks = ["{DECK}"]\n[parameters]\ncrank = {{ linspace = [1.6, 2.4, {args.n}] }}\n'
                          '[options]\ndt = [0.05]\n')
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "batch", str(sweep), "-o", str(work / "batch"), "--fekap",
-                        args.fekap, "--no-plots", "-q"], check=True,
-                       env=dict(os.environ, PYTHONPATH=str(ROOT / "scripts")))
+        subprocess.run([sys.executable, "-m", "fekap.batch", str(sweep), "-o", str(work / "batch"), "--fekap",
+                        args.fekap, "--no-plots", "-q"], check=True)
         batch = time.perf_counter() - start
     finally:
         shutil.rmtree(work, ignore_errors=True)

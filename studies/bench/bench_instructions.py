@@ -1,4 +1,4 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """Instruction counts of FEKAP's fixed benchmark cases (valgrind's callgrind):
 the machine's load cannot move them, so they catch a regression that timings
 on a shared machine would drown.
@@ -19,7 +19,7 @@ Cases (CASES below):
   accelerations, each with the listing alone (`files listing`, track B C)
   and with the CSV files that `fekap decks/fourbar.deck --dt 1e-4` writes
   (the deck's own output: points, links, steps, nodes, mesh, listing);
-- the scissor lift of issue #16 (scripts/scissor.py N --law sine --slider,
+- the scissor lift of issue #16 (python/fekap/models/scissor.py N --law sine --slider,
   dt 0.01, full kinematics, listing only) at N = 100 and 1,000, 10 and 20 steps;
 - the flexible slider-crank (decks/dynamics/slider-crank.deck, dt 1e-4,
   generalized-alpha), 100 and 200 steps.
@@ -37,8 +37,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
-import fekap_bench as fb
-import scissor
+from fekap import run as fb
+from fekap.models import scissor
 
 #: A rise of a case's count above this fraction fails `scripts/bench --check`.
 CHECK_RISE = 0.05
@@ -127,7 +127,7 @@ def table(results: dict) -> str:
     """The Markdown table of measure's results."""
     rows = ["| case | instructions per configuration (marginal) | short run | long run | steps between |",
             "| --- | ---: | ---: | ---: | ---: |"]
-    for name, r in results.items():
+    for r in results.values():
         rows.append(f"| {r['what']} | {r['instructions_per_configuration']:,} | {r['short_run']:,} | "
                     f"{r['long_run']:,} | {r['steps_between']:,} |")
     return "\n".join(rows)

@@ -1,7 +1,7 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """The cost of FEKAP's pictures against the number of steps: a benchmark script, not a test.
 
-    python3 scripts/bench_output.py [--plot-steps N ...] [--vtk-steps N ...]
+    studies/bench/bench_output.py [--plot-steps N ...] [--vtk-steps N ...]
 
 Plotting: Example 1 (decks/fourbar.deck, full kinematics, B and C tracked) run with dt = 1/N for
 each N of --plot-steps (default 1e4 1e5 1e6), then `scripts/plot.py OUTDIR` (every figure, no
@@ -23,8 +23,10 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-FEKAP = ROOT / "build" / "local" / "bin" / "fekap"
+from fekap import run as fb
+
+ROOT = fb.ROOT
+FEKAP = Path(fb.fekap_binary())
 
 
 def child_usage() -> tuple[float, int]:
@@ -94,9 +96,6 @@ def main() -> int:
     parser.add_argument("--plot-steps", type=int, nargs="*", default=[10_000, 100_000, 1_000_000])
     parser.add_argument("--vtk-steps", type=int, nargs="*", default=[1000, 4000, 16000])
     args = parser.parse_args()
-    if not FEKAP.is_file():
-        print(f"bench_output: no {FEKAP} (run scripts/build)", file=sys.stderr)
-        return 1
     work = Path(tempfile.mkdtemp(prefix="fekap-bench-output-"))
     try:
         if args.vtk_steps:

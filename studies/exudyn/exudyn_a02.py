@@ -1,10 +1,10 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """The IFToMM A02 N-four-bar (decks/dynamics/a02-n40.deck) in Exudyn, as rigid
 bodies, against its exact energy integral and against FEKAP's flexible run of
 the deck: the first crank's rate and angle errors and the CPU time per step of
 both. A comparison script, not a test.
 
-    scripts/exudyn_a02.py [--n 40] [--dt 0.002] [--t-end 5]
+    studies/exudyn/exudyn_a02.py [--n 40] [--dt 0.002] [--t-end 5]
 
 The chain: N + 1 vertical cranks (1 m, 1 kg, uniform) pinned at (i, 0) and N
 horizontal couplers (1 m, 1 kg) between their tips, g = 9.81 along -y, the
@@ -13,14 +13,14 @@ m L^2 / 12 about the centre), ObjectJointRevolute2D pins (index 3,
 generalized-alpha with rho_inf 0.8, its default Newton tolerances). It is one
 pendulum of inertia I = (N+1)/3 + N about the pivots and gravity moment
 G cos(theta), G = ((N+1)/2 + N) g, so omega^2 = 1 + 2 G/I (1 - sin theta)
-and theta(t) by its quadrature (scripts/a02_exact.py) give the exact motion. The rigid chain's constraints
+and theta(t) by its quadrature (python/fekap/exact/a02.py) give the exact motion. The rigid chain's constraints
 (3N + 1 pins of 2 equations: 3 (2N + 1) - 1 equations on 3 (2N + 1)
 coordinates) are redundant where every bar is horizontal (the change points),
 which a constraint-based code must pass; FEKAP's elastic bars (EA = 1e10) pass
 them without constraints. CPU time: Exudyn's time.process_time() around
 SolveDynamic; FEKAP's process (start-up and the CSV output of every step
-included). Exudyn runs in build/venv-exudyn (made on the first run, fekap_bench.EXUDYN_PACKAGES); FEKAP is build/local/bin/fekap
-(fekap_bench.run_deck). Errors: dynamics_checks.a02_crank_errors, as the tests.
+included). Exudyn runs in build/venv-exudyn (made on the first run, fekap.run.EXUDYN_PACKAGES); FEKAP is build/local/bin/fekap
+(fekap.run.run_deck). Errors: fekap.dynamics.a02_crank_errors, as the tests.
 """
 
 from __future__ import annotations
@@ -31,16 +31,22 @@ import resource
 import shutil
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import fekap_bench as fb  # noqa: E402
+from fekap import run as fb
 
 
 def run_exudyn(n: int, dt: float, t_end: float) -> dict:
     import exudyn as exu
-    from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBodyPosition, NodeRigidBody2D,
-                                      ObjectGround, ObjectJointRevolute2D, ObjectRigidBody2D, SensorNode)
+    from exudyn.itemInterface import (
+        LoadMassProportional,
+        MarkerBodyMass,
+        MarkerBodyPosition,
+        NodeRigidBody2D,
+        ObjectGround,
+        ObjectJointRevolute2D,
+        ObjectRigidBody2D,
+        SensorNode,
+    )
 
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
@@ -93,7 +99,7 @@ def run_exudyn(n: int, dt: float, t_end: float) -> dict:
 
 
 def run_fekap(n: int, dt: float, t_end: float) -> dict:
-    import dynamics_checks as dc
+    from fekap import dynamics as dc
 
     deck = fb.ROOT / "decks" / "dynamics" / f"a02-n{n}.deck"
     work = fb.scratch_dir("fekap-a02-")
@@ -115,7 +121,7 @@ def main() -> int:
     parser.add_argument("--t-end", type=float, default=5.0)
     args = parser.parse_args()
     fb.in_exudyn_venv(__file__, sys.argv[1:])
-    import dynamics_checks as dc
+    from fekap import dynamics as dc
     print(f"A02 N = {args.n}, dt {args.dt:g}, {args.t_end:g} s, rho_inf 0.8; first crank against the energy integral")
     for name, run in (("Exudyn 1.13.6, rigid bars", run_exudyn), ("FEKAP, elastic bars (the deck)", run_fekap)):
         r = run(args.n, args.dt, args.t_end)

@@ -1,12 +1,12 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """Compare FEKAP's flexible slider-crank (decks/dynamics/slider-crank.deck) with Exudyn's
 geometrically exact 2D beam (ObjectBeamGeometricallyExact2D) on the same model: the
 connecting rod's midpoint deflection (the distance of M from the line AB) over the run,
 and the time per step of both. A comparison script, not a test.
 
-    scripts/exudyn_slider_crank.py [--elements N] [--dt DT] [--t-end T] [--rho-inf R]
-    scripts/exudyn_slider_crank.py --study [--t-end 0.05] [--repeat R] [--json PATH]
-    scripts/exudyn_slider_crank.py --cost [--dt DT] [--t-end T] [--repeat R]
+    studies/exudyn/exudyn_slider_crank.py [--elements N] [--dt DT] [--t-end T] [--rho-inf R]
+    studies/exudyn/exudyn_slider_crank.py --study [--t-end 0.05] [--repeat R] [--json PATH]
+    studies/exudyn/exudyn_slider_crank.py --cost [--dt DT] [--t-end T] [--repeat R]
 
 --cost prints one JSON line: Exudyn's CPU microseconds and Newton iterations
 per step at DT (the median of R runs, as scripts/bench takes FEKAP's), for
@@ -49,7 +49,6 @@ import argparse
 import csv
 import json
 import math
-import os
 import resource
 import statistics
 import subprocess
@@ -58,8 +57,7 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import fekap_bench as fb  # noqa: E402  (the Exudyn environment, shared with the other exudyn_*.py)
+from fekap import run as fb  # the Exudyn environment, shared with the other exudyn_*.py
 
 ROOT = fb.ROOT
 
@@ -71,7 +69,7 @@ CRANK, ROD, OMEGA = 0.15, 0.30, 150.0
 
 
 def ensure_exudyn() -> None:
-    """Run this script in build/venv-exudyn (made and filled on the first run: fekap_bench)."""
+    """Run this script in build/venv-exudyn (made and filled on the first run: fekap.run.in_exudyn_venv)."""
     fb.in_exudyn_venv(__file__, sys.argv[1:])
 
 
@@ -90,9 +88,16 @@ def run_exudyn(n: int, dt: float, t_end: float, rho_inf: float, details: dict | 
     where it then cuts steps for nothing); `details` receives the solver's
     steps taken, Newton iterations and Jacobians."""
     import exudyn as exu
-    from exudyn.itemInterface import (MarkerNodeCoordinate, MarkerNodePosition, NodePointGround, NodeRigidBody2D,
-                                      ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate,
-                                      ObjectJointRevolute2D, SensorNode)
+    from exudyn.itemInterface import (
+        MarkerNodeCoordinate,
+        MarkerNodePosition,
+        NodePointGround,
+        NodeRigidBody2D,
+        ObjectBeamGeometricallyExact2D,
+        ObjectConnectorCoordinate,
+        ObjectJointRevolute2D,
+        SensorNode,
+    )
 
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
@@ -164,9 +169,7 @@ def run_fekap(n: int, dt: float, t_end: float, rho_inf: float, details: dict | N
     time) and steps of FEKAP's run of the deck, writing every `every`-th step;
     `details` receives the run's process CPU seconds ("cpu") and the
     listing's SUMMARY numbers."""
-    binary = Path(os.environ.get("FEKAP_BIN") or ROOT / "build" / "local" / "bin" / "fekap")
-    if not binary.is_file():
-        sys.exit(f"{binary}: missing; build it with scripts/build")
+    binary = fb.fekap_binary()
     deck = (ROOT / "decks" / "dynamics" / "slider-crank.deck").read_text()
     deck = deck.replace("steel  4 ", f"steel  {n} ")
     if rho_inf != 0.8:
@@ -323,8 +326,8 @@ def study(n: int, t_end: float, rho_inf: float, repeat: int, json_path: Path | N
                    "error": worst_difference(run["series"], reference[code]), "cpu": cpu,
                    "us_per_step": 1e6 * cpu / steps, "cpu_per_simulated_second": cpu / t_end}
             rows.append(row)
-            print(f"| {dt:.4g} | {code} | {steps} ({taken:.0f}) | {run['written']} | {its:.2f} | {row['error']:.3e} | {row['us_per_step']:.1f} | "
-                  f"{row['cpu_per_simulated_second']:.3g} |")
+            print(f"| {dt:.4g} | {code} | {steps} ({taken:.0f}) | {run['written']} | {its:.2f} | {row['error']:.3e} | "
+                  f"{row['us_per_step']:.1f} | {row['cpu_per_simulated_second']:.3g} |")
     curves = {code: [(r["error"], r["cpu_per_simulated_second"]) for r in rows if r["code"] == code]
               for code in ("FEKAP", "Exudyn")}
     print("\nat equal error (each against its own converged run; log-log interpolation):")

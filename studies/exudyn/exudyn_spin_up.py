@@ -1,15 +1,15 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """The spin-up beam (decks/dynamics/spin-up.deck, Simo & Vu-Quoc 1986) in
 Exudyn, an independent code, against FEKAP: the tip's transverse deflection
 and axial stretch in the hub's frame over 0-30 s. A comparison script, not a
 test; `--store` writes the numbers test/app/test_dynamics.py checks FEKAP
 against.
 
-    scripts/exudyn_spin_up.py [--cases 10:0.01,40:0.0025] [--rho-inf 0.8] [--store]
+    studies/exudyn/exudyn_spin_up.py [--cases 10:0.01,40:0.0025] [--rho-inf 0.8] [--store]
 
 The model: L = 10, EA = 2.8e7, GA = 1e7, EI = 1.4e4, rhoA = 1.2, rhoI = 6e-4,
 clamped to a hub at the origin turned by the deck's drive table (the natural
-cubic spline through the published law, scripts/spin_up_deck.py; the same
+cubic spline through the published law, python/fekap/models/spin_up.py; the same
 motion FEKAP is driven by). Exudyn: NodeRigidBody2D nodes and
 ObjectBeamGeometricallyExact2D elements (the 2D Simo-Reissner beam, like
 FEKAP's), the first node's x and y held by ObjectConnectorCoordinate and its
@@ -29,7 +29,7 @@ same model once FEKAP's stiffness-proportional damping acts on the material
 strain rates.
 
 Exudyn runs in build/venv-exudyn (made on the first run, pinned in
-fekap_bench.EXUDYN_PACKAGES); FEKAP is build/local/bin/fekap (scripts/build).
+fekap.run.EXUDYN_PACKAGES); FEKAP is build/local/bin/fekap (scripts/build).
 """
 
 from __future__ import annotations
@@ -40,8 +40,7 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import fekap_bench as fb  # noqa: E402
+from fekap import run as fb
 
 DECK = fb.ROOT / "decks" / "dynamics" / "spin-up.deck"
 DATA = fb.ROOT / "test" / "app" / "data"
@@ -59,9 +58,16 @@ def run_exudyn(elements: int, dt: float, rho_inf: float, t_end: float = T_END, b
     `beta`: stiffness-proportional damping of the strain rates (Exudyn's axial, shear and
     bending damping beta EA, beta GA, beta EI: the material strain rates, objective)."""
     import exudyn as exu
-    from exudyn.itemInterface import (MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D,
-                                      ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, SensorNode)
-    import spin_up_deck
+    from exudyn.itemInterface import (
+        MarkerNodeCoordinate,
+        NodePointGround,
+        NodeRigidBody2D,
+        ObjectBeamGeometricallyExact2D,
+        ObjectConnectorCoordinate,
+        SensorNode,
+    )
+
+    from fekap.models import spin_up as spin_up_deck
 
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
@@ -106,7 +112,7 @@ def run_exudyn(elements: int, dt: float, rho_inf: float, t_end: float = T_END, b
 def run_fekap(elements: int, dt: float, rho_inf: float, t_end: float = T_END, beta: float = 0.0) -> dict:
     """The same from FEKAP's run of the deck (element count, dt, rho_inf and the
     section's Rayleigh beta changed)."""
-    import dynamics_checks as dc
+    from fekap import dynamics as dc
 
     text = DECK.read_text()
     if "OT  O  T  beam  10" not in text:
@@ -137,7 +143,7 @@ def main() -> int:
     fb.in_exudyn_venv(__file__, sys.argv[1:])
     import numpy as np
 
-    import dynamics_checks as dc
+    from fekap import dynamics as dc
 
     print(f"spin-up beam, generalized-alpha rho_inf {args.rho_inf:g}, 0-{T_END:g} s, beta {args.beta:g}; "
           "tip in the hub's frame")
@@ -166,7 +172,8 @@ def main() -> int:
             path = stored(args.beta)
             path.parent.mkdir(parents=True, exist_ok=True)
             with open(path, "w") as handle:
-                handle.write(f"# The spin-up beam in Exudyn 1.13.6 (scripts/exudyn_spin_up.py --store --beta {args.beta:g}):\n"
+                handle.write("# The spin-up beam in Exudyn 1.13.6 "
+                             f"(studies/exudyn/exudyn_spin_up.py --store --beta {args.beta:g}):\n"
                              f"# 10 ObjectBeamGeometricallyExact2D elements, dt 0.01, generalized-alpha {args.rho_inf:g};\n"
                              "# the tip's axial stretch and transverse deflection in the hub's frame every 0.05 s.\n")
                 handle.write("t,along,across\n")

@@ -1,5 +1,5 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
-"""Run FEKAP's hard cases of issue #16 and write their table into docs/hard-cases.md.
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
+"""Run FEKAP's hard cases and write their table into docs/hard-cases.md.
 
 One row per case: the mechanism and options, the exit code, the rows, the
 largest errors against the exact motion (positions relative to the largest
@@ -8,16 +8,16 @@ without rates, Newton iterations per configuration and step cuts (steps.csv),
 and the analysis time per configuration (the listing's "time in analysis"
 over the rows, the least of three runs). Cases:
 
-* the IFToMM A02 N-four-bar (scripts/a02.py), N = 2, 4, 10, 40, at
+* the IFToMM A02 N-four-bar (python/fekap/models/a02_kinematic.py), N = 2, 4, 10, 40, at
   dt = 0.01, 0.02, 0.025, 0.05, 1/12: change points at t = 0.25, 0.75;
 * the double crank of Example 3 landing on (0.025, 0.05, 1/12) or stepping
   over (0.02) its collinear positions;
 * the near-toggle Grashof four-bar at large steps: `--predictor taylor` at 0.2
   and 0.3, the classical methods with `extrapolate` at 0.2, 0.3 and 0.5;
-* the scissor lifts of items 1-2 (N = 10, 100, 1000), by scripts/scissor.py's run_check()
+* the scissor lifts of items 1-2 (N = 10, 100, 1000), by python/fekap/models/scissor.py's run_check()
   when it has one (the rows are that script's; the same columns).
 
-Usage:  python3 scripts/hard_cases.py [--fekap BIN] [--doc docs/hard-cases.md] [--print]
+Usage:  studies/hard_cases/hard_cases.py [--fekap BIN] [--doc docs/hard-cases.md] [--print]
 BIN defaults to build/local/bin/fekap (scripts/build). The table replaces the
 text between the two marker lines of the page (--print: standard output only).
 Times are of one run on whatever machine runs it: compare rows of one table.
@@ -32,12 +32,12 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "scripts"))
-import a02  # noqa: E402
-import fekap_bench as fb  # noqa: E402
+from fekap import run as fb
+from fekap.models import a02_kinematic as a02
 
-BEGIN = "<!-- hard-cases table: begin (written by scripts/hard_cases.py; do not edit by hand) -->"
+ROOT = fb.ROOT
+
+BEGIN = "<!-- hard-cases table: begin (written by studies/hard_cases/hard_cases.py; do not edit by hand) -->"
 END = "<!-- hard-cases table: end -->"
 COLUMNS = ("case", "options", "exit", "rows", "pos", "vel", "acc", "no rates", "its/config", "cuts",
            "us/config")
@@ -217,12 +217,12 @@ def grashof_rows(fekap: str, work: Path) -> list[dict]:
 
 
 def scissor_rows(fekap: str, work: Path, sizes: tuple[int, ...] = (10, 100, 1000)) -> tuple[list[dict], str]:
-    """The scissor lifts of items 1-2 (scripts/scissor.py's run_check: the issue's
+    """The scissor lifts of items 1-2 (python/fekap/models/scissor.py's run_check: the issue's
     layout, errors relative to the closed form's largest value of each kind)."""
     try:
-        import scissor  # noqa: E402
+        from fekap.models import scissor
     except ImportError as e:
-        return [], f"scripts/scissor.py could not be imported ({e})"
+        return [], f"python/fekap/models/scissor.py could not be imported ({e})"
     rows = []
     for cells in sizes:
         r = scissor.run_check(cells, 0.01, Path(fekap), work)
@@ -230,7 +230,7 @@ def scissor_rows(fekap: str, work: Path, sizes: tuple[int, ...] = (10, 100, 1000
                      "rows": r["steps"] + 1, "pos": r["pos"], "vel": r["vel"], "acc": r["acc"],
                      "its/config": r["its"], "us/config": r["us"] * r["equations"]})
     return rows, ("scissor rows: errors relative to the closed form's largest value; N = 10,000 with "
-                  "`python3 scripts/scissor.py --check 10000` (section 7)")
+                  "`scripts/python -m fekap.models.scissor --check 10000` (section 7)")
 
 
 def cell(row: dict, key: str) -> str:

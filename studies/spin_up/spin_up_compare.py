@@ -1,11 +1,11 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
+#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/../../scripts/python" "$0" "$@"'
 """Compare FEKAP's spin-up beam (decks/dynamics/spin-up.deck) with the
-independent linear rotating-beam model of scripts/spin_up_reference.py: the
+independent linear rotating-beam model of python/fekap/exact/spin_up.py: the
 transverse tip deflection in the hub's frame over 0-30 s, for 10, 20, 40 and
 80 elements at dt 0.01, 0.005 and 0.0025 (the deck: 10 elements, dt 0.01).
 A comparison script, not a test (test/app/test_dynamics.py checks the deck).
 
-    scripts/spin_up_compare.py [--plot docs/dynamics/spin-up.png] [--beta B]
+    studies/spin_up/spin_up_compare.py [--plot docs/dynamics/spin-up.png] [--beta B]
 
 --beta B adds a run of the deck with stiffness-proportional Rayleigh damping
 beta = B on the section (the published case has none; docs/dynamics.md shows
@@ -25,10 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import dynamics_checks as dc  # noqa: E402
-import fekap_bench as fb  # noqa: E402
-import spin_up_reference as reference  # noqa: E402
+from fekap import dynamics as dc
+from fekap import run as fb
+from fekap.exact import spin_up as reference
 
 ROOT = fb.ROOT
 DECK = ROOT / "decks" / "dynamics" / "spin-up.deck"

@@ -10,15 +10,11 @@ Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_free_motion.py
 
 from __future__ import annotations
 
-import re
 import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary  # noqa: E402
+from apptest import ROOT, fekap_binary
 
 FOURBAR = (ROOT / "decks" / "fourbar.deck").read_text()
 

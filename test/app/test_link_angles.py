@@ -10,11 +10,9 @@ from __future__ import annotations
 
 import math
 import subprocess
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary, read_rows  # noqa: E402
+from apptest import ROOT, fekap_binary, read_rows
 
 
 def fekap(*args) -> subprocess.CompletedProcess:

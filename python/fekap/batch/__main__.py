@@ -1,7 +1,7 @@
-"""python3 -m batch (scripts/fekap-batch): see batch.cli."""
+"""python -m fekap.batch (scripts/fekap-batch): see fekap.batch.cli."""
 
 import sys
 
-from batch.cli import main
+from fekap.batch.cli import main
 
 sys.exit(main())

@@ -26,10 +26,21 @@ import sys
 from pathlib import Path
 
 from . import engine, results
-from .sweep import (MAX_CASES, Place, Problems, Sweep, SweepError, check_count, expand, expand_decks,
-                    load_sweep, option_values, values_of)
+from .sweep import (
+    MAX_CASES,
+    Place,
+    Problems,
+    Sweep,
+    SweepError,
+    check_count,
+    expand,
+    expand_decks,
+    load_sweep,
+    option_values,
+    values_of,
+)
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 PROG = "fekap-batch"
 
 

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-import compare
-import fekap_csv as fc
-import fekap_stream as fs
+from fekap import compare
+from fekap import read as fc
+from fekap import stream as fs
 
 from . import task
 from .sweep import Case, format_value

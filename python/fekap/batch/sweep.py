@@ -411,8 +411,8 @@ def expand(sweep: Sweep, version: str) -> tuple[list[Case], dict[Case, Case]]:
         if len({lengths[k] for k in longest}) > 1:
             for k in longest:
                 section = "parameters" if k in sweep.parameters else "options"
-                problems.add(f"{section}.{k}", f"combine = \"zip\" needs lists of one length; "
-                             f"the lists have " + ", ".join(f"{n}: {lengths[n]}" for n in longest))
+                problems.add(f"{section}.{k}", "combine = \"zip\" needs lists of one length; "
+                             "the lists have " + ", ".join(f"{n}: {lengths[n]}" for n in longest))
     problems.check()
     check_count(sweep)
 

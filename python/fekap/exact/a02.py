@@ -1,4 +1,3 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """The exact motion of the IFToMM A02 N-four-bar in dynamics (decks/dynamics/a02-*.deck):
 with rigid bars the chain is one pendulum about the crank pivots, of inertia
 I = (N+1) m L^2/3 + N m L^2 and gravity moment G cos(theta), G = ((N+1)/2 + N) m g L
@@ -14,7 +13,7 @@ never zero, and the time at which the crank passes theta is the quadrature
 here by 20-point Gauss-Legendre panels of 1/16 rad (the integrand is analytic:
 exact to round-off, about 1e-15 s over 20 s); theta(t) by Newton on t(theta) = t.
 
-Usage: python3 scripts/a02_exact.py N T...   (prints t, theta, omega)
+Usage: scripts/python -m fekap.exact.a02 N T...   (prints t, theta, omega)
 """
 
 from __future__ import annotations

@@ -1,4 +1,3 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """An independent solution of the spin-up beam (decks/dynamics/spin-up.deck):
 the transverse tip deflection in the hub's frame by a linear rotating-beam
 model with centrifugal (geometric) stiffening, as in Kane, Ryan & Banerjee
@@ -25,7 +24,7 @@ clamped-free modes (int phi_i^2 = L),
 Shear (EI/(GA L^2) = 1.4e-5) and rotary inertia (rhoI/(rhoA L^2) = 5e-6)
 change the first frequency by less than 1e-5 and are left out.
 
-    python3 scripts/spin_up_reference.py [--modes N] [--dt DT] [--law exact|table]
+    scripts/python -m fekap.exact.spin_up [--modes N] [--dt DT] [--law exact|table]
 
 prints the peak transverse tip deflection and its time, its value at
 t = 15 s and its largest magnitude after t = 15 s; `--law table` drives the
@@ -40,8 +39,8 @@ import math
 
 import numpy as np
 
-import spin_up_deck
-from dynamics_checks import spin_up_features as features
+from fekap.dynamics import spin_up_features as features
+from fekap.models import spin_up as spin_up_deck
 
 L, EI, RHOA = 10.0, 1.4e4, 1.2
 T_SPIN, OMEGA = 15.0, 6.0
@@ -57,7 +56,7 @@ def hub_rates(t: float) -> tuple[float, float]:
 
 def table_rates(t: float) -> tuple[float, float]:
     """Angular velocity and acceleration of the deck's drive: the natural
-    cubic spline through the law's values (scripts/spin_up_deck.py's table)."""
+    cubic spline through the law's values (python/fekap/models/spin_up.py's table)."""
     return spin_up_deck.table_motion(t)[1:]
 
 

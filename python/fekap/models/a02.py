@@ -1,4 +1,3 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Write the IFToMM A02 N-four-bar deck for dynamics (decks/dynamics/a02-n<N>.deck).
 
 N + 1 vertical cranks (1 m, 1 kg) on pivots 1 m apart, N horizontal couplers
@@ -7,14 +6,14 @@ N + 1 vertical cranks (1 m, 1 kg) on pivots 1 m apart, N horizontal couplers
 its energy integral gives the first crank's angle and rate exactly
 (test/app/test_dynamics.py).
 
-    python3 scripts/a02_deck.py N [DT] > decks/dynamics/a02-n<N>.deck
+    scripts/python -m fekap.models.a02 N [DT] > decks/dynamics/a02-n<N>.deck
 """
 import sys
 
 
 def deck(n, dt=2e-3, t_end=20.0):
     lines = [
-        f"* IFToMM A02 N-four-bar in dynamics, N = {n} (written by scripts/a02_deck.py {n} {dt:g}):",
+        f"* IFToMM A02 N-four-bar in dynamics, N = {n} (written by fekap.models.a02 {n} {dt:g}):",
         f"* {n + 1} vertical cranks and {n} horizontal couplers, uniform 1 m / 1 kg stiff bars,",
         "* g = 9.81 along -y, crank tips starting at 1 m/s along x; the chain passes the",
         "* horizontal change points (all bars flat on the x axis) by its inertia. Exact:",

@@ -1,4 +1,3 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Write FEKAP decks of the IFToMM A02 N-four-bar (a parallelogram chain with
 change points), and its exact motion.
 
@@ -8,8 +7,8 @@ pi/2 + 2 pi t. At t = 0.25 and 0.75 every bar is horizontal and the tangent
 loses N ranks (a change point: the chain could fold there). On the
 parallelogram tip k is at (k + cos q, sin q), q = pi/2 + 2 pi t.
 
-Usage:  python3 scripts/a02.py N [--dt DT] [--law absolute|relative] [--out DECK]
-        python3 scripts/a02.py --grid DIR    (N = 2, 4, 10, 40 x dt = 0.01,
+Usage:  scripts/python -m fekap.models.a02_kinematic N [--dt DT] [--law absolute|relative] [--out DECK]
+        scripts/python -m fekap.models.a02_kinematic --grid DIR    (N = 2, 4, 10, 40 x dt = 0.01,
                                               0.02, 0.025, 0.05, 1/12 into DIR)
 DT is deck text (`1/12` is allowed). Without --out the deck goes to standard output.
 """
@@ -45,7 +44,7 @@ def a02_deck(n: int, dt_text: str = "0.01", law: str = "absolute") -> str:
     links += [f"  coupler{k}  T{k}  T{k + 1}  bar" for k in range(n)]
     rate = "rate 2*pi pi/2" if law == "absolute" else "rate 2*pi"
     return "\n".join([
-        f"* IFToMM A02 N-four-bar, N = {n} (written by scripts/a02.py): pivots Ok = (k, 0), cranks",
+        f"* IFToMM A02 N-four-bar, N = {n} (written by fekap.models.a02_kinematic): pivots Ok = (k, 0), cranks",
         "* Ok-Tk and couplers Tk-Tk+1 of length 1 (separate links, hinged at the tips); crank0",
         "* driven pi/2 + 2 pi t. Change points (every bar horizontal) at t = 0.25 and 0.75.",
         f"TITLe   IFToMM A02 N-four-bar, N = {n}",
@@ -89,12 +88,11 @@ def errors(outdir: str, n: int) -> dict:
             if r.get("vx", "") == "":
                 no_rates.add(r["step"])
                 continue
-            w = 2 * math.pi
             vel = max(vel, abs(float(r["vx"]) - vx), abs(float(r["vy"]) - vy))
             if r.get("ax", "") != "":
                 acc = max(acc, abs(float(r["ax"]) - ax), abs(float(r["ay"]) - ay))
     for a in angle.values():
-        for k, v in a.items():
+        for v in a.values():
             d = abs(math.remainder(v - a[0], 2 * math.pi))
             spread = max(spread, d)
     return {"pos": pos / (n + 1), "vel": vel / (2 * math.pi), "acc": acc / (4 * math.pi ** 2),

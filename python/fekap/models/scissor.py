@@ -1,4 +1,3 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Write a FEKAP deck for a scissor lift of N cells.
 
 Each cell is two bars of length 2 crossing at their midpoints and hinged there;
@@ -22,12 +21,12 @@ With --law sine the drive is instead theta(t) = 30 deg + 20 deg sin(2 pi t) (the
 layout of issue #16), and with --slider R0 slides on a floor slideline (a ground
 guide along y = 0) instead of a roller support; both keep the closed form.
 
-Usage:  python3 scripts/scissor.py N [--out DECK] [--dt DT] [--theta0 DEG]
+Usage:  scripts/python -m fekap.models.scissor N [--out DECK] [--dt DT] [--theta0 DEG]
         [--theta1 DEG] [--law ramp|sine] [--slider] [--elements K] [--solver band|dense]
         [--compute positions,velocities,accelerations] [--files csv,listing]
 Without --out the deck goes to standard output.
 
-        python3 scripts/scissor.py --check N [N ...] [--dt DT] [--fekap BIN]
+        scripts/python -m fekap.models.scissor --check N [N ...] [--dt DT] [--fekap BIN]
 runs the issue's layout (--law sine --slider, dt 0.01 unless given) for each N
 and prints, per N: the largest error of the top ends' positions, velocities
 and accelerations against the closed form (each relative to the largest exact
@@ -47,6 +46,8 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from fekap.run import RELEASE_BIN
 
 THETA0_DEG = 30.0
 THETA1_DEG = 60.0
@@ -97,7 +98,7 @@ def deck_text(cells: int, dt: float = 0.05, theta0_deg: float = THETA0_DEG,
         theta0_deg = SINE_MEAN_DEG
     c, s = (f"cos({theta0_deg}*deg)", f"sin({theta0_deg}*deg)")
     lines = [
-        f"* Scissor lift of {cells} cells, written by scripts/scissor.py: bars of length 2",
+        f"* Scissor lift of {cells} cells, written by fekap.models.scissor: bars of length 2",
         "* crossing and hinged at their midpoints, cells hinged end to end; L0 pinned,",
         "* R0 on a roller (y fixed); driven by the angle of the bottom bar L0 -> M1.",
         f"* Exact platform height: 2*{cells}*sin(theta), theta = " + (
@@ -214,8 +215,7 @@ def main(argv: list[str] | None = None) -> int:
         parser = argparse.ArgumentParser(description="check scissor lifts against the closed form")
         parser.add_argument("sizes", type=int, nargs="+")
         parser.add_argument("--dt", type=float, default=0.01)
-        parser.add_argument("--fekap", type=Path, default=Path(__file__).resolve().parent.parent
-                            / "build" / "local" / "bin" / "fekap")
+        parser.add_argument("--fekap", type=Path, default=RELEASE_BIN)
         args = parser.parse_args(argv[1:])
         return check_main(args.sizes, args.dt, args.fekap)
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

@@ -1,4 +1,3 @@
-#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/python" "$0" "$@"'
 """Write the spin-up beam deck (Simo & Vu-Quoc 1986) for dynamics:
 decks/dynamics/spin-up.deck.
 
@@ -10,7 +9,7 @@ every second after is within 2e-6 rad of it up to 15 s (this script prints
 the largest difference on standard error) and turns at 6 rad/s after it to
 the spline's decay of the kink in the third derivative at 15 s.
 
-    python3 scripts/spin_up_deck.py > decks/dynamics/spin-up.deck
+    scripts/python -m fekap.models.spin_up > decks/dynamics/spin-up.deck
 """
 import math
 import sys
@@ -72,7 +71,7 @@ def main() -> None:
     worst = max(abs(spline_value(ts, vs, ms, t) - hub(t)) for t in np.linspace(0, 15, 3001))
     print(f"largest difference of the table from the hub law up to 15 s: {worst:.3g} rad", file=sys.stderr)
     table = " ".join(f"{t:g} {v:.12g}" for t, v in zip(ts, vs))
-    sys.stdout.write(f"""* Spin-up of a flexible beam (Simo & Vu-Quoc 1986), written by scripts/spin_up_deck.py:
+    sys.stdout.write(f"""* Spin-up of a flexible beam (Simo & Vu-Quoc 1986), written by fekap.models.spin_up:
 * a beam of length 10 clamped to a hub whose angle rises smoothly to 6 rad/s at
 * t = 15 s (a table through the published law, within {worst:.1g} rad of it), then
 * turns at 6 rad/s. The tip's axial stretch settles at the centrifugal value
