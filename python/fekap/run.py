@@ -22,10 +22,14 @@ def fekap_binary(explicit: str | None = None) -> str:
     """The fekap executable, one rule for the scripts, the studies and the tests: an explicit
     path (a --bin or --fekap option), else $FEKAP_BIN (scripts/test sets it to its checking
     build), else the release build of scripts/build (build/local/bin/fekap)."""
-    for candidate in (explicit, os.environ.get("FEKAP_BIN"), str(RELEASE_BIN)):
-        if candidate and Path(candidate).is_file():
+    for what, candidate in (("given", explicit), ("FEKAP_BIN", os.environ.get("FEKAP_BIN"))):
+        if candidate:
+            if not Path(candidate).is_file():
+                raise SystemExit(f"no fekap executable at {candidate} ({what}): build it, or name another")
             return str(Path(candidate).resolve())
-    raise SystemExit("no fekap executable: run scripts/build first (or set FEKAP_BIN)")
+    if RELEASE_BIN.is_file():
+        return str(RELEASE_BIN)
+    raise SystemExit(f"no fekap executable at {RELEASE_BIN}: run scripts/build first (or set FEKAP_BIN)")
 
 
 def run_fekap(*args: str, binary: str | None = None, cwd: Path = ROOT, timeout: float = 300,

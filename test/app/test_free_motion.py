@@ -5,7 +5,7 @@ first step (exit 2) with the free nodes and links named, as --method
 cartesian refuses it; a determined mechanism, a redundant one included,
 runs as before; a statics run that fails is not blamed on a dead point.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_free_motion.py
+Run alone:  scripts/test free_motion
 """
 
 from __future__ import annotations

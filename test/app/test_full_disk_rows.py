@@ -8,7 +8,7 @@ lists exactly the .vtu files left.
 The tests mount a small tmpfs of their own (test_robust.SmallFileSystem) and
 are skipped, saying why, where that is not allowed.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_full_disk_rows.py
+Run alone:  scripts/test full_disk_rows
 """
 
 from __future__ import annotations

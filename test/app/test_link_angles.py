@@ -3,7 +3,7 @@
 last (issue #31, item 8), also for a link meshed with several elements,
 whose end rotations differ from it; and --tol says what it changes.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_link_angles.py
+Run alone:  scripts/test link_angles
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 and predictor_names) read by the deck and the command line alike, each name
 taken in full or shortened to 4 letters (FEAP's rule), in any case.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_names.py
+Run alone:  scripts/test names
 """
 
 from __future__ import annotations

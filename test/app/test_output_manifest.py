@@ -4,7 +4,7 @@ a run (.fekap-manifest) lists its files and those scripts/plot.py draws; the
 next run removes those and no other; the deck is never written over; files
 of FEKAP's names that no manifest lists stop the run unless --force.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_output_manifest.py
+Run alone:  scripts/test output_manifest
 """
 
 from __future__ import annotations

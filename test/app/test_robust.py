@@ -9,7 +9,7 @@ scripts/test) in a few seconds. The full-disk tests mount a small tmpfs of
 their own and are skipped, saying why, where that is not allowed (not root,
 no mount).
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_robust.py
+Run alone:  scripts/test robust
 """
 
 from __future__ import annotations
