@@ -7,7 +7,7 @@ answers found without FEKAP:
   figures, two digits: here within 2 % and 0.15 ms);
 - Exudyn 1.13.6's converged run of the same model (its geometrically exact 2D beam,
   extrapolated from 8, 16 and 32 rod elements at dt 2.5e-6: test/app/data/
-  slider-crank-rigid-exudyn.csv, written by scripts/exudyn_slider_crank_rigid.py --store;
+  slider-crank-rigid-exudyn.csv, written by studies/exudyn/exudyn_slider_crank_rigid.py --store;
   stored, so no Exudyn is needed here);
 
 and the convergence of FEKAP's own answer: as the rod's element count doubles (dt fixed)

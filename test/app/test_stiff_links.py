@@ -8,7 +8,7 @@ dynamics' Newton solves (docs/theory.md, "Convergence").
 The answers:
 - the A01 pendulum (a 1 kg point mass on a massless 1 m link, released from
   the horizontal): its first pass through the bottom, for the rigid link
-  (dynamics_checks.BOTTOM_TIME) and, at EA = 1e8 where the link stretches by
+  (fekap.dynamics.BOTTOM_TIME) and, at EA = 1e8 where the link stretches by
   3e-7 m, for the spring pendulum (an RK4 integration at 1e-5 s, here);
 - a uniform rod (1 kg/m, 1 m) pinned at one end and released 30 degrees above
   the horizontal: the time and speed of its tip's pass through the bottom,
@@ -23,16 +23,14 @@ answer is used."""
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from apptest import ROOT, check, read_rows, run_fekap
+from fekap import dynamics as dc  # the bottom pass of a run's points.csv
 
-sys.path.insert(0, str(ROOT / "scripts"))
-import dynamics_checks as dc  # noqa: E402  (the bottom pass of a run's points.csv)
+from apptest import ROOT, check, read_rows, run_fekap
 
 G = 9.81
 #: The time steps of each order study.
@@ -40,7 +38,7 @@ STEPS = (1e-3, 5e-4, 2.5e-4)
 #: Least observed order (generalized-alpha and energy-momentum are second order).
 LEAST_ORDER = 1.8
 
-OUT: Path
+OUT: Path = None
 
 
 def section(ea: float, rho: str = "") -> str:
@@ -94,7 +92,7 @@ def spring_pendulum_bottom(k: float, m: float = 1.0, length: float = 1.0, h: flo
     """The first pass through x = 0 of a point mass m on a massless spring
     (stiffness k, rest length `length`) pinned at the origin, released at rest
     from (length, 0) under gravity: RK4 at step h, the crossing by the cubic
-    Hermite interpolant of the step around it (as dynamics_checks.bottom_pass)."""
+    Hermite interpolant of the step around it (as fekap.dynamics.bottom_pass)."""
 
     def rate(s):
         x, y, vx, vy = s
