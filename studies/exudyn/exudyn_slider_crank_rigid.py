@@ -134,10 +134,18 @@ def run_exudyn(n: int, dt: float, t_end: float, write_period: float | None = Non
     held; the rod starts undeformed with the rigid mechanism's velocities. `solver`: its
     linear solver, "dense" (Exudyn's default, EXUdense) or "sparse" (EigenSparse)."""
     import exudyn as exu
-    from exudyn.itemInterface import (MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition,
-                                      NodePointGround, NodeRigidBody2D, ObjectBeamGeometricallyExact2D,
-                                      ObjectConnectorCoordinate, ObjectJointRevolute2D, ObjectRigidBody2D,
-                                      SensorNode)
+    from exudyn.itemInterface import (
+        MarkerBodyPosition,
+        MarkerNodeCoordinate,
+        MarkerNodePosition,
+        NodePointGround,
+        NodeRigidBody2D,
+        ObjectBeamGeometricallyExact2D,
+        ObjectConnectorCoordinate,
+        ObjectJointRevolute2D,
+        ObjectRigidBody2D,
+        SensorNode,
+    )
 
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()

@@ -36,7 +36,7 @@ SAMPLE = 1e-4  # compared every 0.1 ms
 PUBLISHED_PEAK, PUBLISHED_TIME = 5.1e-3, 5.5e-3
 PEAK_TOL, TIME_TOL = 0.02, 0.15e-3
 
-OUT: Path
+OUT: Path = None  # a fresh scratch directory, set by conftest.py
 
 
 def deck_text(start: str = "consistent") -> str:
