@@ -1,0 +1,198 @@
+"""The spatial decks of decks/spatial/ (issue 33) against their closed forms at
+every output time: positions within 1e-12, velocities and accelerations
+within 1e-10, Newton at most 2 iterations a step at the deck's step; the
+joints' motion in joints.csv; and the input errors of a spatial deck (a zero
+axis, universal axes not perpendicular, a joint's nodes not at one place, a
+missing node), each naming deck:line:col with nothing written."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from apptest import ROOT, check, read_rows, run_fekap
+
+DECKS = ROOT / "decks" / "spatial"
+# The issue's thresholds: positions, and velocities and accelerations.
+POSITION_TOL = 1e-12
+RATE_TOL = 1e-10
+# Newton iterations a step at the deck's own step.
+MAX_ITERATIONS = 2
+
+
+def run_deck(name: str, tmp_path: Path, *extra: str) -> Path:
+    out = tmp_path / name
+    done = run_fekap("-q", "-o", str(out), *extra, str(DECKS / f"{name}.deck"))
+    check(done.returncode == 0, f"{name}: exit {done.returncode}: {done.stderr}")
+    return out
+
+
+def columns(out: Path, table: str, key: str, name: str) -> dict[str, np.ndarray]:
+    rows = [row for row in read_rows(out / table) if row[key] == name]
+    check(bool(rows), f"no rows for {name} in {table}")
+    return {k: np.array([float(row[k]) for row in rows]) for k in rows[0] if k != key}
+
+
+def vectors(series: dict[str, np.ndarray], names: str) -> np.ndarray:
+    return np.stack([series[n] for n in names.split()], axis=1)
+
+
+def check_iterations(out: Path) -> None:
+    its = np.array([int(row["iterations"]) for row in read_rows(out / "steps.csv")])
+    check(its.max() <= MAX_ITERATIONS, f"Newton took up to {its.max()} iterations a step (at most {MAX_ITERATIONS})")
+
+
+def check_close(what: str, got: np.ndarray, want: np.ndarray, tol: float) -> None:
+    err = float(np.max(np.abs(got - want)))
+    check(err <= tol, f"{what}: largest error {err:.3e} > {tol:g}")
+
+
+def test_slider_crank_matches_closed_form(tmp_path):
+    out = run_deck("slider-crank", tmp_path)
+    s = columns(out, "points.csv", "point", "S")
+    t = s["t"]
+    check(abs(t[-1] - math.pi / 3) < 1e-15 and len(t) == 101, "one turn in 100 steps")
+    theta, w = 6 * t, 6.0
+    g = 0.0592 + 0.016 * np.sin(theta) - 0.0192 * np.cos(theta)
+    g1 = 0.016 * np.cos(theta) + 0.0192 * np.sin(theta)
+    g2 = -0.016 * np.sin(theta) + 0.0192 * np.cos(theta)
+    x = np.sqrt(g)
+    xd = w * g1 / (2 * x)
+    xdd = w**2 * (g2 / (2 * x) - g1**2 / (4 * x**3))
+    zero = np.zeros_like(t)
+    check_close("slider position", vectors(s, "x y z"), np.stack([x, zero, zero], axis=1), POSITION_TOL)
+    check_close("slider velocity", vectors(s, "vx vy vz"), np.stack([xd, zero, zero], axis=1), RATE_TOL)
+    check_close("slider acceleration", vectors(s, "ax ay az"), np.stack([xdd, zero, zero], axis=1), RATE_TOL)
+    # The issue's figures: x(0) = 0.2, x' = 0.24, x'' = 1.44 at t = 0; x(pi) = 0.28 (step 50).
+    check(abs(s["x"][0] - 0.2) < 1e-15 and abs(s["vx"][0] - 0.24) < 1e-13 and abs(s["ax"][0] - 1.44) < 1e-12,
+          f"x, x', x'' at t = 0: {s['x'][0]}, {s['vx'][0]}, {s['ax'][0]}")
+    check(abs(s["x"][50] - 0.28) < POSITION_TOL, f"x(pi) = {s['x'][50]}, not 0.28")
+    # The crank tip B = A + r (0, -sin, cos).
+    b = columns(out, "points.csv", "point", "B")
+    r = 0.08
+    check_close("crank tip", vectors(b, "x y z"),
+                np.stack([zero, 0.1 - r * np.sin(theta), 0.12 + r * np.cos(theta)], axis=1), POSITION_TOL)
+    check_close("crank tip velocity", vectors(b, "vx vy vz"),
+                np.stack([zero, -r * w * np.cos(theta), -r * w * np.sin(theta)], axis=1), RATE_TOL)
+    check_close("crank tip acceleration", vectors(b, "ax ay az"),
+                np.stack([zero, r * w**2 * np.sin(theta), -r * w**2 * np.cos(theta)], axis=1), RATE_TOL)
+    # joints.csv: the crank's angle 6 t, the slider's stroke x - 0.2.
+    ja = columns(out, "joints.csv", "joint", "JA")
+    check_close("crank angle", ja["angle"], theta, POSITION_TOL)
+    check_close("crank rate", np.stack([ja["rate"], ja["acceleration"]]), np.stack([zero + w, zero]), RATE_TOL)
+    js = columns(out, "joints.csv", "joint", "JS")
+    check_close("slider stroke", js["angle"], x - 0.2, POSITION_TOL)
+    check_close("slider stroke rates", np.stack([js["rate"], js["acceleration"]]), np.stack([xd, xdd]), RATE_TOL)
+    check_iterations(out)
+
+
+def rssr_exact(phi: np.ndarray):
+    """psi (sin psi > 0) of the RSSR and its first and second derivatives in phi."""
+    s, c = np.sin(phi), np.cos(phi)
+    n = 12 - (1 - c) ** 2 - (4 - s) ** 2
+    n1 = -2 * (1 - c) * s + 2 * (4 - s) * c
+    n2 = -2 * s**2 - 2 * (1 - c) * c - 2 * c**2 - 2 * (4 - s) * s
+    d, d1, d2 = 4 * (4 - s), -4 * c, 4 * s
+    u = n / d
+    u1 = (n1 * d - n * d1) / d**2
+    u2 = (n2 * d - n * d2) / d**2 - 2 * d1 * (n1 * d - n * d1) / d**3
+    root = np.sqrt(1 - u**2)
+    psi = np.arccos(u)
+    return psi, -u1 / root, -u2 / root - u * u1**2 / root**3
+
+
+def test_rssr_matches_closed_form(tmp_path):
+    out = run_deck("rssr", tmp_path)
+    b = columns(out, "points.csv", "point", "B")
+    t = b["t"]
+    w = 2 * math.pi
+    phi = w * t
+    zero = np.zeros_like(t)
+    check_close("input crank tip", vectors(b, "x y z"), np.stack([np.cos(phi), np.sin(phi), zero], axis=1),
+                POSITION_TOL)
+    psi, dpsi, ddpsi = rssr_exact(phi)
+    psid, psidd = w * dpsi, w**2 * ddpsi
+    c = columns(out, "points.csv", "point", "C")
+    e = np.stack([zero, np.cos(psi), np.sin(psi)], axis=1)
+    n = np.stack([zero, -np.sin(psi), np.cos(psi)], axis=1)
+    check_close("output crank tip", vectors(c, "x y z"), np.array([1.0, 4.0, 0.0]) + 2 * e, POSITION_TOL)
+    check_close("output crank tip velocity", vectors(c, "vx vy vz"), 2 * psid[:, None] * n, RATE_TOL)
+    check_close("output crank tip acceleration", vectors(c, "ax ay az"),
+                2 * psidd[:, None] * n - 2 * (psid**2)[:, None] * e, RATE_TOL)
+    jp = columns(out, "joints.csv", "joint", "JP")
+    check_close("output crank angle", jp["angle"], psi - psi[0], POSITION_TOL)
+    check_close("output crank rates", np.stack([jp["rate"], jp["acceleration"]]), np.stack([psid, psidd]), RATE_TOL)
+    check_iterations(out)
+
+
+def test_rates_match_differences_of_positions(tmp_path):
+    """The slider's velocity and acceleration against central differences of
+    its positions: the differences' error is O(h^2), so it falls by 4 when
+    the step is halved (what is left is the differences' own error)."""
+    errors = []
+    for steps in (1000, 2000):
+        out = run_deck("slider-crank", tmp_path / str(steps), "--dt", f"pi/{3 * steps}")
+        s = columns(out, "points.csv", "point", "S")
+        h = s["t"][1] - s["t"][0]
+        dx = (s["x"][2:] - s["x"][:-2]) / (2 * h)
+        ddx = (s["x"][2:] - 2 * s["x"][1:-1] + s["x"][:-2]) / h**2
+        errors.append((np.max(np.abs(s["vx"][1:-1] - dx)), np.max(np.abs(s["ax"][1:-1] - ddx))))
+    for k, what in enumerate(("velocity", "acceleration")):
+        ratio = errors[0][k] / errors[1][k]
+        check(3.5 < ratio < 4.5, f"{what} against differences: errors {errors[0][k]:.3e}, {errors[1][k]:.3e} "
+              f"at h and h/2 (ratio {ratio:.2f}, not 4)")
+
+
+def test_planar_points_have_no_z(tmp_path):
+    """A planar deck's points.csv keeps exactly its columns, and no joints.csv."""
+    out = tmp_path / "fourbar"
+    done = run_fekap("-q", "-o", str(out), str(ROOT / "decks" / "fourbar.deck"))
+    check(done.returncode == 0, done.stderr)
+    header = (out / "points.csv").read_text().splitlines()[0]
+    check(header == "step,t,point,x,y,vx,vy,ax,ay", f"planar header changed: {header}")
+    check(not (out / "joints.csv").exists(), "a planar run wrote joints.csv")
+
+
+# (what, line of the deck, its replacement, the message, the line named (its first
+# field) and the field the caret points at).
+BAD = [
+    ("zero axis", "JA  revolute   ground  A   1 0 0", "JA  revolute   ground  A   0 0 0",
+     "the axis of joint JA is zero", "JA", 5),
+    ("universal axes not perpendicular", "JU  universal  S       S2  1 0 0   0 -2 1",
+     "JU  universal  S       S2  1 0 0   1 -2 1", "are not perpendicular", "JU", 8),
+    ("nodes not at one place", "B2   0    0.1  0.2 ", "B2   0    0.1  0.2001 ",
+     "the nodes of joint JB are not at one place", "JB", 4),
+    ("missing node", "JB  spherical  B       B2", "JB  spherical  B       B3",
+     "undefined node 'B3'", "JB", 4),
+]
+
+
+def field_place(text: str, first: str, field: int) -> tuple[int, int]:
+    """Line and column (1-based) of the field-th field of the line whose first field is `first`."""
+    for number, row in enumerate(text.splitlines(), start=1):
+        fields = row.split("!")[0].split()
+        if fields and fields[0] == first:
+            col = 0
+            for k in range(field):
+                col = row.index(fields[k], col) + (len(fields[k]) if k < field - 1 else 0)
+            return number, col + 1
+    raise AssertionError(f"no line starting with {first}")
+
+
+@pytest.mark.parametrize("what,old,new,message,first,field", BAD, ids=[b[0] for b in BAD])
+def test_bad_joint_is_input_error(tmp_path, what, old, new, message, first, field):
+    text = (DECKS / "slider-crank.deck").read_text()
+    check(old in text, f"the deck no longer has {old!r}")
+    bad = tmp_path / "bad.deck"
+    bad.write_text(text.replace(old, new))
+    line, col = field_place(bad.read_text(), first, field)
+    out = tmp_path / "out"
+    done = run_fekap("-o", str(out), str(bad))
+    check(done.returncode == 2, f"{what}: exit {done.returncode}, not 2 (input error): {done.stderr}")
+    check(message in done.stderr, f"{what}: the message does not say {message!r}: {done.stderr}")
+    check(f"{bad}:{line}:{col}:" in done.stderr, f"{what}: the message does not name {bad}:{line}:{col}: {done.stderr}")
+    written = sorted(p.name for p in out.iterdir()) if out.exists() else []
+    check(not written, f"{what}: files were written: {written}")
