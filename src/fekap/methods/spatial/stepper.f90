@@ -1,18 +1,18 @@
 !> The time stepper of a spatial deck's kinematics (fekap_spatial_kinematics
 !> driven by the time loop): each step predicts the new configuration by
-!> a Taylor series along the last rates, q (+) (h v + h^2/2 a + h^3/6 j),
-!> j the difference of the last two accelerations over their step, then runs
+!> a Taylor series along the last rates, q (+) (h v + h^2/2 a + h^3/6 j +
+!> h^4/24 k), j and k from the last three accelerations, then runs
 !> Newton-Raphson on the free dofs with the material tangent (exact at the
 !> stress-free solution). Every Newton iteration assembles and factors the
 !> tangent at its iterate; the iteration whose correction is below the
-!> length tolerance (lengths relative to the longest element) ends Newton:
-!> its factored tangent, at the converged configuration, gives the
-!> velocities and accelerations (Eischen, Sun & Marler eqs. (47)-(53)), and
-!> its correction is applied without a further assembly. A step's
-!> iterations count the corrections that needed another assembly and
-!> factorisation after them, as the planar method counts its check "with the
-!> tangent factored at the converged configuration" as no iteration. A step
-!> whose Newton fails is cut in halves.
+!> length tolerance (lengths relative to the longest element), and below
+!> rate_tol, ends Newton: its factored tangent, at the converged
+!> configuration, gives the velocities and accelerations (Eischen, Sun &
+!> Marler eqs. (47)-(53)), and its correction is applied without a further
+!> assembly. A step's iterations count the corrections that needed another
+!> assembly and factorisation after them, as the planar method counts its
+!> check "with the tangent factored at the converged configuration" as no
+!> iteration. A step whose Newton fails is cut in halves.
 module fekap_spatial_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
@@ -31,6 +31,14 @@ module fekap_spatial_stepper
 
    !> Halvings of one step before it is given up (as the planar step control's).
    integer, parameter :: max_cuts = 8
+   !> The last correction (relative to the longest element) below which the
+   !> iterate's tangent gives the rates: the rates at an iterate differ from
+   !> those at the solution by about d(rates)/dq times the correction (an
+   !> acceleration omega^2 times it), so a correction at the length
+   !> tolerance's 1e-12 would cost the accelerations two digits; one that
+   !> the tolerance accepts above this is applied and the next iterate,
+   !> whatever its correction below the tolerance, gives the rates.
+   real(dp), parameter :: rate_tol = 1.0e-14_dp
 
    type, extends(stepper_type) :: spatial_stepper_type
       type(spatial_mechanism_type) :: m
@@ -40,8 +48,8 @@ module fekap_spatial_stepper
       real(dp) :: t = 0
       real(dp), allocatable :: v(:), a(:)
       !> The accelerations and step before the last accepted ones (for the predictor's third term).
-      real(dp), allocatable :: a_prev(:)
-      real(dp) :: h_prev = 0
+      real(dp), allocatable :: a_prev(:), a_prev2(:)
+      real(dp) :: h_prev = 0, h_prev2 = 0
       !> Newton: length tolerance of the correction, most iterations.
       real(dp) :: tol = 1.0e-12_dp
       integer :: max_iter = 25
@@ -68,7 +76,8 @@ contains
       self%tol = model%analysis%length_tol
       self%max_iter = model%analysis%max_iter
       self%fdof = free_dofs(self%m)
-      allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%a_prev(self%m%ndof), source=0.0_dp)
+      allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%a_prev(self%m%ndof), self%a_prev2(self%m%ndof), &
+         & source=0.0_dp)
    end subroutine new_spatial_stepper
 
    !> The deck's configuration at the start time, solved (it is stress free:
@@ -86,6 +95,7 @@ contains
          return
       end if
       self%h_prev = 0
+      self%h_prev2 = 0
       result%t = self%t
       result%iterations = iterations
       call fill_result(self, result)
@@ -98,8 +108,8 @@ contains
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
       type(spatial_state_type) :: saved
-      real(dp), allocatable :: v0(:), a0(:), ap0(:)
-      real(dp) :: h, t_try, t0, hp0
+      real(dp), allocatable :: v0(:), a0(:), ap0(:), ap20(:)
+      real(dp) :: h, t_try, t0, hp0, hp20
       integer :: cuts, iterations, total
       logical :: converged
       character(:), allocatable :: why
@@ -114,12 +124,16 @@ contains
          v0 = self%v
          a0 = self%a
          ap0 = self%a_prev
+         ap20 = self%a_prev2
          t0 = self%t
          hp0 = self%h_prev
+         hp20 = self%h_prev2
          call predict(self, t_try - self%t)
          call solve(self, t_try, iterations, converged, why)
          total = total + iterations
          if (converged) then
+            self%a_prev2 = ap0
+            self%h_prev2 = hp0
             self%a_prev = a0
             self%h_prev = t_try - t0
             self%t = t_try
@@ -129,8 +143,10 @@ contains
          self%v = v0
          self%a = a0
          self%a_prev = ap0
+         self%a_prev2 = ap20
          self%t = t0
          self%h_prev = hp0
+         self%h_prev2 = hp20
          cuts = cuts + 1
          if (cuts > max_cuts) then
             write (text, '(a,i0,a)') 'Newton failed even with the step cut ', max_cuts, ' times ('
@@ -147,13 +163,24 @@ contains
       call fill_result(self, result)
    end subroutine spatial_advance
 
-   !> The predictor: s (+) (h v + h^2/2 a + h^3/6 j), j = (a - a_prev)/h_prev.
+   !> The predictor: s (+) (h v + h^2/2 a + h^3/6 j + h^4/24 k), j and k the
+   !> first and second rates of the quadratic through the last three
+   !> accelerations (with two: j their difference quotient, k = 0).
    subroutine predict(self, h)
       type(spatial_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: h
-      real(dp) :: dq(self%m%ndof)
+      real(dp) :: dq(self%m%ndof), j(self%m%ndof), k(self%m%ndof), h1, hh
       dq = h*self%v + h**2/2*self%a
-      if (self%h_prev > 0) dq = dq + h**3/6*(self%a - self%a_prev)/self%h_prev
+      if (self%h_prev > 0 .and. self%h_prev2 > 0) then
+         ! a(tau) = a + j tau + k tau^2/2 through (-h1, a_prev), (-h1 - h2, a_prev2).
+         h1 = self%h_prev
+         hh = self%h_prev + self%h_prev2
+         k = 2*((self%a_prev2 - self%a)*h1 - (self%a_prev - self%a)*hh)/(h1*hh*(hh - h1))
+         j = (self%a - self%a_prev)/h1 + k*h1/2
+         dq = dq + h**3/6*j + h**4/24*k
+      else if (self%h_prev > 0) then
+         dq = dq + h**3/6*(self%a - self%a_prev)/self%h_prev
+      end if
       call update_state(self%m, self%s, dq)
    end subroutine predict
 
@@ -172,6 +199,8 @@ contains
       integer, allocatable :: ipiv(:)
       integer :: info, it
       character(len=80) :: text
+      logical :: refining
+      refining = .false.
       converged = .false.
       iterations = 0
       why = ''
@@ -200,20 +229,20 @@ contains
             why = 'the correction is not a finite number'
             return
          end if
-         if (correction < self%tol) then
-            ! Converged at this iterate: its factored tangent gives the rates.
+         if (correction < self%tol .and. (correction < rate_tol .or. refining)) then
+            ! Converged at this iterate, which is the solution to round-off:
+            ! its factored tangent gives the rates.
             self%residual = norm2(res(self%fdof))
             call spatial_rates_factored(self%m, self%s, c, k, kff, ipiv, self%fdof, self%v, ad, self%a)
             self%counts%velocity_solves = self%counts%velocity_solves + 1
             self%counts%acceleration_solves = self%counts%acceleration_solves + 1
-            ! The correction is applied too (it costs nothing more): the
-            ! configuration is then converged to round-off, the rates at
-            ! the iterate differ from those at it by O(correction).
             call update_state(self%m, self%s, dq)
             converged = .true.
             return
          end if
-         if (it >= 2 .and. correction > last) then
+         ! Converged, but the rates want the next iterate (once: round-off may keep it above rate_tol).
+         if (correction < self%tol) refining = .true.
+         if (it >= 2 .and. correction > last .and. .not. refining) then
             write (text, '(a,i0,a)') 'the correction grew at iteration ', it + 1, ''
             why = trim(text)
             return
