@@ -3,7 +3,7 @@
 program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
-   use fekap_error, only: error_type, error_input, error_analysis, error_output, fatal_error
+   use fekap_error, only: error_type, error_input, error_analysis, error_output, fatal_error, input_error
    use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_statics, &
       & effects_dynamics, effects_kinematics
    use fekap_deck, only: read_deck
@@ -132,6 +132,11 @@ contains
       effects = planned_effects(model)
       if (model%analysis%spatial) then
          ! A spatial deck (kinematics only): joints as double nodes, SE(3) beams (docs/spatial.md).
+         if (model%analysis%method /= method_fem) then
+            call input_error(error, model%file//': a spatial deck runs with the finite element method only: '// &
+               & 'leave out --method and the ANALysis method line')
+            return
+         end if
          allocate (spatial)
          call new_spatial_stepper(spatial, model, error)
          if (allocated(error)) return

@@ -21,6 +21,8 @@ DECKS = ROOT / "decks" / "spatial"
 # The issue's thresholds: positions, and velocities and accelerations.
 POSITION_TOL = 1e-12
 RATE_TOL = 1e-10
+# The return to the start after each of 1,000 turns.
+TURN_TOL = 1e-10
 # Newton iterations a step at the deck's own step.
 MAX_ITERATIONS = 2
 
@@ -265,6 +267,26 @@ def test_fourbar_3d_matches_planar_example_1(tmp_path):
     check(its.max() <= 3, f"Newton took up to {its.max()} iterations a step")
 
 
+@pytest.mark.parametrize("name", ["rssr", "bricard"])
+def test_thousand_turns_return_to_the_start(tmp_path, name):
+    """Driven 1,000 turns (the Bricard linkage: 1,000 swings) at 25 steps a
+    turn, every point back at its start after each turn within 1e-10."""
+    text = (DECKS / f"{name}.deck").read_text()
+    check("  time 0 1 0.01\n" in text and "\n  track " in text, "the deck's time and track lines changed")
+    deck = tmp_path / f"{name}.deck"
+    deck.write_text(text.replace("  time 0 1 0.01\n", "  time 0 1000 0.04\n").replace(
+        "\n  track ", "\n  every 25\n  track "))
+    out = tmp_path / "out"
+    done = run_fekap("-q", "-o", str(out), str(deck), timeout=900)
+    check(done.returncode == 0, f"exit {done.returncode}: {done.stderr}")
+    rows = read_rows(out / "points.csv")
+    for point in sorted({row["point"] for row in rows}):
+        series = [row for row in rows if row["point"] == point]
+        check(len(series) == 1001, f"{point}: {len(series)} rows, not one a turn")
+        x = np.array([[float(row[k]) for k in ("x", "y", "z")] for row in series])
+        check_close(f"{point} after each of 1,000 turns", x, np.broadcast_to(x[0], x.shape), TURN_TOL)
+
+
 def test_rates_match_differences_of_positions(tmp_path):
     """The slider's velocity and acceleration against central differences of
     its positions: the differences' error is O(h^2), so it falls by 4 when
@@ -333,3 +355,11 @@ def test_bad_joint_is_input_error(tmp_path, what, old, new, message, first, fiel
     check(f"{bad}:{line}:{col}:" in done.stderr, f"{what}: the message does not name {bad}:{line}:{col}: {done.stderr}")
     written = sorted(p.name for p in out.iterdir()) if out.exists() else []
     check(not written, f"{what}: files were written: {written}")
+
+
+def test_spatial_deck_refuses_another_method(tmp_path):
+    out = tmp_path / "out"
+    done = run_fekap("-o", str(out), "--method", "angles", str(DECKS / "slider-crank.deck"))
+    check(done.returncode == 2, f"exit {done.returncode}, not 2: {done.stderr}")
+    check("finite element method only" in done.stderr, done.stderr)
+    check(not out.exists(), "the output directory was made")

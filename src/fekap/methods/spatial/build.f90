@@ -117,8 +117,9 @@ contains
          end do
          frame_set = [(i, i=1, nn)]
          do k = 1, nj
-            if (joints(k)%kind == joint_weld .and. joints(k)%node(2) > 0) &
-               & call join(frame_set, joints(k)%node(1), joints(k)%node(2))
+            if (joints(k)%kind == joint_weld .and. joints(k)%node(2) > 0) then
+               call join(frame_set, joints(k)%node(1), joints(k)%node(2))
+            end if
          end do
          do i = 1, nn
             if (has_frame(i)) has_frame(find_root(frame_set, i)) = .true.
@@ -152,6 +153,7 @@ contains
                else
                   call add_frame(m, frame_universal, class_frame(c), 0, joints(k)%axis2, joints(k)%axis, error)
                end if
+            case default                                 ! spherical: skipped above
             end select
             if (allocated(error)) return
             tail = tail + 1
@@ -313,6 +315,7 @@ contains
          shifted%tm = sign*law%tm
       case (law_linear)
          shifted%tv = sign*(law%tv - f0)
+      case default                                       ! no law: nothing to shift
       end select
    end function shifted_law
 
