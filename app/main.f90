@@ -3,7 +3,7 @@
 program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
-   use fekap_error, only: error_type, error_input, error_analysis, error_output, fatal_error
+   use fekap_error, only: error_type, error_input, error_analysis, error_output, fatal_error, input_error
    use fekap_model, only: model_type, method_fem, method_cartesian, effects_kinetostatics, effects_statics, &
       & effects_dynamics, effects_kinematics
    use fekap_deck, only: read_deck
@@ -14,6 +14,7 @@ program fekap_main
    use fekap_dynamics_dynamic_stepper, only: dynamic_stepper_type, new_dynamic_stepper, energy_names
    use fekap_stepping_stepper, only: stepper_type
    use fekap_fem, only: fem_stepper_type, new_fem_stepper
+   use fekap_spatial_stepper, only: spatial_stepper_type, new_spatial_stepper
    use fekap_classical, only: angles_stepper_type, new_angles_stepper, cartesian_stepper_type, &
       & new_cartesian_stepper
    use fekap_stepping_interrupt, only: catch_interrupts, interrupt_signal, interrupt_reads
@@ -126,8 +127,22 @@ contains
       type(dynamic_stepper_type), allocatable :: dynamic
       type(cartesian_stepper_type), allocatable :: cartesian
       type(angles_stepper_type), allocatable :: angles
+      type(spatial_stepper_type), allocatable :: spatial
       integer :: effects
       effects = planned_effects(model)
+      if (model%analysis%spatial) then
+         ! A spatial deck (kinematics only): joints as double nodes, SE(3) beams (docs/spatial.md).
+         if (model%analysis%method /= method_fem) then
+            call input_error(error, model%file//': a spatial deck runs with the finite element method only: '// &
+               & 'leave out --method and the ANALysis method line')
+            return
+         end if
+         allocate (spatial)
+         call new_spatial_stepper(spatial, model, error)
+         if (allocated(error)) return
+         call move_alloc(spatial, stepper)
+         return
+      end if
       select case (model%analysis%method)
       case (method_fem)
          allocate (fem)
@@ -192,7 +207,9 @@ contains
       plan%force = force
       if (model%output%csv) then
          call add_run_file(plan, 'points.csv')
-         call add_run_file(plan, 'links.csv')
+         ! A spatial run reports its joints' motion (joints.csv), not planar link angles.
+         if (.not. model%analysis%spatial) call add_run_file(plan, 'links.csv')
+         if (model%analysis%spatial) call add_run_file(plan, 'joints.csv')
          call add_run_file(plan, 'steps.csv')
          call add_run_file(plan, 'nodes.csv')
          call add_run_file(plan, 'mesh.csv')
@@ -211,7 +228,12 @@ contains
       if (allocated(error)) return
       if (model%output%csv) then
          call open_replace(outdir//'/points.csv', units%points, error, stream=.true.)
-         if (.not. allocated(error)) call open_replace(outdir//'/links.csv', units%links, error, stream=.true.)
+         if (.not. allocated(error) .and. .not. model%analysis%spatial) then
+            call open_replace(outdir//'/links.csv', units%links, error, stream=.true.)
+         end if
+         if (.not. allocated(error) .and. model%analysis%spatial) then
+            call open_replace(outdir//'/joints.csv', units%joints, error, stream=.true.)
+         end if
          if (.not. allocated(error)) call open_replace(outdir//'/steps.csv', units%steps, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/nodes.csv', units%nodes, error, stream=.true.)
          if (.not. allocated(error)) call open_replace(outdir//'/mesh.csv', mesh_unit, error, stream=.true.)

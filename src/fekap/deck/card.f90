@@ -12,22 +12,25 @@ module fekap_deck_card
    integer, parameter, public :: card_none = 0, card_title = 1, card_sections = 2, card_nodes = 3, &
       & card_links = 4, card_welds = 5, card_supports = 6, card_drives = 7, card_loads = 8, &
       & card_slidelines = 9, card_analysis = 10, card_output = 11, card_include = 12, card_end = 13, &
-      & card_parameters = 14, card_masses = 15, card_gravity = 16, card_velocities = 17
+      & card_parameters = 14, card_masses = 15, card_gravity = 16, card_velocities = 17, &
+      & card_joints = 18
    !> Number of distinct cards.
-   integer, parameter, public :: ncards = 17
+   integer, parameter, public :: ncards = 18
 
    !> Keywords (upper case) and the card each selects; aliases share a card.
-   character(*), parameter :: keywords(19) = [character(len=11) :: 'TITLE', 'SECTIONS', 'NODES', &
+   character(*), parameter :: keywords(20) = [character(len=11) :: 'TITLE', 'SECTIONS', 'NODES', &
       & 'COORDINATES', 'LINKS', 'ELEMENTS', 'WELDS', 'SUPPORTS', 'BOUNDARY', 'DRIVES', 'LOADS', &
-      & 'SLIDELINES', 'ANALYSIS', 'OUTPUT', 'INCLUDE', 'PARAMETERS', 'MASSES', 'GRAVITY', 'VELOCITIES']
-   integer, parameter :: keyword_card(19) = [card_title, card_sections, card_nodes, card_nodes, &
+      & 'SLIDELINES', 'ANALYSIS', 'OUTPUT', 'INCLUDE', 'PARAMETERS', 'MASSES', 'GRAVITY', 'VELOCITIES', &
+      & 'JOINTS']
+   integer, parameter :: keyword_card(20) = [card_title, card_sections, card_nodes, card_nodes, &
       & card_links, card_links, card_welds, card_supports, card_supports, card_drives, card_loads, &
       & card_slidelines, card_analysis, card_output, card_include, card_parameters, card_masses, card_gravity, &
-      & card_velocities]
+      & card_velocities, card_joints]
    !> Names for messages: the capital letters are the shortest accepted form.
    character(*), parameter :: display(ncards) = [character(len=10) :: 'TITLe', 'SECTions', 'NODEs', &
       & 'LINKs', 'WELDs', 'SUPPorts', 'DRIVes', 'LOADs', 'SLIDelines', 'ANALysis', 'OUTPut', &
-      & 'INCLude', 'END', 'PARAmeters', 'MASSes', 'GRAVity', 'VELOcities']
+      & 'INCLude', 'END', 'PARAmeters', 'MASSes', 'GRAVity', 'VELOcities', &
+      & 'JOINts']
 
 contains
 
@@ -69,7 +72,7 @@ contains
    pure function card_list() result(list)
       character(:), allocatable :: list
       list = 'TITLe PARAmeters SECTions NODEs (COORdinates) LINKs (ELEMents) WELDs SUPPorts (BOUNdary) DRIVes ' &
-         & //'LOADs MASSes GRAVity VELOcities SLIDelines ANALysis OUTPut INCLude END'
+         & //'LOADs MASSes GRAVity VELOcities SLIDelines JOINts ANALysis OUTPut INCLude END'
    end function card_list
 
 end module fekap_deck_card

@@ -7,8 +7,11 @@ module fekap_deck
    use fekap_deck_card, only: card_none, card_title, card_sections, card_nodes, card_links, card_welds, &
       & card_supports, card_drives, card_loads, card_slidelines, card_analysis, card_output, card_include, &
       & card_end, card_parameters, ncards, card_name, card_list, card_of, card_masses, card_gravity, &
-      & card_velocities
+      & card_velocities, card_joints
+   use fekap_deck_spatial, only: read_spatial_sections, read_spatial_nodes, read_spatial_links, read_joints, &
+      & read_spatial_drives
    use fekap_deck_context, only: context_type
+   use fekap_strings, only: lower
    use fekap_deck_diagnostic, only: mark_type
    use fekap_deck_source, only: load_file, load_string
    use fekap_deck_geometry, only: read_sections, read_nodes, read_links, read_welds, read_supports
@@ -138,19 +141,26 @@ contains
       if (allocated(ctx%parameters)) model%parameters = ctx%parameters
       call read_title(ctx, model, pack([(i, i=1, ctx%source%nlines)], block == card_title))
       call read_analysis(ctx, model, lines_of(card_analysis))
-      call read_sections(ctx, model, lines_of(card_sections))
-      call read_nodes(ctx, model, lines_of(card_nodes))
-      call read_links(ctx, model, lines_of(card_links))
-      call read_welds(ctx, model, lines_of(card_welds))
-      call read_supports(ctx, model, lines_of(card_supports))
-      call read_slidelines(ctx, model, lines_of(card_slidelines))
-      call read_drives(ctx, model, lines_of(card_drives))
-      call read_loads(ctx, model, lines_of(card_loads))
-      call read_masses(ctx, model, lines_of(card_masses))
-      call read_gravity(ctx, model, lines_of(card_gravity))
-      call read_velocities(ctx, model, lines_of(card_velocities))
-      call read_output(ctx, model, lines_of(card_output))
-      call check_effects(ctx, model, lines_of(card_analysis))
+      if (model%analysis%spatial) then
+         call read_spatial_deck()
+      else
+         call read_sections(ctx, model, lines_of(card_sections))
+         call read_nodes(ctx, model, lines_of(card_nodes))
+         call read_links(ctx, model, lines_of(card_links))
+         call read_welds(ctx, model, lines_of(card_welds))
+         call read_supports(ctx, model, lines_of(card_supports))
+         call read_slidelines(ctx, model, lines_of(card_slidelines))
+         call read_drives(ctx, model, lines_of(card_drives))
+         call read_loads(ctx, model, lines_of(card_loads))
+         call read_masses(ctx, model, lines_of(card_masses))
+         call read_gravity(ctx, model, lines_of(card_gravity))
+         call read_velocities(ctx, model, lines_of(card_velocities))
+         call read_output(ctx, model, lines_of(card_output))
+         call check_effects(ctx, model, lines_of(card_analysis))
+         call refuse(card_joints, 'JOINts belong to a spatial deck', &
+            & 'planar links meeting at a node are hinged there; '// &
+            & 'for a spatial deck write ANALysis type kinematics spatial')
+      end if
 
       ! The deck as a whole.
       last = ctx%source%nlines
@@ -161,8 +171,15 @@ contains
          call ctx%error(last, size(ctx%source%lines(last)%tokens) + 1, 'unterminated deck: there is no END card', &
             & label='add END after the last block')
       end if
-      call require(card_nodes, 'NODEs', 'name x y')
-      call require(card_sections, 'SECTions', 'name E=... G=... A=... I=... k=...')
+      if (model%analysis%spatial) then
+         call require(card_nodes, 'NODEs', 'name x y z')
+         call require(card_sections, 'SECTions', 'name EA=... GA2=... GA3=... GJ=... EI2=... EI3=...')
+         call require(card_joints, 'JOINts', &
+            & 'name kind first-node second-node|ground [axis x y z]')
+      else
+         call require(card_nodes, 'NODEs', 'name x y')
+         call require(card_sections, 'SECTions', 'name E=... G=... A=... I=... k=...')
+      end if
       call require(card_links, 'LINKs', 'name first-node second-node section')
       ! Masses move a mechanism by themselves (dynamics, under gravity).
       if (count(block == card_drives) + count(block == card_loads) == 0 .and. .not. has_masses(model)) then
@@ -172,6 +189,45 @@ contains
       if (size(model%links) > 0 .and. size(model%links) == count(block == card_links)) call check_nodes_used()
 
    contains
+
+      !> The cards of a spatial deck (docs/deck-format.md, "Spatial decks");
+      !> the planar-only cards are errors.
+      subroutine read_spatial_deck()
+         integer :: k
+         integer, parameter :: planar_only(7) = [card_welds, card_supports, card_slidelines, card_loads, &
+            & card_masses, card_gravity, card_velocities]
+         call read_spatial_sections(ctx, model, lines_of(card_sections))
+         call read_spatial_nodes(ctx, model, lines_of(card_nodes))
+         call read_spatial_links(ctx, model, lines_of(card_links))
+         call read_joints(ctx, model, lines_of(card_joints))
+         call read_spatial_drives(ctx, model, lines_of(card_drives))
+         call read_output(ctx, model, lines_of(card_output))
+         do k = 1, size(planar_only)
+            call refuse(planar_only(k), card_name(planar_only(k))//' is not a card of a spatial deck (yet)', &
+               & 'a spatial deck has SECTions, NODEs, LINKs, JOINts, DRIVes, ANALysis, OUTPut: ground nodes by '// &
+               & 'joints to ground, weld links by weld joints')
+         end do
+         if (model%output%vtk) then
+            do k = 1, ctx%source%nlines
+               if (block(k) == card_output .and. index(lower(ctx%source%lines(k)%code), 'vtk') > 0) then
+                  call ctx%error(k, 1, 'a spatial run writes no VTK files yet', label='leave vtk out of files')
+               end if
+            end do
+         end if
+      end subroutine read_spatial_deck
+
+      !> Every line of the card's blocks is an error: message, label.
+      subroutine refuse(which, message, label)
+         integer, intent(in) :: which
+         character(*), intent(in) :: message, label
+         integer :: k
+         do k = 1, ctx%source%nlines
+            if (block(k) == which) then
+               call ctx%error(k, 1, message, label=label)
+               exit
+            end if
+         end do
+      end subroutine refuse
 
       function lines_of(which) result(lines)
          integer, intent(in) :: which
@@ -199,6 +255,12 @@ contains
          do k = 1, size(model%links)
             used(model%links(k)%node) = .true.
          end do
+         if (allocated(model%spatial%joints)) then
+            ! A spatial node may be a joint's only (a slider block between a prismatic and a universal joint).
+            do k = 1, size(model%spatial%joints)
+               used(pack(model%spatial%joints(k)%node, model%spatial%joints(k)%node > 0)) = .true.
+            end do
+         end if
          do k = 1, size(model%nodes)
             if (used(k)) cycle
             call ctx%error_at(model%nodes(k)%loc, 'node '//model%nodes(k)%name//' is not on any link', &

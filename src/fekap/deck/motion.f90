@@ -16,7 +16,7 @@ module fekap_deck_motion
    implicit none
    private
 
-   public :: read_drives, read_loads, read_slidelines
+   public :: read_drives, read_loads, read_slidelines, read_law
 
    real(dp), parameter :: pi = acos(-1.0_dp)
    !> Tolerances of the initial value of an absolute drive: angle (rad), and

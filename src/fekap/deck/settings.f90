@@ -138,9 +138,24 @@ contains
             model%analysis%solver = chosen('band dense', [solver_band, solver_dense], model%analysis%solver)
          else if (is_word_of(key, 'type', 4)) then
             ! Whether the type can run is checked against the whole deck (check_effects).
-            if (.not. one_value('type auto|kinematics|kinetostatics|statics|dynamics')) cycle
+            ! A third field `spatial` (or `planar`) says what kind of mechanism the deck holds.
+            if (.not. ctx%require(iline, 'type auto|kinematics|kinetostatics|statics|dynamics [spatial|planar]', &
+               & 'the line')) cycle
+            if (extra(4, 'type auto|kinematics|kinetostatics|statics|dynamics [spatial|planar]')) cycle
             model%analysis%effects = chosen('auto kinematics kinetostatics statics dynamics', [effects_auto, &
                & effects_kinematics, effects_kinetostatics, effects_statics, effects_dynamics], model%analysis%effects)
+            if (ctx%nfields(iline) == 3) then
+               select case (choice(3, 'spatial planar'))
+               case (1)
+                  model%analysis%spatial = .true.
+                  if (all(model%analysis%effects /= [effects_auto, effects_kinematics])) then
+                     call ctx%error(iline, 2, 'a spatial deck runs kinematics only', &
+                        & label='spatial kinetostatics, statics and dynamics are not there yet: type kinematics spatial')
+                  end if
+               case (2)
+                  model%analysis%spatial = .false.
+               end select
+            end if
          else if (is_word_of(key, 'start', 4)) then
             ! start consistent|unstrained: dynamics' start state (docs/dynamics.md).
             if (.not. one_value('start consistent|unstrained')) cycle

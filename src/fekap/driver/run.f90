@@ -18,6 +18,8 @@ module fekap_driver_run
       & write_header, steps_header, dynamics_steps_header, reactions_header, deflection_header, write_steps_row, &
       & row_prefix_type, &
       & new_row_prefix, write_nodes_header, write_nodes_row, write_reactions_rows, write_energy_row, write_deflection_rows
+   use fekap_output_spatial_csv, only: write_spatial_points_header, write_spatial_points_rows, &
+      & write_joints_header, write_joints_rows
    use fekap_output_listing, only: write_listing_step_header, write_listing_step, write_listing_summary, &
       & write_listing_stop, write_listing_note
    use fekap_output_vtk, only: write_vtu
@@ -65,6 +67,8 @@ module fekap_driver_run
       character(:), allocatable :: energy_names
       !> deflection.csv, written by kinetostatics runs with OUTPut deflection on.
       integer :: deflection = no_unit
+      !> joints.csv, written by spatial runs only.
+      integer :: joints = no_unit
       logical :: vtk = .false.
       !> The output directory and the deck's stem, for the VTK file names.
       character(:), allocatable :: outdir, stem
@@ -84,7 +88,7 @@ module fekap_driver_run
 
    !> The text of the files written step by step, held between flushes.
    type :: run_buffers_type
-      type(text_buffer_type) :: points, links, steps, nodes, listing, reactions, energy, deflection
+      type(text_buffer_type) :: points, links, steps, nodes, listing, reactions, energy, deflection, joints
    end type run_buffers_type
 
 contains
@@ -141,7 +145,12 @@ contains
       c_start = clock_seconds()
       last_flush = coarse_clock_seconds()
       call new_run_buffers(units, out)
-      if (units%points /= no_unit) call write_points_header(out%points, vel, acc)
+      if (units%points /= no_unit .and. model%analysis%spatial) then
+         call write_spatial_points_header(out%points, vel, acc)
+      else if (units%points /= no_unit) then
+         call write_points_header(out%points, vel, acc)
+      end if
+      if (units%joints /= no_unit) call write_joints_header(out%joints, vel, acc)
       if (units%links /= no_unit) call write_links_header(out%links, vel, acc)
       if (units%steps /= no_unit .and. units%energy /= no_unit) then
          call write_header(out%steps, dynamics_steps_header)
@@ -209,12 +218,19 @@ contains
          if (result%written) then
             if (units%points /= no_unit .or. units%links /= no_unit .or. units%steps /= no_unit .or. &
                & units%nodes /= no_unit .or. units%reactions /= no_unit .or. units%energy /= no_unit .or. &
-               & units%deflection /= no_unit) then
+               & units%deflection /= no_unit .or. units%joints /= no_unit) then
                call new_row_prefix(prefix, result)
             end if
-            if (units%points /= no_unit) then
+            if (units%points /= no_unit .and. model%analysis%spatial) then
+               call write_spatial_points_rows(out%points, model, result, prefix%text(1:prefix%n), vel, acc)
+               rows = rows + size(model%output%points)
+            else if (units%points /= no_unit) then
                call write_points_rows(out%points, model, result, prefix, vel, acc)
                rows = rows + size(model%output%points)
+            end if
+            if (units%joints /= no_unit) then
+               call write_joints_rows(out%joints, model, result, prefix%text(1:prefix%n), vel, acc)
+               rows = rows + size(result%joint_motion, 2)
             end if
             if (units%links /= no_unit) then
                call write_links_rows(out%links, model, result, prefix, vel, acc)
@@ -450,6 +466,7 @@ contains
       if (units%reactions /= no_unit) call new_text_buffer(out%reactions, units%reactions, formatted=.false.)
       if (units%energy /= no_unit) call new_text_buffer(out%energy, units%energy, formatted=.false.)
       if (units%deflection /= no_unit) call new_text_buffer(out%deflection, units%deflection, formatted=.false.)
+      if (units%joints /= no_unit) call new_text_buffer(out%joints, units%joints, formatted=.false.)
       if (units%listing /= no_unit) call new_text_buffer(out%listing, units%listing, formatted=.true.)
    end subroutine new_run_buffers
 
@@ -469,6 +486,7 @@ contains
       if (units%reactions /= no_unit) call flush_one(out%reactions)
       if (units%energy /= no_unit) call flush_one(out%energy)
       if (units%deflection /= no_unit) call flush_one(out%deflection)
+      if (units%joints /= no_unit) call flush_one(out%joints)
       if (units%listing /= no_unit) call flush_one(out%listing)
    contains
       subroutine flush_one(buffer)

@@ -6,6 +6,7 @@ module fekap_model
    use fekap_kinds, only: dp
    use fekap_model_drive_law, only: law_type
    use fekap_strings, only: same_name
+   use fekap_model_spatial, only: spatial_model_type
    implicit none
    private
 
@@ -217,6 +218,9 @@ module fekap_model
       logical :: start_unstrained = .true.
       !> Where an energy-momentum integrator line is (for the errors of what it does not cover).
       type(source_loc_type) :: integrator_loc
+      !> A spatial mechanism (ANALysis `type kinematics spatial`): the model's
+      !> `spatial` component holds its 3D data (fekap_model_spatial).
+      logical :: spatial = .false.
    end type analysis_type
 
    !> What to write.
@@ -282,6 +286,8 @@ module fekap_model
       type(output_type) :: output
       !> The deck's parameters in the order defined, with the values used.
       type(parameter_type), allocatable :: parameters(:)
+      !> A spatial deck's nodes' z, 3D sections, trusses, joints and drives.
+      type(spatial_model_type) :: spatial
    end type model_type
 
 contains

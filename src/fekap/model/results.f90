@@ -64,6 +64,11 @@ module fekap_model_results
       !> of every node (2, number of nodes), and whether it is known at this step.
       logical :: has_deflection = .false.
       real(dp), allocatable :: deflection(:, :)
+      !> Spatial runs only (allocated by the spatial stepper): z, its velocity
+      !> and acceleration of every node, and each reported joint's motion
+      !> (3, joints): angle (stroke), rate and second rate (fekap_spatial_build).
+      real(dp), allocatable :: pos_z(:), vel_z(:), acc_z(:)
+      real(dp), allocatable :: joint_motion(:, :)
    end type step_result_type
 
 contains

@@ -39,6 +39,7 @@ module fekap_output_directory
    !> VTK step files are `vtk/*.vtu`.
    character(*), parameter :: own_files(*) = [character(len=17) :: 'points.csv', 'links.csv', 'steps.csv', &
       & 'mesh.csv', 'nodes.csv', 'reactions.csv', 'energy.csv', 'deflection.csv', 'mechanism.txt', '*.lis', '*.pvd', &
+      & 'joints.csv', &
       & '*.fekap-tmp', 'paths.png', &
       & 'angles.png', 'iterations.png', 'history_*.png', 'shapes.png', 'energy.png', 'reactions.png', &
       & 'deflection.png', 'motion.gif', 'motion.mp4', 'motion-frame.png']
@@ -48,7 +49,7 @@ module fekap_output_directory
    !> `<stem>.pvd` and `vtk/<stem>_*.vtu`: one of these found in the directory
    !> and not in its manifest is someone else's.
    character(*), parameter :: run_files(*) = [character(len=17) :: 'points.csv', 'links.csv', 'steps.csv', &
-      & 'mesh.csv', 'nodes.csv', 'reactions.csv', 'energy.csv', 'deflection.csv', 'mechanism.txt', 'paths.png', &
+      & 'mesh.csv', 'nodes.csv', 'reactions.csv', 'energy.csv', 'deflection.csv', 'mechanism.txt', 'paths.png', 'joints.csv', &
       & 'angles.png', 'iterations.png', 'history_*.png', 'shapes.png', 'energy.png', 'reactions.png', &
       & 'deflection.png', 'motion.gif', 'motion.mp4', 'motion-frame.png']
 

@@ -244,6 +244,7 @@ contains
       character(len=32) :: num
       text = 'method '//trim(merge('fem      ', 'cartesian', model%analysis%method == method_fem))
       if (model%analysis%method /= method_fem .and. model%analysis%method /= method_cartesian) text = 'method angles'
+      if (model%analysis%spatial) text = 'method fem, spatial'
       if (model%analysis%velocities .and. model%analysis%accelerations) then
          text = text//'; computing positions, velocities and accelerations'
       else if (model%analysis%velocities) then
@@ -304,6 +305,14 @@ contains
       ! es_text: 1e300 keeps its E (es12.5 writes 1.00000+300).
       write (unit, '(2x,a)') 'time from '//es_text(model%analysis%t_start, 12, 5)//' to '// &
          & es_text(model%analysis%t_end, 12, 5)//' step '//es_text(model%analysis%dt, 12, 5)
+      if (model%analysis%spatial) then
+         ! The spatial stepper's own settings (fekap_spatial_stepper).
+         write (unit, '(2x,a,a,a,i0,a)') 'Newton: length ', es_text(model%analysis%length_tol, 9, 2), &
+            & ' x longest element (the rates from an iterate within 1e-14 of it), at most ', &
+            & model%analysis%max_iter, ' iterations'
+         write (unit, '(2x,a)') 'predictor: Taylor series with the rates of the last three accelerations'
+         return
+      end if
       write (unit, '(2x,a,a,a,i0,a)') 'Newton: tolerance '//es_text(model%analysis%tol, 9, 2)//', length ', &
          & es_text(model%analysis%length_tol, 9, 2), ' x model size, at most ', model%analysis%max_iter, ' iterations'
       write (unit, '(2x,a)') 'predictor '//trim(pred)//', convergence test '// &

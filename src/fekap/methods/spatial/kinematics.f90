@@ -28,7 +28,7 @@ module fekap_spatial_kinematics
 
    public :: spatial_state_type, new_spatial_state, spatial_configuration_type, configure, frame_curvature
    public :: assemble_spatial, set_drives, update_state, spatial_newton, spatial_rates, spatial_report_type
-   public :: point_position, point_rate, free_dofs
+   public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular
 
    !> Where a mechanism is: its generalized dofs and its free frames' rotations.
    type :: spatial_state_type
@@ -355,8 +355,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(spatial_configuration_type) :: c
       type(spatial_state_type) :: sd
-      real(dp) :: res(m%ndof), k(m%ndof, m%ndof), ad(m%ndof), conv(m%ndof), kappa(3, size(s%r, 3))
-      real(dp), allocatable :: kff(:, :), rhs(:)
+      real(dp) :: res(m%ndof), k(m%ndof, m%ndof), ad(m%ndof)
+      real(dp), allocatable :: kff(:, :)
       integer, allocatable :: fdof(:), ipiv(:)
       integer :: info
       fdof = free_dofs(m)
@@ -371,6 +371,25 @@ contains
          call singular(error, fdof(info), t)
          return
       end if
+      call spatial_rates_factored(m, s, c, k, kff, ipiv, fdof, v, ad, a)
+   end subroutine spatial_rates
+
+   !> The rates at state s (configuration c, tangent k, its free block kff
+   !> factored by dense_lu_factor with ipiv) given the drives' rates in v and
+   !> second rates ad (zero at the free dofs): v and a of every dof.
+   subroutine spatial_rates_factored(m, s, c, k, kff, ipiv, fdof, v, ad, a)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_state_type), intent(in) :: s
+      type(spatial_configuration_type), intent(in) :: c
+      real(dp), intent(in) :: k(:, :), ad(:)
+      real(dp), contiguous, intent(in) :: kff(:, :)
+      integer, contiguous, intent(in) :: ipiv(:)
+      integer, intent(in) :: fdof(:)
+      real(dp), intent(inout) :: v(:)
+      real(dp), intent(out) :: a(:)
+      real(dp) :: res(m%ndof), conv(m%ndof), kappa(3, size(s%r, 3))
+      real(dp), allocatable :: rhs(:)
+      integer :: info
       rhs = -matmul(k(fdof, :), v)
       call dense_lu_solve(kff, ipiv, rhs, info)
       v(fdof) = rhs
@@ -380,7 +399,7 @@ contains
       rhs = -matmul(k(fdof, :), a) - conv(fdof)
       call dense_lu_solve(kff, ipiv, rhs, info)
       a(fdof) = rhs
-   end subroutine spatial_rates
+   end subroutine spatial_rates_factored
 
    subroutine singular(error, dof, t)
       type(error_type), allocatable, intent(out) :: error

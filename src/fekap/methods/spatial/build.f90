@@ -1,0 +1,328 @@
+!> The spatial mechanism of a spatial deck's model: joints as double nodes
+!> turned into shared points and a tree of frames (fekap_spatial_mechanism).
+!> The nodes joined by joints share one point (fixed by a joint to the
+!> ground, on a ground line by a prismatic or cylindrical one, else free);
+!> welded nodes share one frame; each revolute or universal joint makes one
+!> frame the child of the other, the tree grown outwards from the ground
+!> (breadth first), so a joint written "backwards" is turned round and its
+!> angle counted with a sign. A joint's angle (stroke) is the second node's
+!> rotation about (motion along) the axis relative to the first node's, zero
+!> at the deck's configuration; a drive prescribes its change since the
+!> start time, law(t) - law(t_start).
+module fekap_spatial_build
+   use fekap_kinds, only: dp
+   use fekap_error, only: error_type, input_error
+   use fekap_union_find, only: find_root, join
+   use fekap_model, only: model_type
+   use fekap_model_drive_law, only: law_type, law_rate, law_harmonic, law_polynomial, law_table, &
+      & law_constant, law_linear
+   use fekap_model_spatial, only: spatial_joint_type, reported_joints, joint_spherical, joint_revolute, joint_universal, &
+      & joint_prismatic, joint_cylindrical, joint_weld
+   use fekap_spatial_mechanism, only: spatial_mechanism_type, add_point, add_frame, add_node, add_beam, &
+      & add_truss, add_drive, point_fixed, point_free, point_line, frame_fixed, frame_free, frame_revolute, &
+      & frame_universal
+   implicit none
+   private
+
+   public :: spatial_map_type, build_spatial_mechanism, shifted_law
+
+   !> Where the model's entities are in the mechanism.
+   type :: spatial_map_type
+      !> The mechanism's point of each model node.
+      integer, allocatable :: node_point(:)
+      !> Reported joints (revolute: angle; prismatic: stroke): model joint,
+      !> mechanism dof and the sign of the joint's motion in it.
+      integer, allocatable :: report_joint(:), report_dof(:)
+      real(dp), allocatable :: report_sign(:)
+   end type spatial_map_type
+
+contains
+
+   !> Build m from the model's spatial data (read and checked by the deck).
+   subroutine build_spatial_mechanism(model, m, map, error)
+      type(model_type), intent(in) :: model
+      type(spatial_mechanism_type), intent(out) :: m
+      type(spatial_map_type), intent(out) :: map
+      type(error_type), allocatable, intent(out) :: error
+      integer :: nn, nj, i, k, c, o, p, head, tail
+      integer, allocatable :: point_set(:), frame_set(:), ground_joint(:), class_point(:), class_frame(:)
+      integer, allocatable :: angle_dof(:), stroke_dof(:), queue(:), mech_node(:)
+      real(dp), allocatable :: angle_sign(:), stroke_sign(:)
+      logical, allocatable :: has_frame(:), used(:)
+      real(dp) :: d(3), v(3), sign
+      type(law_type) :: law
+      nn = size(model%nodes)
+      nj = size(model%spatial%joints)
+      allocate (angle_dof(nj), stroke_dof(nj), source=0)
+      allocate (angle_sign(nj), stroke_sign(nj), source=1.0_dp)
+      associate (joints => model%spatial%joints)
+         ! Points: the nodes of a joint share one.
+         point_set = [(i, i=1, nn)]
+         do k = 1, nj
+            if (joints(k)%node(2) > 0) call join(point_set, joints(k)%node(1), joints(k)%node(2))
+         end do
+         allocate (ground_joint(nn), class_point(nn), source=0)
+         do k = 1, nj
+            if (joints(k)%node(2) > 0) cycle
+            c = find_root(point_set, joints(k)%node(1))
+            if (ground_joint(c) > 0) then
+               if (grounds_point(joints(ground_joint(c))) .neqv. grounds_point(joints(k))) then
+                  call joint_error(joints(k), 'joint '//joints(k)%name//' and joint '// &
+                     & joints(ground_joint(c))%name//' hold one point to the ground in two ways', &
+                     & 'one point is fixed or slides on one line of the ground: keep one of them', error)
+                  return
+               end if
+               if (.not. grounds_point(joints(k)) .and. &
+                  & norm2(cross(joints(k)%axis, joints(ground_joint(c))%axis)) > 1.0e-9_dp) then
+                  call joint_error(joints(k), 'joints '//joints(k)%name//' and '//joints(ground_joint(c))%name// &
+                     & ' slide one point along two lines', 'give them one axis, or keep one of them', error)
+                  return
+               end if
+            end if
+            ground_joint(c) = k
+         end do
+         do i = 1, nn
+            if (find_root(point_set, i) /= i) cycle
+            if (ground_joint(i) == 0) then
+               call add_point(m, point_free, position(i), class_point(i), error=error)
+            else if (grounds_point(joints(ground_joint(i)))) then
+               call add_point(m, point_fixed, position(i), class_point(i), error=error)
+            else
+               call add_point(m, point_line, position(i), class_point(i), joints(ground_joint(i))%axis, error)
+               stroke_dof(ground_joint(i)) = m%points(class_point(i))%dof
+               if (.not. joints(ground_joint(i))%ground_first) stroke_sign(ground_joint(i)) = -1
+            end if
+            if (allocated(error)) return
+         end do
+         ! A prismatic joint named a second time on one line shares the first's stroke.
+         do k = 1, nj
+            if (joints(k)%node(2) == 0 .and. .not. grounds_point(joints(k)) .and. stroke_dof(k) == 0) then
+               p = class_point(find_root(point_set, joints(k)%node(1)))
+               stroke_dof(k) = m%points(p)%dof
+               if (.not. joints(k)%ground_first) stroke_sign(k) = -1
+            end if
+         end do
+         allocate (map%node_point(nn))
+         do i = 1, nn
+            map%node_point(i) = class_point(find_root(point_set, i))
+         end do
+
+         ! Frames: on the nodes of beams and of the joints that hold rotations.
+         allocate (has_frame(nn), source=.false.)
+         do k = 1, size(model%links)
+            if (.not. model%spatial%truss(k)) has_frame(model%links(k)%node) = .true.
+         end do
+         do k = 1, nj
+            if (joints(k)%kind /= joint_spherical) has_frame(pack(joints(k)%node, joints(k)%node > 0)) = .true.
+         end do
+         frame_set = [(i, i=1, nn)]
+         do k = 1, nj
+            if (joints(k)%kind == joint_weld .and. joints(k)%node(2) > 0) then
+               call join(frame_set, joints(k)%node(1), joints(k)%node(2))
+            end if
+         end do
+         do i = 1, nn
+            if (has_frame(i)) has_frame(find_root(frame_set, i)) = .true.
+         end do
+         allocate (class_frame(nn), source=0)
+         allocate (queue(nn), source=0)
+         allocate (used(nj), source=.false.)
+         head = 1
+         tail = 0
+         ! Frames held by the ground first.
+         do k = 1, nj
+            if (joints(k)%node(2) > 0 .or. joints(k)%kind == joint_spherical) cycle
+            c = find_root(frame_set, joints(k)%node(1))
+            used(k) = .true.
+            if (class_frame(c) > 0) then
+               call joint_error(joints(k), 'joint '//joints(k)%name//' holds the rotation of node '// &
+                  & model%nodes(joints(k)%node(1))%name//' to the ground a second time', &
+                  & 'one joint to the ground sets a node''s rotation: keep one', error)
+               return
+            end if
+            select case (joints(k)%kind)
+            case (joint_weld, joint_prismatic)
+               call add_frame(m, frame_fixed, class_frame(c), 0, error=error)
+            case (joint_revolute, joint_cylindrical)
+               call add_frame(m, frame_revolute, class_frame(c), 0, joints(k)%axis, error=error)
+               angle_dof(k) = m%frames(class_frame(c))%dof
+               if (.not. joints(k)%ground_first) angle_sign(k) = -1
+            case (joint_universal)
+               if (joints(k)%ground_first) then
+                  call add_frame(m, frame_universal, class_frame(c), 0, joints(k)%axis, joints(k)%axis2, error)
+               else
+                  call add_frame(m, frame_universal, class_frame(c), 0, joints(k)%axis2, joints(k)%axis, error)
+               end if
+            case default                                 ! spherical: skipped above
+            end select
+            if (allocated(error)) return
+            tail = tail + 1
+            queue(tail) = c
+         end do
+         do
+            ! Grow the tree from the frames placed so far through revolute and universal joints.
+            do while (head <= tail)
+               c = queue(head)
+               head = head + 1
+               do k = 1, nj
+                  if (all(joints(k)%kind /= [joint_revolute, joint_universal]) .or. joints(k)%node(2) == 0) cycle
+                  if (used(k)) cycle
+                  if (find_root(frame_set, joints(k)%node(1)) == c) then
+                     o = find_root(frame_set, joints(k)%node(2))
+                     sign = 1
+                  else if (find_root(frame_set, joints(k)%node(2)) == c) then
+                     o = find_root(frame_set, joints(k)%node(1))
+                     sign = -1
+                  else
+                     cycle
+                  end if
+                  used(k) = .true.
+                  if (o == c .or. class_frame(o) > 0) then
+                     call joint_error(joints(k), 'joint '//joints(k)%name//' closes a loop of joints that '// &
+                        & 'set rotations (revolute, universal, weld) between frames already related', &
+                        & 'a loop of links needs elastic links between its joints: make one of these joints '// &
+                        & 'spherical, or remove it', error)
+                     return
+                  end if
+                  if (joints(k)%kind == joint_revolute) then
+                     call add_frame(m, frame_revolute, class_frame(o), class_frame(c), joints(k)%axis, error=error)
+                     angle_dof(k) = m%frames(class_frame(o))%dof
+                     angle_sign(k) = sign
+                  else if (sign > 0) then
+                     call add_frame(m, frame_universal, class_frame(o), class_frame(c), joints(k)%axis, &
+                        & joints(k)%axis2, error)
+                  else
+                     call add_frame(m, frame_universal, class_frame(o), class_frame(c), joints(k)%axis2, &
+                        & joints(k)%axis, error)
+                  end if
+                  if (allocated(error)) return
+                  tail = tail + 1
+                  queue(tail) = o
+               end do
+            end do
+            ! A part not held by the ground: its first frame turns freely.
+            c = 0
+            do i = 1, nn
+               if (find_root(frame_set, i) == i .and. has_frame(i) .and. class_frame(i) == 0) then
+                  c = i
+                  exit
+               end if
+            end do
+            if (c == 0) exit
+            call add_frame(m, frame_free, class_frame(c), error=error)
+            if (allocated(error)) return
+            tail = tail + 1
+            queue(tail) = c
+         end do
+
+         allocate (mech_node(nn))
+         do i = 1, nn
+            call add_node(m, map%node_point(i), class_frame(find_root(frame_set, i)), mech_node(i))
+         end do
+         do k = 1, size(model%links)
+            associate (link => model%links(k), sec => model%spatial%sections(model%links(k)%section))
+               if (model%spatial%truss(k)) then
+                  call add_truss(m, map%node_point(link%node(1)), map%node_point(link%node(2)), sec%c(1), error)
+               else
+                  d = position(link%node(2)) - position(link%node(1))
+                  v = sec%orientation
+                  if (all(v == 0)) then
+                     ! A symmetric section (the deck checks): the global axis most across the link.
+                     v = 0
+                     v(minloc(abs(d), 1)) = 1
+                  end if
+                  call add_beam(m, mech_node(link%node(1)), mech_node(link%node(2)), sec%c, v, error)
+               end if
+            end associate
+            if (allocated(error)) then
+               error%message = model%links(k)%name//': '//error%message
+               return
+            end if
+         end do
+
+         do k = 1, size(model%spatial%drives)
+            associate (drive => model%spatial%drives(k))
+               if (drive%stroke) then
+                  law = shifted_law(drive%law, model%analysis%t_start, stroke_sign(drive%joint))
+                  call add_drive(m, stroke_dof(drive%joint), law, error)
+               else
+                  law = shifted_law(drive%law, model%analysis%t_start, angle_sign(drive%joint))
+                  call add_drive(m, angle_dof(drive%joint), law, error)
+               end if
+            end associate
+            if (allocated(error)) return
+         end do
+
+         map%report_joint = reported_joints(model%spatial)
+         allocate (map%report_dof(size(map%report_joint)), map%report_sign(size(map%report_joint)))
+         do i = 1, size(map%report_joint)
+            k = map%report_joint(i)
+            if (joints(k)%kind == joint_revolute) then
+               map%report_dof(i) = angle_dof(k)
+               map%report_sign(i) = angle_sign(k)
+            else
+               map%report_dof(i) = stroke_dof(k)
+               map%report_sign(i) = stroke_sign(k)
+            end if
+         end do
+      end associate
+
+   contains
+
+      pure function position(node) result(x)
+         integer, intent(in) :: node
+         real(dp) :: x(3)
+         x = [model%nodes(node)%x, model%spatial%z(node)]
+      end function position
+
+   end subroutine build_spatial_mechanism
+
+   !> Whether a joint to the ground fixes its point (not a line to slide on).
+   pure logical function grounds_point(joint)
+      type(spatial_joint_type), intent(in) :: joint
+      grounds_point = all(joint%kind /= [joint_prismatic, joint_cylindrical])
+   end function grounds_point
+
+   !> An input error at the joint's deck line.
+   subroutine joint_error(joint, message, advice, error)
+      type(spatial_joint_type), intent(in) :: joint
+      character(*), intent(in) :: message, advice
+      type(error_type), allocatable, intent(out) :: error
+      character(len=24) :: where_
+      write (where_, '(i0,a,i0)') joint%line, ':', joint%col
+      call input_error(error, joint%file//':'//trim(where_)//': error: '//message//'; '//advice)
+   end subroutine joint_error
+
+   !> sign*(law(t) - law(t0)): the change of a joint's angle or stroke since
+   !> the start, as the mechanism's dof counts it.
+   pure function shifted_law(law, t0, sign) result(shifted)
+      type(law_type), intent(in) :: law
+      real(dp), intent(in) :: t0, sign
+      type(law_type) :: shifted
+      real(dp) :: f0, df, ddf
+      call law%eval(t0, f0, df, ddf)
+      shifted = law
+      select case (law%kind)
+      case (law_rate)
+         shifted%c = sign*[law%c(1), law%c(2) - f0]
+      case (law_harmonic)
+         shifted%c = [sign*(law%c(1) - f0), sign*law%c(2), law%c(3), law%c(4)]
+      case (law_polynomial, law_constant)
+         shifted%c = sign*law%c
+         shifted%c(1) = sign*(law%c(1) - f0)
+      case (law_table)
+         shifted%tv = sign*(law%tv - f0)
+         shifted%tm = sign*law%tm
+      case (law_linear)
+         shifted%tv = sign*(law%tv - f0)
+      case default                                       ! no law: nothing to shift
+      end select
+   end function shifted_law
+
+   pure function cross(a, b) result(c)
+      real(dp), intent(in) :: a(3), b(3)
+      real(dp) :: c(3)
+      c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
+   end function cross
+
+end module fekap_spatial_build

@@ -1,0 +1,365 @@
+"""The spatial decks of decks/spatial/ (issue 33) against their closed forms at
+every output time: positions within 1e-12, velocities and accelerations
+within 1e-10, Newton at most 2 iterations a step at the deck's step (3 for
+Example 1's four-bar at its 40 steps a turn); the joints' motion in
+joints.csv; Example 1 as a spatial deck against the planar run; and the
+input errors of a spatial deck (a zero axis, universal axes not
+perpendicular, a joint's nodes not at one place, a missing node), each
+naming deck:line:col with nothing written."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from apptest import ROOT, check, read_rows, run_fekap
+
+DECKS = ROOT / "decks" / "spatial"
+# The issue's thresholds: positions, and velocities and accelerations.
+POSITION_TOL = 1e-12
+RATE_TOL = 1e-10
+# The return to the start after each of 1,000 turns.
+TURN_TOL = 1e-10
+# Newton iterations a step at the deck's own step.
+MAX_ITERATIONS = 2
+
+
+def run_deck(name: str, tmp_path: Path, *extra: str) -> Path:
+    out = tmp_path / name
+    done = run_fekap("-q", "-o", str(out), *extra, str(DECKS / f"{name}.deck"))
+    check(done.returncode == 0, f"{name}: exit {done.returncode}: {done.stderr}")
+    return out
+
+
+def columns(out: Path, table: str, key: str, name: str) -> dict[str, np.ndarray]:
+    rows = [row for row in read_rows(out / table) if row[key] == name]
+    check(bool(rows), f"no rows for {name} in {table}")
+    return {k: np.array([float(row[k]) for row in rows]) for k in rows[0] if k != key}
+
+
+def vectors(series: dict[str, np.ndarray], names: str) -> np.ndarray:
+    return np.stack([series[n] for n in names.split()], axis=1)
+
+
+def check_iterations(out: Path) -> None:
+    its = np.array([int(row["iterations"]) for row in read_rows(out / "steps.csv")])
+    check(its.max() <= MAX_ITERATIONS, f"Newton took up to {its.max()} iterations a step (at most {MAX_ITERATIONS})")
+
+
+def check_close(what: str, got: np.ndarray, want: np.ndarray, tol: float) -> None:
+    err = float(np.max(np.abs(got - want)))
+    check(err <= tol, f"{what}: largest error {err:.3e} > {tol:g}")
+
+
+def test_slider_crank_matches_closed_form(tmp_path):
+    out = run_deck("slider-crank", tmp_path)
+    s = columns(out, "points.csv", "point", "S")
+    t = s["t"]
+    check(abs(t[-1] - math.pi / 3) < 1e-15 and len(t) == 101, "one turn in 100 steps")
+    theta, w = 6 * t, 6.0
+    g = 0.0592 + 0.016 * np.sin(theta) - 0.0192 * np.cos(theta)
+    g1 = 0.016 * np.cos(theta) + 0.0192 * np.sin(theta)
+    g2 = -0.016 * np.sin(theta) + 0.0192 * np.cos(theta)
+    x = np.sqrt(g)
+    xd = w * g1 / (2 * x)
+    xdd = w**2 * (g2 / (2 * x) - g1**2 / (4 * x**3))
+    zero = np.zeros_like(t)
+    check_close("slider position", vectors(s, "x y z"), np.stack([x, zero, zero], axis=1), POSITION_TOL)
+    check_close("slider velocity", vectors(s, "vx vy vz"), np.stack([xd, zero, zero], axis=1), RATE_TOL)
+    check_close("slider acceleration", vectors(s, "ax ay az"), np.stack([xdd, zero, zero], axis=1), RATE_TOL)
+    # The issue's figures: x(0) = 0.2, x' = 0.24, x'' = 1.44 at t = 0; x(pi) = 0.28 (step 50).
+    check(abs(s["x"][0] - 0.2) < 1e-15 and abs(s["vx"][0] - 0.24) < 1e-13 and abs(s["ax"][0] - 1.44) < 1e-12,
+          f"x, x', x'' at t = 0: {s['x'][0]}, {s['vx'][0]}, {s['ax'][0]}")
+    check(abs(s["x"][50] - 0.28) < POSITION_TOL, f"x(pi) = {s['x'][50]}, not 0.28")
+    # The crank tip B = A + r (0, -sin, cos).
+    b = columns(out, "points.csv", "point", "B")
+    r = 0.08
+    check_close("crank tip", vectors(b, "x y z"),
+                np.stack([zero, 0.1 - r * np.sin(theta), 0.12 + r * np.cos(theta)], axis=1), POSITION_TOL)
+    check_close("crank tip velocity", vectors(b, "vx vy vz"),
+                np.stack([zero, -r * w * np.cos(theta), -r * w * np.sin(theta)], axis=1), RATE_TOL)
+    check_close("crank tip acceleration", vectors(b, "ax ay az"),
+                np.stack([zero, r * w**2 * np.sin(theta), -r * w**2 * np.cos(theta)], axis=1), RATE_TOL)
+    # joints.csv: the crank's angle 6 t, the slider's stroke x - 0.2.
+    ja = columns(out, "joints.csv", "joint", "JA")
+    check_close("crank angle", ja["angle"], theta, POSITION_TOL)
+    check_close("crank rate", np.stack([ja["rate"], ja["acceleration"]]), np.stack([zero + w, zero]), RATE_TOL)
+    js = columns(out, "joints.csv", "joint", "JS")
+    check_close("slider stroke", js["angle"], x - 0.2, POSITION_TOL)
+    check_close("slider stroke rates", np.stack([js["rate"], js["acceleration"]]), np.stack([xd, xdd]), RATE_TOL)
+    check_iterations(out)
+
+
+def rssr_exact(phi: np.ndarray):
+    """psi (sin psi > 0) of the RSSR and its first and second derivatives in phi."""
+    s, c = np.sin(phi), np.cos(phi)
+    n = 12 - (1 - c) ** 2 - (4 - s) ** 2
+    n1 = -2 * (1 - c) * s + 2 * (4 - s) * c
+    n2 = -2 * s**2 - 2 * (1 - c) * c - 2 * c**2 - 2 * (4 - s) * s
+    d, d1, d2 = 4 * (4 - s), -4 * c, 4 * s
+    u = n / d
+    u1 = (n1 * d - n * d1) / d**2
+    u2 = (n2 * d - n * d2) / d**2 - 2 * d1 * (n1 * d - n * d1) / d**3
+    root = np.sqrt(1 - u**2)
+    psi = np.arccos(u)
+    return psi, -u1 / root, -u2 / root - u * u1**2 / root**3
+
+
+def test_rssr_matches_closed_form(tmp_path):
+    out = run_deck("rssr", tmp_path)
+    b = columns(out, "points.csv", "point", "B")
+    t = b["t"]
+    w = 2 * math.pi
+    phi = w * t
+    zero = np.zeros_like(t)
+    check_close("input crank tip", vectors(b, "x y z"), np.stack([np.cos(phi), np.sin(phi), zero], axis=1),
+                POSITION_TOL)
+    psi, dpsi, ddpsi = rssr_exact(phi)
+    psid, psidd = w * dpsi, w**2 * ddpsi
+    c = columns(out, "points.csv", "point", "C")
+    e = np.stack([zero, np.cos(psi), np.sin(psi)], axis=1)
+    n = np.stack([zero, -np.sin(psi), np.cos(psi)], axis=1)
+    check_close("output crank tip", vectors(c, "x y z"), np.array([1.0, 4.0, 0.0]) + 2 * e, POSITION_TOL)
+    check_close("output crank tip velocity", vectors(c, "vx vy vz"), 2 * psid[:, None] * n, RATE_TOL)
+    check_close("output crank tip acceleration", vectors(c, "ax ay az"),
+                2 * psidd[:, None] * n - 2 * (psid**2)[:, None] * e, RATE_TOL)
+    jp = columns(out, "joints.csv", "joint", "JP")
+    check_close("output crank angle", jp["angle"], psi - psi[0], POSITION_TOL)
+    check_close("output crank rates", np.stack([jp["rate"], jp["acceleration"]]), np.stack([psid, psidd]), RATE_TOL)
+    check_iterations(out)
+
+
+class Jet:
+    """A function of time with its first two derivatives (truncated Taylor
+    arithmetic): the closed forms and their exact rates from one formula."""
+
+    def __init__(self, v, d1=0.0, d2=0.0):
+        self.v, self.d1, self.d2 = np.asarray(v, float), np.asarray(d1, float), np.asarray(d2, float)
+
+    def __add__(self, o):
+        o = lift(o)
+        return Jet(self.v + o.v, self.d1 + o.d1, self.d2 + o.d2)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return Jet(-self.v, -self.d1, -self.d2)
+
+    def __sub__(self, o):
+        return self + (-lift(o))
+
+    def __rsub__(self, o):
+        return lift(o) - self
+
+    def __mul__(self, o):
+        o = lift(o)
+        return Jet(self.v * o.v, self.v * o.d1 + self.d1 * o.v, self.v * o.d2 + 2 * self.d1 * o.d1 + self.d2 * o.v)
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, o):
+        o = lift(o)
+        q = self.v / o.v
+        q1 = (self.d1 - q * o.d1) / o.v
+        return Jet(q, q1, (self.d2 - 2 * q1 * o.d1 - q * o.d2) / o.v)
+
+
+def lift(x) -> Jet:
+    return x if isinstance(x, Jet) else Jet(x)
+
+
+def jsin(a: Jet) -> Jet:
+    return Jet(np.sin(a.v), np.cos(a.v) * a.d1, np.cos(a.v) * a.d2 - np.sin(a.v) * a.d1**2)
+
+
+def jcos(a: Jet) -> Jet:
+    return Jet(np.cos(a.v), -np.sin(a.v) * a.d1, -np.sin(a.v) * a.d2 - np.cos(a.v) * a.d1**2)
+
+
+def jsqrt(a: Jet) -> Jet:
+    r = np.sqrt(a.v)
+    r1 = a.d1 / (2 * r)
+    return Jet(r, r1, (a.d2 - 2 * r1**2) / (2 * r))
+
+
+def jasin(a: Jet) -> Jet:
+    c = np.sqrt(1 - a.v**2)
+    return Jet(np.arcsin(a.v), a.d1 / c, a.d2 / c + a.v * a.d1**2 / c**3)
+
+
+def jatan2(y: Jet, x: Jet) -> Jet:
+    r2 = x.v**2 + y.v**2
+    n, n1 = x.v * y.d1 - y.v * x.d1, x.v * y.d2 - y.v * x.d2
+    dr2 = 2 * (x.v * x.d1 + y.v * y.d1)
+    return Jet(np.unwrap(np.arctan2(y.v, x.v)), n / r2, (n1 * r2 - n * dr2) / r2**2)
+
+
+def check_jets(what: str, series: dict[str, np.ndarray], names: tuple[str, str, str], exact: list[Jet]) -> None:
+    """Values, rates and second rates of the columns against the jets."""
+    for k, cols in enumerate(names):
+        got = vectors(series, cols)
+        want = np.stack([[e.v, e.d1, e.d2][k] * np.ones(len(got)) for e in exact], axis=1)
+        check_close(f"{what} ({cols})", got, want, POSITION_TOL if k == 0 else RATE_TOL)
+
+
+def check_joint(out: Path, joint: str, exact: Jet) -> None:
+    series = columns(out, "joints.csv", "joint", joint)
+    check_close(f"joint {joint} angle", series["angle"], exact.v - exact.v[0], POSITION_TOL)
+    check_close(f"joint {joint} rates", np.stack([series["rate"], series["acceleration"]]),
+                np.stack([exact.d1 * np.ones_like(exact.v), exact.d2 * np.ones_like(exact.v)]), RATE_TOL)
+
+
+XYZ = ("x y z", "vx vy vz", "ax ay az")
+
+
+def test_bennett_matches_closed_form(tmp_path):
+    out = run_deck("bennett", tmp_path)
+    t = columns(out, "points.csv", "point", "J2")["t"]
+    k = 1 + math.sqrt(3)
+    theta1 = Jet(math.pi / 2 + 2 * math.pi * t, 2 * math.pi, 0.0)
+    half = theta1 * 0.5
+    theta2 = 2 * jatan2(k * jcos(half), jsin(half))      # tan(theta1/2) tan(theta2/2) = 1 + sqrt 3
+    c30, s30 = math.cos(math.pi / 6), 0.5
+    x2 = [jcos(theta1), jsin(theta1), Jet(np.zeros_like(t))]
+    y2 = [-c30 * jsin(theta1), c30 * jcos(theta1), Jet(np.full_like(t, s30))]
+    j3 = [x2[i] + math.sqrt(3) * (jcos(theta2) * x2[i] + jsin(theta2) * y2[i]) for i in range(3)]
+    check_jets("J2", columns(out, "points.csv", "point", "J2"), XYZ, x2)
+    check_jets("J3", columns(out, "points.csv", "point", "J3"), XYZ, j3)
+    for joint, angle in (("R1", theta1), ("R2", theta2), ("R3", -theta1), ("R4", -theta2)):
+        check_joint(out, joint, angle)
+    check_iterations(out)
+
+
+def test_bricard_matches_closed_form(tmp_path):
+    out = run_deck("bricard", tmp_path)
+    t = columns(out, "points.csv", "point", "J3")["t"]
+    phi = (math.pi / 2) * (1 - jcos(Jet(2 * math.pi * t, 2 * math.pi, 0.0)))
+    psi = jasin(-jsin(phi) / (1 + jsin(phi)))          # sin phi + sin psi + sin phi sin psi = 0
+    j3 = [jcos(phi), -jsqrt(1 + 2 * jsin(phi)), 1 - jsin(phi)]
+    check_jets("J3", columns(out, "points.csv", "point", "J3"), XYZ, j3)
+    check_jets("J1", columns(out, "points.csv", "point", "J1"), XYZ, [jcos(phi), Jet(np.zeros_like(t)), -jsin(phi)])
+    for joint, angle in zip(("R0", "R1", "R2", "R3", "R4", "R5"), (phi, psi) * 3):
+        check_joint(out, joint, angle)
+    check_iterations(out)
+
+
+def test_fourbar_3d_matches_planar_example_1(tmp_path):
+    """Example 1 as a spatial deck against the planar run of decks/fourbar.deck."""
+    spatial = run_deck("fourbar-3d", tmp_path)
+    planar = tmp_path / "planar"
+    done = run_fekap("-q", "-o", str(planar), str(ROOT / "decks" / "fourbar.deck"))
+    check(done.returncode == 0, done.stderr)
+    for point in ("B", "C"):
+        a = columns(spatial, "points.csv", "point", point)
+        b = columns(planar, "points.csv", "point", point)
+        check(len(a["t"]) == len(b["t"]) and np.array_equal(a["t"], b["t"]), "the same output times")
+        check_close(f"{point} against the planar run", vectors(a, "x y"), vectors(b, "x y"), POSITION_TOL)
+        check_close(f"{point} velocity against the planar run", vectors(a, "vx vy"), vectors(b, "vx vy"), RATE_TOL)
+        check_close(f"{point} acceleration against the planar run", vectors(a, "ax ay"), vectors(b, "ax ay"),
+                    RATE_TOL)
+        check(not np.any(vectors(a, "z vz az")), f"{point} left the plane z = 0")
+    its = np.array([int(row["iterations"]) for row in read_rows(spatial / "steps.csv")])
+    # At Example 1's 40 steps a turn Newton needs 3 iterations on a few steps
+    # near the start and the end of the turn (the planar run needs up to 4).
+    check(its.max() <= 3, f"Newton took up to {its.max()} iterations a step")
+
+
+@pytest.mark.parametrize("name", ["rssr", "bricard"])
+def test_thousand_turns_return_to_the_start(tmp_path, name):
+    """Driven 1,000 turns (the Bricard linkage: 1,000 swings) at 25 steps a
+    turn, every point back at its start after each turn within 1e-10."""
+    text = (DECKS / f"{name}.deck").read_text()
+    check("  time 0 1 0.01\n" in text and "\n  track " in text, "the deck's time and track lines changed")
+    deck = tmp_path / f"{name}.deck"
+    deck.write_text(text.replace("  time 0 1 0.01\n", "  time 0 1000 0.04\n").replace(
+        "\n  track ", "\n  every 25\n  track "))
+    out = tmp_path / "out"
+    done = run_fekap("-q", "-o", str(out), str(deck), timeout=900)
+    check(done.returncode == 0, f"exit {done.returncode}: {done.stderr}")
+    rows = read_rows(out / "points.csv")
+    for point in sorted({row["point"] for row in rows}):
+        series = [row for row in rows if row["point"] == point]
+        check(len(series) == 1001, f"{point}: {len(series)} rows, not one a turn")
+        x = np.array([[float(row[k]) for k in ("x", "y", "z")] for row in series])
+        check_close(f"{point} after each of 1,000 turns", x, np.broadcast_to(x[0], x.shape), TURN_TOL)
+
+
+def test_rates_match_differences_of_positions(tmp_path):
+    """The slider's velocity and acceleration against central differences of
+    its positions: the differences' error is O(h^2), so it falls by 4 when
+    the step is halved (what is left is the differences' own error)."""
+    errors = []
+    for steps in (1000, 2000):
+        out = run_deck("slider-crank", tmp_path / str(steps), "--dt", f"pi/{3 * steps}")
+        s = columns(out, "points.csv", "point", "S")
+        h = s["t"][1] - s["t"][0]
+        dx = (s["x"][2:] - s["x"][:-2]) / (2 * h)
+        ddx = (s["x"][2:] - 2 * s["x"][1:-1] + s["x"][:-2]) / h**2
+        errors.append((np.max(np.abs(s["vx"][1:-1] - dx)), np.max(np.abs(s["ax"][1:-1] - ddx))))
+    for k, what in enumerate(("velocity", "acceleration")):
+        ratio = errors[0][k] / errors[1][k]
+        check(3.5 < ratio < 4.5, f"{what} against differences: errors {errors[0][k]:.3e}, {errors[1][k]:.3e} "
+              f"at h and h/2 (ratio {ratio:.2f}, not 4)")
+
+
+def test_planar_points_have_no_z(tmp_path):
+    """A planar deck's points.csv keeps exactly its columns, and no joints.csv."""
+    out = tmp_path / "fourbar"
+    done = run_fekap("-q", "-o", str(out), str(ROOT / "decks" / "fourbar.deck"))
+    check(done.returncode == 0, done.stderr)
+    header = (out / "points.csv").read_text().splitlines()[0]
+    check(header == "step,t,point,x,y,vx,vy,ax,ay", f"planar header changed: {header}")
+    check(not (out / "joints.csv").exists(), "a planar run wrote joints.csv")
+
+
+# (what, line of the deck, its replacement, the message, the line named (its first
+# field) and the field the caret points at).
+BAD = [
+    ("zero axis", "JA  revolute   ground  A   1 0 0", "JA  revolute   ground  A   0 0 0",
+     "the axis of joint JA is zero", "JA", 5),
+    ("universal axes not perpendicular", "JU  universal  S       S2  1 0 0   0 -2 1",
+     "JU  universal  S       S2  1 0 0   1 -2 1", "are not perpendicular", "JU", 8),
+    ("nodes not at one place", "B2   0    0.1  0.2 ", "B2   0    0.1  0.2001 ",
+     "the nodes of joint JB are not at one place", "JB", 4),
+    ("missing node", "JB  spherical  B       B2", "JB  spherical  B       B3",
+     "undefined node 'B3'", "JB", 4),
+]
+
+
+def field_place(text: str, first: str, field: int) -> tuple[int, int]:
+    """Line and column (1-based) of the field-th field of the line whose first field is `first`."""
+    for number, row in enumerate(text.splitlines(), start=1):
+        fields = row.split("!")[0].split()
+        if fields and fields[0] == first:
+            col = 0
+            for k in range(field):
+                col = row.index(fields[k], col) + (len(fields[k]) if k < field - 1 else 0)
+            return number, col + 1
+    raise AssertionError(f"no line starting with {first}")
+
+
+@pytest.mark.parametrize("what,old,new,message,first,field", BAD, ids=[b[0] for b in BAD])
+def test_bad_joint_is_input_error(tmp_path, what, old, new, message, first, field):
+    text = (DECKS / "slider-crank.deck").read_text()
+    check(old in text, f"the deck no longer has {old!r}")
+    bad = tmp_path / "bad.deck"
+    bad.write_text(text.replace(old, new))
+    line, col = field_place(bad.read_text(), first, field)
+    out = tmp_path / "out"
+    done = run_fekap("-o", str(out), str(bad))
+    check(done.returncode == 2, f"{what}: exit {done.returncode}, not 2 (input error): {done.stderr}")
+    check(message in done.stderr, f"{what}: the message does not say {message!r}: {done.stderr}")
+    check(f"{bad}:{line}:{col}:" in done.stderr, f"{what}: the message does not name {bad}:{line}:{col}: {done.stderr}")
+    written = sorted(p.name for p in out.iterdir()) if out.exists() else []
+    check(not written, f"{what}: files were written: {written}")
+
+
+def test_spatial_deck_refuses_another_method(tmp_path):
+    out = tmp_path / "out"
+    done = run_fekap("-o", str(out), "--method", "angles", str(DECKS / "slider-crank.deck"))
+    check(done.returncode == 2, f"exit {done.returncode}, not 2: {done.stderr}")
+    check("finite element method only" in done.stderr, done.stderr)
+    check(not out.exists(), "the output directory was made")
