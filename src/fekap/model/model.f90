@@ -217,6 +217,12 @@ module fekap_model
       logical :: start_unstrained = .true.
       !> Where an energy-momentum integrator line is (for the errors of what it does not cover).
       type(source_loc_type) :: integrator_loc
+      !> Dynamics: adaptive steps (`time T0 T1 DT adaptive TOL`) keeping each
+      !> step's local error estimate below adaptive_tol (a length), with rows
+      !> at T0 + k DT; and where `adaptive` is on its line.
+      logical :: adaptive = .false.
+      real(dp) :: adaptive_tol = 0
+      type(source_loc_type) :: adaptive_loc
    end type analysis_type
 
    !> What to write.
