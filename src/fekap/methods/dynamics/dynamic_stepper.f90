@@ -104,6 +104,9 @@ contains
             & c%rho_inf, ' (alpha_m ', c%am, ', alpha_f ', c%af, ', beta ', c%beta, ', gamma ', c%gamma, ')'
       end if
       text = text//new_line('a')//'  '//trim(line)
+      if (self%model%analysis%adaptive) text = text//new_line('a')//'  steps: adaptive, each step''s local error '// &
+         & 'estimate at most '//trim(adjustl(es_text(self%model%analysis%adaptive_tol, 10, 3)))// &
+         & ' (rows at the output instants)'
       if (len_trim(self%start_velocity) > 0) text = text//new_line('a')//'  start: '//trim(self%start_velocity)
       if (len_trim(self%start_state) > 0) text = text//new_line('a')//'  start state: '//trim(self%start_state)
    end function dynamic_plan_text
