@@ -43,9 +43,24 @@ mean analysis time, median CPU time.
 Writes docs/performance/accuracy.png, docs/performance/accuracy.json and the
 table between the accuracy markers of docs/performance.md.
 
-Usage: studies/accuracy/accuracy_study.py [--short] [--dynamics] [--bin FEKAP] [--repeat N]
+  adaptive   (--adaptive, a plot of its own) fixed against adaptive steps
+             (`time T0 T1 DT adaptive TOL`): the largest position error over
+             the rows against the child's CPU time, on the pendulum
+             (decks/dynamics/pendulum.deck with its link 1000 times stiffer,
+             so that the rigid answer is exact to 1e-10 m; to 0.6 s against RK4
+             of the rigid pendulum at 1e-5 s), the double pendulum (two 1 kg
+             masses on stiff massless 1 m links from the horizontal, to 0.5 s,
+             against RK4 of Lagrange's equations at 1e-5 s) and the flexible
+             slider-crank (decks/dynamics/slider-crank.deck to 0.02 s, node M,
+             against FEKAP's own run at dt 2.5e-6: no exact answer exists),
+             generalized-alpha 0.8 with the consistent start; errors at the
+             rows' common instants (multiples of the adaptive runs' DT).
+
+Usage: studies/accuracy/accuracy_study.py [--short] [--dynamics] [--adaptive [--plot PNG]] [--bin FEKAP] [--repeat N]
   --short: a few points per study, prints the table, writes no docs.
   --dynamics: the dynamics table alone.
+  --adaptive: the fixed-against-adaptive study alone; writes its plot to PNG
+             (default docs/performance/accuracy-adaptive.png) and prints its table.
 """
 
 from __future__ import annotations
@@ -400,6 +415,183 @@ def plot(rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+# --- fixed against adaptive steps (--adaptive) -------------------------------
+
+G = 9.81
+
+DOUBLE_PENDULUM = """TITLe double pendulum of point masses on stiff massless links
+SECTions
+  rod  E=1e13  G=4e12  A=1e-3  I=1e-5
+NODEs
+  A 0 0
+  B 1 0
+  C 2 0
+LINKs
+  AB A B rod 1
+  BC B C rod 1
+SUPPorts
+  A pin
+MASSes
+  B 1
+  C 1
+GRAVity 0 -9.81
+ANALysis
+  type dynamics
+  time 0 0.5 0.001
+OUTPut
+  units length=m time=s
+  track C
+END
+"""
+
+
+def rk4_states(rate, state: list[float], h: float, n: int) -> np.ndarray:
+    """RK4 of y' = rate(y) from `state`: all n + 1 states at step h."""
+    out = np.empty((n + 1, len(state)))
+    y = np.array(state, dtype=float)
+    out[0] = y
+    for i in range(n):
+        k1 = rate(y)
+        k2 = rate(y + 0.5 * h * k1)
+        k3 = rate(y + 0.5 * h * k2)
+        k4 = rate(y + h * k3)
+        y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out[i + 1] = y
+    return out
+
+
+def pendulum_reference(t_end: float, h: float = 1e-5):
+    """The rigid pendulum from the horizontal (angle th below it, th'' = g cos th): B at time t."""
+    states = rk4_states(lambda y: np.array([y[1], G * math.cos(y[0])]), [0.0, 0.0], h, round(t_end / h))
+    return lambda t: (math.cos(states[round(t / h), 0]), -math.sin(states[round(t / h), 0]))
+
+
+def double_reference(t_end: float, h: float = 1e-5):
+    """The double pendulum (angles from the downward vertical, both released at pi/2): C at time t."""
+    def rate(y):
+        a, b, wa, wb = y
+        d = a - b
+        den = 3 - math.cos(2 * d)
+        acc_a = (-3 * G * math.sin(a) - G * math.sin(a - 2 * b) - 2 * math.sin(d) * (wb**2 + wa**2 * math.cos(d))) / den
+        acc_b = 2 * math.sin(d) * (2 * wa**2 + 2 * G * math.cos(a) + wb**2 * math.cos(d)) / den
+        return np.array([wa, wb, acc_a, acc_b])
+    states = rk4_states(rate, [math.pi / 2, math.pi / 2, 0.0, 0.0], h, round(t_end / h))
+
+    def at(t: float) -> tuple[float, float]:
+        a, b = states[round(t / h), :2]
+        return math.sin(a) + math.sin(b), -math.cos(a) - math.cos(b)
+    return at
+
+
+def run_text(binary: str, work: Path, name: str, text: str, repeat: int) -> dict:
+    """Run a deck text `repeat` times: the last run's result with the median child CPU time."""
+    path = work / f"{name}-{len(list(work.iterdir()))}.deck"
+    path.write_text(text)
+    cpus = []
+    for k in range(repeat):
+        if k:
+            shutil.rmtree(work / path.stem, ignore_errors=True)
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        result = fb.run_deck(binary, path, work / path.stem)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpus.append((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
+    result["cpu"] = statistics.median(cpus)
+    return result
+
+
+def common_error(outdir: Path, point: str, exact, every: float) -> float:
+    """The largest distance of `point` from exact(t) over the rows at multiples of `every`."""
+    worst = 0.0
+    for r in read.rows(outdir / "points.csv", True, point=point):
+        k = round(r["t"] / every)
+        if abs(r["t"] - k * every) <= 1e-9 * every:
+            x, y = exact(k * every)
+            worst = max(worst, math.hypot(r["x"] - x, r["y"] - y))
+    return worst
+
+
+def adaptive_cases(short: bool) -> list[dict]:
+    """Each case: its deck text with the time line left to fill, the tracked
+    point, the exact answer (a function of t), the rows' common spacing, the
+    fixed steps and the adaptive tolerances."""
+    pendulum = (fb.ROOT / "decks" / "dynamics" / "pendulum.deck").read_text().replace("E=2e11  G=8e10", "E=2e14  G=8e13")
+    crank = (fb.ROOT / "decks" / "dynamics" / "slider-crank.deck").read_text()
+    fixed_pendulum = [4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4] if not short else [2e-3, 1e-3]
+    cases = [
+        dict(name="pendulum", text=pendulum, point="B", t_end=0.6, every=0.01, exact=pendulum_reference(0.6),
+             fixed=fixed_pendulum, tols=[1e-6, 1e-7, 1e-8, 1e-9, 1e-10] if not short else [1e-7, 1e-9]),
+        dict(name="double pendulum", text=DOUBLE_PENDULUM, point="C", t_end=0.5, every=0.01,
+             exact=double_reference(0.5), fixed=fixed_pendulum,
+             tols=[1e-6, 1e-7, 1e-8, 1e-9, 1e-10] if not short else [1e-7, 1e-9]),
+        dict(name="flexible slider-crank", text=crank, point="M", t_end=0.02, every=1e-4, exact=None,
+             fixed=[1e-4, 5e-5, 2.5e-5, 1.25e-5] if not short else [1e-4, 5e-5],
+             tols=[1e-5, 1e-6, 1e-7, 1e-8] if not short else [1e-6]),
+    ]
+    return cases
+
+
+def adaptive_study(binary: str, work: Path, short: bool, repeat: int) -> list[dict]:
+    rows = []
+    for case in adaptive_cases(short):
+        def deck_text(time: str) -> str:
+            return fb.with_settings(case["text"], {"start": "consistent", "time": time})
+        exact = case["exact"]
+        if exact is None:
+            # The flexible slider-crank: FEKAP's own run at a fine fixed step.
+            ref_dt = 2.5e-6 if not short else 1.25e-5
+            ref = run_text(binary, work, "reference", deck_text(f"0 {case['t_end']!r} {ref_dt!r}"), 1)
+            table_ = {round(r["t"] / case["every"]): (r["x"], r["y"]) for r in read.rows(ref["outdir"] / "points.csv", True, point=case["point"])
+                      if abs(r["t"] / case["every"] - round(r["t"] / case["every"])) < 1e-6}
+            exact = lambda t, table_=table_, every=case["every"]: table_[round(t / every)]  # noqa: E731
+        settings = [("fixed", f"dt {dt:g}", f"0 {case['t_end']!r} {dt!r}") for dt in case["fixed"]]
+        settings += [("adaptive", f"TOL {tol:g}", f"0 {case['t_end']!r} {case['every']!r} adaptive {tol!r}")
+                     for tol in case["tols"]]
+        for kind, setting, time in settings:
+            result = run_text(binary, work, case["name"].replace(" ", "-"), deck_text(time), repeat)
+            error = math.nan
+            steps = None
+            if result["rc"] == 0:
+                error = common_error(result["outdir"], case["point"], exact, case["every"])
+                steps = result.get("summary", {}).get("configurations solved")
+            rows.append(dict(case=case["name"], kind=kind, setting=setting, rc=result["rc"], error=error,
+                             cpu=result["cpu"], steps=steps))
+            shutil.rmtree(result["outdir"], ignore_errors=True)
+    return rows
+
+
+def adaptive_table(rows: list[dict]) -> str:
+    lines = ["| case | steps | setting | accepted steps | largest position error | CPU (s) |",
+             "|------|-------|---------|---------------:|-----------------------:|--------:|"]
+    for r in rows:
+        steps = "" if r["steps"] is None else f"{r['steps']:g}"
+        lines.append(f"| {r['case']} | {r['kind']} | {r['setting']} | {steps} | {fmt(r['error'])} | {r['cpu']:.3f} |")
+    return "\n".join(lines)
+
+
+def adaptive_plot(rows: list[dict], path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    cases = list(dict.fromkeys(r["case"] for r in rows))
+    fig, axes = plt.subplots(1, len(cases), figsize=(5 * len(cases), 4.5), squeeze=False)
+    for ax, case in zip(axes[0], cases):
+        for kind, marker in (("fixed", "o"), ("adaptive", "s")):
+            pts = [(max(r["cpu"], 1e-3), r["error"]) for r in rows
+                   if r["case"] == case and r["kind"] == kind and r["rc"] == 0 and r["error"] > 0]
+            if pts:
+                ax.loglog(*zip(*pts), marker=marker, label=f"{kind} steps")
+        ax.set_title(case)
+        ax.set_xlabel("CPU time of the run (s)")
+        ax.set_ylabel("largest position error (m)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle("FEKAP dynamics: error against CPU time, fixed and adaptive steps")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="FEKAP accuracy against cost")
     parser.add_argument("--short", action="store_true", help="a few points per study; no docs written")
@@ -407,10 +599,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, help="runs per point (default 5, short 1)")
     parser.add_argument("--dynamics", action="store_true",
                         help="the dynamics table alone (written to docs/performance.md unless --short)")
+    parser.add_argument("--adaptive", action="store_true",
+                        help="the fixed-against-adaptive study alone (a plot and a table)")
+    parser.add_argument("--plot", help="the adaptive study's PNG (default docs/performance/accuracy-adaptive.png)")
     args = parser.parse_args(argv)
     binary = fb.fekap_binary(args.bin)
     work = fb.scratch_dir("fekap-accuracy-")
     repeat = args.repeat or (1 if args.short else 5)
+    if args.adaptive:
+        adaptive = adaptive_study(binary, work, args.short, repeat)
+        shutil.rmtree(work, ignore_errors=True)
+        print(adaptive_table(adaptive))
+        png = Path(args.plot) if args.plot else fb.ROOT / "docs" / "performance" / "accuracy-adaptive.png"
+        adaptive_plot(adaptive, png)
+        print(f"wrote {png}")
+        return 0 if all(r["rc"] == 0 for r in adaptive) else 1
     rows = [] if args.dynamics else [measure(binary, work, item, repeat) for item in studies(args.short)]
     dynamics = [measure_dynamics(binary, work, item, repeat) for item in dynamics_studies(args.short)]
     shutil.rmtree(work, ignore_errors=True)

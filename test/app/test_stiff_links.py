@@ -355,7 +355,7 @@ def test_deck_tolerances_act_on_the_dynamics() -> None:
     dt = 1e-3
     default = run_deck("tol-default", a01_deck(1e12), dt)
     rows = steps_of(default)
-    check(list(rows[0]) == ["step", "t", "iterations", "residual", "cuts", "floor"], f"header {list(rows[0])}")
+    check(list(rows[0])[:6] == ["step", "t", "iterations", "residual", "cuts", "floor"], f"header {list(rows[0])}")
     floors = sum(int(row["floor"]) for row in rows)
     check(floors > len(rows) // 2, f"{floors} of {len(rows)} steps at the floor")
     listing = next(default.glob("*.lis")).read_text()

@@ -4,8 +4,8 @@
 !> sections' densities are read with the other section properties (SECTions).
 module fekap_deck_inertia
    use fekap_kinds, only: dp
-   use fekap_model, only: model_type, mass_type, effects_auto
-   use fekap_model_effects, only: effects_plan_type, plan_effects, integrator_obstacle
+   use fekap_model, only: model_type, mass_type, effects_auto, effects_dynamics
+   use fekap_model_effects, only: effects_plan_type, plan_effects, integrator_obstacle, effects_name
    use fekap_deck_context, only: context_type
    use fekap_deck_card, only: card_none, is_word_of
    use fekap_deck_geometry, only: has_end, welded, lookup_node, lookup_link
@@ -182,6 +182,10 @@ contains
          if (is_word_of(ctx%field(lines(i), 1), 'type', 4)) type_line = lines(i)
       end do
       plan = plan_effects(model)
+      if (model%analysis%adaptive .and. len(plan%problem) == 0 .and. plan%effects /= effects_dynamics) then
+         call ctx%error_at(model%analysis%adaptive_loc, 'adaptive steps are for dynamics: this deck runs '// &
+            & effects_name(plan%effects), label='remove `adaptive TOL`, or give the links masses (ANALysis type dynamics)')
+      end if
       if (len(plan%problem) == 0) return
       if (len(integrator_obstacle(model)) > 0 .and. model%analysis%integrator_loc%line > 0) then
          if (index(plan%problem, integrator_obstacle(model)) > 0) then

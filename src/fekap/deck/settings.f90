@@ -71,14 +71,24 @@ contains
             model%analysis%method = chosen(method_names, [method_fem, method_cartesian, method_angles], &
                & model%analysis%method)
          else if (is_word_of(key, 'time', 4)) then
-            if (.not. ctx%require(iline, 'time START END STEP', 'a time line')) cycle
-            if (extra(5, 'time START END STEP')) cycle
+            if (.not. ctx%require(iline, 'time START END STEP [adaptive TOL]', 'a time line')) cycle
+            if (extra(7, 'time START END STEP [adaptive TOL]')) cycle
             ok = .true.
             do k = 1, 3
                call ctx%real_field(iline, k + 1, t(k), fine)
                ok = ok .and. fine
             end do
             if (.not. ok) cycle
+            ! time START END STEP adaptive TOL: dynamics' steps adapt to keep
+            ! each step's local error estimate below TOL (docs/dynamics.md).
+            if (ctx%nfields(iline) >= 5) then
+               if (.not. adaptive_tolerance(v)) cycle
+               model%analysis%adaptive = .true.
+               model%analysis%adaptive_tol = v
+               model%analysis%adaptive_loc = ctx%loc(iline, 5)
+            else
+               model%analysis%adaptive = .false.
+            end if
             model%analysis%t_start = t(1)
             model%analysis%t_end = t(2)
             model%analysis%dt = t(3)
@@ -231,6 +241,27 @@ contains
          chosen = current
          if (k > 0) chosen = values(k)
       end function chosen
+
+      !> The time line's `adaptive TOL` (fields 5 and 6) with TOL > 0, in v.
+      logical function adaptive_tolerance(v) result(ok)
+         real(dp), intent(out) :: v
+         character(*), parameter :: label = 'time START END STEP adaptive TOL, e.g. adaptive 1e-6 (a length)'
+         v = 0
+         ok = is_word_of(lower(ctx%field(iline, 5)), 'adaptive', 4)
+         if (.not. ok) then
+            call ctx%error(iline, 5, "unknown value '"//ctx%field(iline, 5)//"' after the time step", label=label)
+            return
+         end if
+         ok = ctx%nfields(iline) >= 6
+         if (.not. ok) then
+            call ctx%error(iline, 5, 'adaptive steps need a tolerance', label=label)
+            return
+         end if
+         call ctx%real_field(iline, 6, v, ok)
+         if (.not. ok) return
+         ok = v > 0 .and. v <= huge(v)
+         if (.not. ok) call ctx%error(iline, 6, 'the adaptive tolerance must be positive', label=label)
+      end function adaptive_tolerance
 
       !> The line is `key VALUE` with a real VALUE strictly between 0 and 1
       !> (else an error saying that `what` must be).

@@ -221,6 +221,12 @@ module fekap_model
       !> A spatial mechanism (ANALysis `type kinematics spatial`): the model's
       !> `spatial` component holds its 3D data (fekap_model_spatial).
       logical :: spatial = .false.
+      !> Dynamics: adaptive steps (`time T0 T1 DT adaptive TOL`) keeping each
+      !> step's local error estimate below adaptive_tol (a length), with rows
+      !> at T0 + k DT; and where `adaptive` is on its line.
+      logical :: adaptive = .false.
+      real(dp) :: adaptive_tol = 0
+      type(source_loc_type) :: adaptive_loc
    end type analysis_type
 
    !> What to write.

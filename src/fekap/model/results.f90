@@ -25,6 +25,10 @@ module fekap_model_results
       !> floor with the residual above the tolerance; -1: not reported (steps.csv's
       !> `floor` column is written only for results that report it).
       integer :: floor = -1
+      !> Dynamics: the largest local error estimate (a length) of the step's
+      !> (sub-)steps (fekap_dynamics_local_error); negative: not reported
+      !> (steps.csv's `error_estimate` column is written only for results that report it).
+      real(dp) :: estimate = -1
       !> Whether the run writes this step's rows (set by the time loop): a
       !> stepper may leave the rows' values of a step not written unfilled.
       logical :: written = .true.

@@ -22,6 +22,13 @@ module fekap_model_work
       !> Steps accepted at the round-off floor with the residual above the
       !> tolerance (fekap_stepping_newton's stop_at_floor).
       integer :: floor_steps = 0
+      !> Dynamics: the largest local error estimate of an accepted step
+      !> (negative: none made), its time and where it is (a dof's name), and
+      !> the adaptive steps rejected for an estimate above the tolerance.
+      real(dp) :: largest_estimate = -1
+      real(dp) :: largest_estimate_t = 0
+      character(len=100) :: largest_estimate_where = ''
+      integer :: rejected_steps = 0
       !> Smallest pivot ratio of the tangents used for velocities (1: none computed),
       !> a measure of how close the run came to a singular configuration.
       real(dp) :: min_pivot_ratio = 1

@@ -24,9 +24,10 @@ module fekap_output_csv
 
    !> The fixed headers (write_header) of steps.csv, reactions.csv and
    !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.
-   !> (dynamics_steps_header: a dynamics run's steps.csv, with the `floor` column.)
+   !> (dynamics_steps_header: a dynamics run's steps.csv, with the `floor`
+   !> and, last, the `error_estimate` columns.)
    character(*), parameter, public :: steps_header = 'step,t,iterations,residual,cuts', &
-      & dynamics_steps_header = steps_header//',floor', &
+      & dynamics_steps_header = steps_header//',floor,error_estimate', &
       & reactions_header = 'step,t,kind,link,node,fx,fy,m', deflection_header = 'step,t,node,ux,uy'
 
    !> Longest text of a real (es25.16e3 without its leading blank) and of an
@@ -181,13 +182,14 @@ contains
       call append_text(out%text, out%n, header//new_line('a'))
    end subroutine write_header
 
-   !> `step,t,iterations,residual,cuts` (and `,floor` when the result reports it: dynamics).
+   !> `step,t,iterations,residual,cuts` (and `,floor` and `,error_estimate`
+   !> when the result reports them: dynamics).
    subroutine write_steps_row(out, result, prefix)
       type(text_buffer_type), intent(inout) :: out
       type(step_result_type), intent(in) :: result
       !> new_row_prefix of the result.
       type(row_prefix_type), intent(in) :: prefix
-      call reserve_text(out, prefix_length + 3*(integer_width + 1) + real_width + 1)
+      call reserve_text(out, prefix_length + 3*(integer_width + 1) + 2*(real_width + 1))
       call append_text(out%text, out%n, prefix%text(1:prefix%n))
       call append_integer(out%text, out%n, result%iterations)
       call append_char(out%text, out%n, ',')
@@ -197,6 +199,10 @@ contains
       if (result%floor >= 0) then
          call append_char(out%text, out%n, ',')
          call append_integer(out%text, out%n, result%floor)
+      end if
+      if (result%estimate >= 0) then
+         call append_char(out%text, out%n, ',')
+         call append_real(out%text, out%n, result%estimate)
       end if
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_steps_row

@@ -371,6 +371,11 @@ contains
          & real(counts%iterations, dp)/counts%steps
       ! Dynamics: steps whose residual stayed above the tolerance at round-off (steps.csv's floor column).
       if (counts%floor_steps > 0) write (unit, '(2x,a30,i12)') 'accepted at round-off floor', counts%floor_steps
+      ! Dynamics: the largest local error estimate (steps.csv's error_estimate column) and where.
+      if (counts%largest_estimate >= 0) write (unit, '(2x,a30,a,a,a,a,a)') 'largest local error estimate', &
+         & es_text(counts%largest_estimate, 12, 3), ' at t = ', trim(adjustl(es_text(counts%largest_estimate_t, 12, 5))), ', ', &
+         & trim(counts%largest_estimate_where)
+      if (counts%rejected_steps > 0) write (unit, '(2x,a30,i12)') 'adaptive steps rejected', counts%rejected_steps
       write (unit, '(2x,a30,i12)') 'residual assemblies', counts%residual_assemblies
       write (unit, '(2x,a30,i12)') 'tangent assemblies', counts%tangent_assemblies
       write (unit, '(2x,a30,i12)') 'Cholesky factorisations', counts%cholesky_factorisations

@@ -20,9 +20,9 @@
 module fekap_dynamics_dynamic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
-   use fekap_model, only: model_type, integrator_energy_momentum
+   use fekap_model, only: model_type, integrator_energy_momentum, dof_rot
    use fekap_model_results, only: step_result_type, has_note
-   use fekap_assembly_mesh, only: dof_driven
+   use fekap_assembly_mesh, only: dof_driven, describe_dof
    use fekap_assembly_tracking, only: relocate
    use fekap_stepping_stepper, only: clock_seconds, phase_timed
    use fekap_fem_setup, only: new_fem_base, mesh_plan_line
@@ -40,6 +40,9 @@ module fekap_dynamics_dynamic_stepper
    use fekap_dynamics_alpha_step, only: alpha_newton
    use fekap_dynamics_em_step, only: em_newton
    use fekap_dynamics_step_result, only: fill_result, keep_step_start
+   use fekap_dynamics_local_error, only: alpha_error_scale, midpoint_error_scale, largest_local_error, adapted_step, &
+      & least_step
+   use fekap_stepping_interrupt, only: interrupt_signal
    implicit none
    private
 
@@ -82,6 +85,7 @@ contains
          & self%state%r(n), source=0.0_dp)
       allocate (self%qt(n), self%vt(n), self%acct(n), self%at(n), self%gt(n), self%zt(n), self%dzt(n), source=0.0_dp)
       allocate (self%state%seg(size(self%mesh%slides)), source=1)
+      self%error_weight = merge(0.0_dp, 1.0_dp, self%mesh%dof_kind == dof_rot)
    end subroutine new_dynamic_stepper
 
    !> The mesh and the integrator for the listing's plan.
@@ -100,6 +104,9 @@ contains
             & c%rho_inf, ' (alpha_m ', c%am, ', alpha_f ', c%af, ', beta ', c%beta, ', gamma ', c%gamma, ')'
       end if
       text = text//new_line('a')//'  '//trim(line)
+      if (self%model%analysis%adaptive) text = text//new_line('a')//'  steps: adaptive, each step''s local error '// &
+         & 'estimate at most '//trim(adjustl(es_text(self%model%analysis%adaptive_tol, 10, 3)))// &
+         & ' (rows at the output instants)'
       if (len_trim(self%start_velocity) > 0) text = text//new_line('a')//'  start: '//trim(self%start_velocity)
       if (len_trim(self%start_state) > 0) text = text//new_line('a')//'  start state: '//trim(self%start_state)
    end function dynamic_plan_text
@@ -113,7 +120,8 @@ contains
    end subroutine dynamic_start
 
    !> Advance to time t under step control (the kinematics' loop,
-   !> advance_by_cuts: a failed step is cut, and grows back).
+   !> advance_by_cuts: a failed step is cut, and grows back), or by adaptive
+   !> steps (adaptive_advance) when the deck asks for them.
    subroutine dynamic_advance(self, t, result, error)
       class(dynamic_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
@@ -127,10 +135,16 @@ contains
       if (self%system%timing) clock = clock_seconds()
       self%try_residual = 0
       self%try_floor = 0
-      call advance_by_cuts(self, dynamic_try, no_between, self%state%t, t, 0, cuts, result%iterations, error)
-      if (allocated(error)) return
+      self%advance_estimate = 0
+      if (self%model%analysis%adaptive) then
+         call adaptive_advance(self, t, result%iterations, result%cuts, error)
+         if (allocated(error)) return
+      else
+         call advance_by_cuts(self, dynamic_try, no_between, self%state%t, t, 0, cuts, result%iterations, error)
+         if (allocated(error)) return
+         result%cuts = cuts%cuts
+      end if
       result%residual = self%try_residual
-      result%cuts = cuts%cuts
       call fill_result(self, result)
       ! The result lives through the run: a note of an earlier step must not stay.
       if (has_note(result%note)) result%note = ''
@@ -153,10 +167,86 @@ contains
       if (depth /= 0) return
       select type (self => stepper)
       class is (dynamic_stepper_type)
-         call solve_step(self, t, iterations, self%try_residual, reason)
+         call solve_step(self, t, huge(1.0_dp), iterations, self%try_residual, reason)
          outcome = merge(try_failed, try_accepted, allocated(reason))
       end select
    end subroutine dynamic_try
+
+   !> Adaptive steps to time t (`time T0 T1 DT adaptive TOL`): each step's
+   !> local error estimate (fekap_dynamics_local_error) must stay at or below
+   !> TOL. A step above it is rejected and tried again shorter, by the
+   !> controller (adapted_step); a step whose Newton solve fails, at half
+   !> its length. An accepted step sets the next one's length by the same
+   !> controller. The steps land on t exactly (a step that would end less
+   !> than its own length before t is cut to half the rest). A step that
+   !> must be shorter than least_step (T1 - T0) ends the run with an error
+   !> naming the time and the estimate. `rejected`: the steps tried again.
+   subroutine adaptive_advance(self, t, iterations, rejected, error)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      integer, intent(out) :: iterations, rejected
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: reason
+      real(dp) :: h, h_min, rest, tol, t_new
+      integer :: its
+      character(len=400) :: msg
+      logical :: clipped
+      tol = self%model%analysis%adaptive_tol
+      h_min = least_step*(self%model%analysis%t_end - self%model%analysis%t_start)
+      iterations = 0
+      rejected = 0
+      ! The first step: the output interval (the controller shortens it at once if need be).
+      if (self%h_next <= 0) self%h_next = t - self%state%t
+      do while (self%state%t < t)
+         rest = t - self%state%t
+         h = self%h_next
+         clipped = h >= rest
+         if (clipped) then
+            h = rest
+            t_new = t
+         else
+            if (2*h > rest) h = 0.5_dp*rest
+            t_new = self%state%t + h
+         end if
+         call solve_step(self, t_new, tol, its, self%try_residual, reason)
+         iterations = iterations + its
+         if (.not. allocated(reason) .and. self%try_estimate <= tol) then
+            ! Accepted: a step shortened to land on t does not shorten the next.
+            if (clipped) then
+               self%h_next = max(self%h_next, adapted_step(h, self%try_estimate, tol))
+            else
+               self%h_next = adapted_step(h, self%try_estimate, tol)
+            end if
+            cycle
+         end if
+         if (allocated(reason) .and. interrupt_signal() /= 0) then
+            call move_alloc(reason, error)
+            return
+         end if
+         rejected = rejected + 1
+         self%counts%rejected_steps = self%counts%rejected_steps + 1
+         if (allocated(reason)) then
+            self%h_next = 0.5_dp*h
+         else
+            self%h_next = adapted_step(h, self%try_estimate, tol)
+         end if
+         if (self%h_next < h_min) then
+            if (allocated(reason)) then
+               write (msg, '(a,a,a,a,a)') 't = ', trim(adjustl(es_text(self%state%t, 12, 5))), &
+                  & ': the adaptive step cannot be shortened below the least step ', &
+                  & trim(adjustl(es_text(h_min, 10, 3))), ' (1e-12 (T1 - T0)): '//reason%message
+            else
+               write (msg, '(a,a,a,a,a,a,a,a,a)') 't = ', trim(adjustl(es_text(self%state%t, 12, 5))), &
+                  & ': the adaptive step cannot meet the tolerance ', trim(adjustl(es_text(tol, 10, 3))), &
+                  & ': the local error estimate is ', trim(adjustl(es_text(self%try_estimate, 10, 3))), &
+                  & ' at a step of ', trim(adjustl(es_text(h, 10, 3))), &
+                  & ', and a shorter step would be below the least step (1e-12 (T1 - T0))'
+            end if
+            call analysis_error(error, trim(msg))
+            return
+         end if
+      end do
+   end subroutine adaptive_advance
 
    !> Between the steps of a cut advance: nothing (the accepted state is all
    !> the next step needs).
@@ -166,10 +256,12 @@ contains
    end subroutine no_between
 
    !> One step from the accepted state to t_new (generalized-alpha or the
-   !> energy-momentum integrator); the state is left untouched on failure.
-   subroutine solve_step(self, t_new, iterations, residual, error)
+   !> energy-momentum integrator) with its local error estimate (try_estimate);
+   !> the state is left untouched on failure, and when the estimate is above
+   !> `limit` (the adaptive tolerance; huge: every converged step is accepted).
+   subroutine solve_step(self, t_new, limit, iterations, residual, error)
       type(dynamic_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t_new
+      real(dp), intent(in) :: t_new, limit
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
       type(error_type), allocatable, intent(out) :: error
@@ -194,6 +286,8 @@ contains
             call analysis_error(error, 'the configuration is not finite')
             return
          end if
+         call local_error(self, t_new - state%t, em)
+         if (self%try_estimate > limit) return
          ! Work over the step: the trapezoidal rule of the forces on the
          ! displacement (exact for the trapezoidal integrator of a linear system);
          ! energy-momentum: on its increments z (Cayley's psi on rotations).
@@ -264,7 +358,37 @@ contains
             self%counts%floor_steps = self%counts%floor_steps + 1
             self%try_floor = self%try_floor + 1
          end if
+         self%advance_estimate = max(self%advance_estimate, self%try_estimate)
+         if (self%try_estimate > self%counts%largest_estimate) then
+            self%counts%largest_estimate = self%try_estimate
+            self%counts%largest_estimate_t = t_new
+            self%counts%largest_estimate_where = ''
+            if (self%try_estimate_dof > 0) self%counts%largest_estimate_where = &
+               & describe_dof(mesh, self%model, self%try_estimate_dof)
+         end if
       end associate
    end subroutine solve_step
+
+   !> The local error estimate of the iterate's step of length h (from the
+   !> accepted state): generalized-alpha's from the change of its
+   !> acceleration variable a over the step; energy-momentum's from the
+   !> change of the mean acceleration (v1 - v0)/h since the last step's
+   !> (h_prev; the start's acceleration at the first step). Into try_estimate
+   !> and try_estimate_dof.
+   subroutine local_error(self, h, em)
+      type(dynamic_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: h
+      logical, intent(in) :: em
+      associate (state => self%state, mesh => self%mesh)
+         if (em) then
+            call largest_local_error(midpoint_error_scale(h, self%h_prev), state%acc, self%acct, self%error_weight, &
+               & mesh%eq_dof(1:mesh%nfree), self%try_estimate, self%try_estimate_dof)
+         else
+            call largest_local_error(alpha_error_scale(new_alpha_coefficients(self%model%analysis%rho_inf, h), h), &
+               & state%a, self%at, self%error_weight, mesh%eq_dof(1:mesh%nfree), self%try_estimate, &
+               & self%try_estimate_dof)
+         end if
+      end associate
+   end subroutine local_error
 
 end module fekap_dynamics_dynamic_stepper

@@ -30,6 +30,7 @@ contains
       associate (state => self%state, mesh => self%mesh, dyn => self%dynamics)
          result%t = state%t
          result%floor = self%try_floor
+         result%estimate = self%advance_estimate
          result%has_velocity = .true.
          result%has_acceleration = .true.
          if (.not. result%written) return
