@@ -40,6 +40,7 @@ module fekap_fem
    use fekap_fem_predict, only: predict, guard_extrapolation, drive_increment_residual, record_velocity
    use fekap_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
    use fekap_fem_fill, only: check_predictor, interpolate_fill, finish_fill, filled_state, next_output_time
+   use fekap_fem_determinacy, only: check_free_motion, free_start_error
    implicit none
    private
 
@@ -144,10 +145,17 @@ contains
       self%change_found = .false.
       call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
       self%detect_change = .false.
-      if (allocated(error)) return
+      if (allocated(error)) then
+         ! Not a dead point: a start that the drives' path does not determine.
+         call free_start_error(self, error)
+         return
+      end if
       if (self%change_found) then
          call step_over(self, t, result, cuts, filled, error)
-         if (allocated(error)) return
+         if (allocated(error)) then
+            call free_start_error(self, error)
+            return
+         end if
          if (filled) then
             if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
             return
@@ -156,6 +164,10 @@ contains
       self%last_cuts = cuts%cuts
       result%cuts = self%last_cuts
       call solve_rates(self)
+      ! A singular configuration that moves freely with the drives held, as the
+      ! one before it did: free motion, not a change point (fekap_fem_determinacy).
+      call check_free_motion(self, error)
+      if (allocated(error)) return
       ! The listing says why the step was cut (the first and the last rejection).
       call prepend_cuts_note(self%state%note, cuts)
       call fill_result(self, result)
