@@ -46,7 +46,7 @@ module fekap_fem_determinacy
    implicit none
    private
 
-   public :: check_determined, check_free_motion, free_start_error, probe_free_motion
+   public :: check_determined, check_free_motion, probe_free_motion
 
    !> Most nodes and links named in the message.
    integer, parameter :: max_named = 12
@@ -237,6 +237,20 @@ contains
       text = what//trim(merge('s', ' ', total > 1))//' '//text
    end function listed_names
 
+   !> After a run's step to the accepted state from time t_from (fekap_fem's
+   !> advance_to): if it failed (error), free_start_error; if it advanced,
+   !> accepted_free_motion (see the module's header).
+   subroutine check_free_motion(self, t_from, error)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), intent(in) :: t_from
+      type(error_type), allocatable, intent(inout) :: error
+      if (allocated(error)) then
+         call free_start_error(self, error)
+      else if (self%state%t > t_from) then
+         call accepted_free_motion(self, error)
+      end if
+   end subroutine check_free_motion
+
    !> During a run (see the module's header): at the accepted configuration,
    !> if its tangent is singular (as the listing's note says: the pivot ratio
    !> of the factor the rates used, against the run's largest; or below
@@ -246,7 +260,7 @@ contains
    !> links. Unloaded runs only: a loaded structure's configurations are
    !> strained, and its failures are limit loads. The stepper's state and
    !> factor are left as they are (the probe works on a copy).
-   subroutine check_free_motion(self, error)
+   subroutine accepted_free_motion(self, error)
       class(fem_core_type), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
       logical, allocatable :: moved(:), moved_before(:)
@@ -281,7 +295,7 @@ contains
          & 'links: with the drives held, a part of it moves freely here and at t = '//then//' (a free motion, '// &
          & 'not a change point that the drives pass through): '//moved_parts(self%mesh, self%model, moved)// &
          & '; support or drive the part that moves, or remove it')
-   end subroutine check_free_motion
+   end subroutine accepted_free_motion
 
    !> A run whose first step failed (error, after its cuts) from a start
    !> configuration that moves freely with the drives held: the drives' path

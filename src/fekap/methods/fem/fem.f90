@@ -40,7 +40,7 @@ module fekap_fem
    use fekap_fem_predict, only: predict, guard_extrapolation, drive_increment_residual, record_velocity
    use fekap_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
    use fekap_fem_fill, only: check_predictor, interpolate_fill, finish_fill, filled_state, next_output_time
-   use fekap_fem_determinacy, only: check_free_motion, free_start_error
+   use fekap_fem_determinacy, only: check_free_motion
    implicit none
    private
 
@@ -145,17 +145,10 @@ contains
       self%change_found = .false.
       call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
       self%detect_change = .false.
-      if (allocated(error)) then
-         ! Not a dead point: a start that the drives' path does not determine.
-         call free_start_error(self, error)
-         return
-      end if
+      if (allocated(error)) return
       if (self%change_found) then
          call step_over(self, t, result, cuts, filled, error)
-         if (allocated(error)) then
-            call free_start_error(self, error)
-            return
-         end if
+         if (allocated(error)) return
          if (filled) then
             if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
             return
@@ -164,10 +157,6 @@ contains
       self%last_cuts = cuts%cuts
       result%cuts = self%last_cuts
       call solve_rates(self)
-      ! A singular configuration that moves freely with the drives held, as the
-      ! one before it did: free motion, not a change point (fekap_fem_determinacy).
-      call check_free_motion(self, error)
-      if (allocated(error)) return
       ! The listing says why the step was cut (the first and the last rejection).
       call prepend_cuts_note(self%state%note, cuts)
       call fill_result(self, result)
@@ -249,7 +238,7 @@ contains
 
    !> Advance the accepted state to time t under step control (the shared
    !> advance_by_cuts: cut after a failure, grow back after a success), each
-   !> try being fem_try's.
+   !> try being fem_try's; a run's step then looks for free motion (determinacy).
    recursive subroutine advance_to(self, t, depth, iterations, residual, cuts, error)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
@@ -264,6 +253,7 @@ contains
       t_from = self%state%t
       call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, cuts, iterations, error)
       if (.not. allocated(error) .and. self%state%t > t_from) residual = self%try_residual
+      if (depth == 0) call check_free_motion(self, t_from, error)
    end subroutine advance_to
 
    !> The FEM's try of a step to time t (for advance_by_cuts): Newton
