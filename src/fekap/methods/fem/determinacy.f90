@@ -263,21 +263,27 @@ contains
    subroutine accepted_free_motion(self, error)
       class(fem_core_type), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
-      logical, allocatable :: moved(:), moved_before(:)
-      logical :: singular, free
       real(dp) :: ratio
+      if (self%loaded) return
+      if (.not. self%accepted_singular) then
+         if (.not. self%factor_current) return
+         ratio = accepted_pivot(self)
+         if (.not. (singular_pivot(ratio, self%state%reference_pivot) .or. ratio < probe_pivot)) return
+      end if
+      ! Singular (rare): the probes, in a procedure of their own so that the
+      ! regular step's path stays a few comparisons.
+      call singular_free_motion(self, error)
+   end subroutine accepted_free_motion
+
+   !> accepted_free_motion at a singular configuration: its probe and that of
+   !> the configuration accepted before it.
+   subroutine singular_free_motion(self, error)
+      class(fem_core_type), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      logical, allocatable :: moved(:), moved_before(:)
+      logical :: free
       integer :: before
       character(len=12) :: now, then
-      if (self%loaded) return
-      if (self%accepted_singular) then
-         singular = .true.
-      else if (self%factor_current) then
-         ratio = accepted_pivot(self)
-         singular = singular_pivot(ratio, self%state%reference_pivot) .or. ratio < probe_pivot
-      else
-         return
-      end if
-      if (.not. singular) return
       associate (state => self%state, history => self%state%history)
          if (history%filled < 2) return
          before = history%column(2)
@@ -295,7 +301,7 @@ contains
          & 'links: with the drives held, a part of it moves freely here and at t = '//then//' (a free motion, '// &
          & 'not a change point that the drives pass through): '//moved_parts(self%mesh, self%model, moved)// &
          & '; support or drive the part that moves, or remove it')
-   end subroutine accepted_free_motion
+   end subroutine singular_free_motion
 
    !> A run whose first step failed (error, after its cuts) from a start
    !> configuration that moves freely with the drives held: the drives' path
