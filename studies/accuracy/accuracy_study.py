@@ -533,14 +533,15 @@ def adaptive_cases(short: bool) -> list[dict]:
 def adaptive_study(binary: str, work: Path, short: bool, repeat: int) -> list[dict]:
     rows = []
     for case in adaptive_cases(short):
-        def deck_text(time: str) -> str:
-            return fb.with_settings(case["text"], {"start": "consistent", "time": time})
+        def deck_text(time: str, text: str = case["text"]) -> str:
+            return fb.with_settings(text, {"start": "consistent", "time": time})
         exact = case["exact"]
         if exact is None:
             # The flexible slider-crank: FEKAP's own run at a fine fixed step.
             ref_dt = 2.5e-6 if not short else 1.25e-5
             ref = run_text(binary, work, "reference", deck_text(f"0 {case['t_end']!r} {ref_dt!r}"), 1)
-            table_ = {round(r["t"] / case["every"]): (r["x"], r["y"]) for r in read.rows(ref["outdir"] / "points.csv", True, point=case["point"])
+            reference = read.rows(ref["outdir"] / "points.csv", True, point=case["point"])
+            table_ = {round(r["t"] / case["every"]): (r["x"], r["y"]) for r in reference
                       if abs(r["t"] / case["every"] - round(r["t"] / case["every"])) < 1e-6}
             exact = lambda t, table_=table_, every=case["every"]: table_[round(t / every)]  # noqa: E731
         settings = [("fixed", f"dt {dt:g}", f"0 {case['t_end']!r} {dt!r}") for dt in case["fixed"]]

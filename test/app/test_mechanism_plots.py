@@ -448,6 +448,26 @@ def test_titles_are_plain_text(tmp_path, title):
     plot.fc.pyplot().close(fig)
 
 
+def test_units_with_mathtext_characters_are_plain_text(tmp_path):
+    """Unit names are drawn as given too (issue #31 item 6: titles, units and names): `$\\frac{`
+    and `$x^2$` label the axes literally, and every figure is written (mathtext would raise
+    on the first and set the second in italics)."""
+    length, time_ = "$\\frac{", "$x^2$"
+    text = without_units(ROOT / "decks" / "fourbar.deck").replace(
+        "OUTPut", f"OUTPut\n  units length={length} time={time_}", 1)
+    deck = tmp_path / "units.deck"
+    deck.write_text(text)
+    out = run_deck(tmp_path, deck)
+    assert plot.main([str(out), "--instants", "2"]) == 0
+    run = plot.Run(out, 2, 0)
+    fig = plot.plot_history(run, run.points["C"], ["position", "velocity"])
+    labels = [ax.get_ylabel() for ax in fig.axes] + [fig.axes[-1].get_xlabel()]
+    assert labels == [f"x ({length})", f"y ({length})", f"vx ({length}/{time_})", f"vy ({length}/{time_})",
+                      f"t ({time_})"], labels
+    fig.savefig(tmp_path / "check.png")
+    plot.fc.pyplot().close(fig)
+
+
 def test_a_latin1_title_and_a_128_kib_name_plot(tmp_path):
     """A Latin-1 byte in the title (fekap takes it as it is) and a node name of 128 KiB + 1:
     plot.py draws every figure, the title decoded as Latin-1."""

@@ -1,15 +1,21 @@
 """scripts/setup and the project's environment build/venv: every Python script of scripts/
-and studies/ starts through scripts/python (that environment's interpreter, whatever python3 PATH names),
-and a pip failure stops the setup with pip's message. Run alone: scripts/test setup."""
+and studies/ starts through scripts/python (that environment's interpreter, whatever python3 PATH
+names); a pip or apt-get failure stops the setup with its message; running a deck needs only the
+run packages; the README's run command works with Debian's python3 first on PATH.
+Run alone: scripts/test setup."""
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 
-from apptest import ROOT
+import pytest
+
+from apptest import ROOT, run_fekap
 
 #: The first line of a Python script in scripts/ (UP = "") and in studies/NAME/ (UP = "../../").
 LAUNCHER = """#!/usr/bin/env -S sh -c 'exec "$(dirname "$0")/{UP}python" "$0" "$@"'"""
@@ -79,3 +85,79 @@ def test_a_pip_failure_stops_the_setup_with_its_message(tmp_path: Path) -> None:
     assert (tmp_path / "build" / "venv" / "bin" / "python").exists()
     assert not (tmp_path / "build" / "venv" / ".fekap-run").exists()
     shutil.rmtree(tmp_path / "build")
+
+
+def test_an_apt_failure_stops_the_setup_with_its_message(tmp_path: Path) -> None:
+    """apt-get that cannot install (a fake one first on PATH, refusing as Debian's does for
+    an unknown package): exit 1, apt's E: line and the setup's own message, and nothing
+    after it (no environment made). --paraview asks for packages this machine lacks."""
+    if shutil.which("pvpython") or os.getuid() != 0:
+        pytest.skip("ParaView is installed, or not root (setup would call the real apt-get through sudo)")
+    (tmp_path / "scripts").mkdir()
+    (tmp_path / "scripts" / "setup").write_text((ROOT / "scripts" / "setup").read_text())
+    (tmp_path / "scripts" / "setup").chmod(0o755)
+    fake = tmp_path / "fakebin"
+    fake.mkdir()
+    (fake / "apt-get").write_text("#!/bin/sh\necho 'E: Unable to locate package paraview' >&2\nexit 100\n")
+    (fake / "apt-get").chmod(0o755)
+    env = debian_env()
+    env["PATH"] = f"{fake}:{DEBIAN_PATH}"
+    done = subprocess.run([str(tmp_path / "scripts" / "setup"), "--paraview"], capture_output=True, text=True,
+                          env=env, timeout=120)
+    assert done.returncode == 1, (done.returncode, done.stderr)
+    assert "E: Unable to locate package paraview" in done.stderr, done.stderr
+    assert "setup: apt-get could not install paraview" in done.stderr, done.stderr
+    assert not (tmp_path / "build" / "venv").exists(), "the setup went on after apt-get failed"
+
+
+def test_running_a_deck_needs_only_the_run_packages() -> None:
+    """The packages a run installs (RUN_PACKAGES) hold none of the test or batch tools, and
+    plot.py draws a run's pictures with those tools unimportable (a meta-path finder
+    refuses them), as on a machine set up only to run decks."""
+    text = (ROOT / "scripts" / "setup").read_text()
+
+    def pinned(name: str) -> set[str]:
+        line = next(ln for ln in text.splitlines() if ln.startswith(f"{name}=("))
+        return {spec.split("==")[0] for spec in re.findall(r'"([^"$]+)==', line)} | (
+            {"fpm"} if "fpm==" in line else set())
+
+    run, test, batch = pinned("RUN_PACKAGES"), pinned("TEST_PACKAGES"), pinned("BATCH_PACKAGES")
+    assert run == {"fpm", "numpy", "matplotlib", "pyarrow"}, run
+    assert not run & (test | batch), run & (test | batch)
+    assert {"pytest", "vtk", "meshio"} <= test and "dask" in batch
+    out = Path(tempfile.mkdtemp(prefix="fekap-run-only-"))
+    try:
+        done = run_fekap("-q", "-o", str(out), "decks/fourbar-quarter-turn.deck")
+        assert done.returncode == 0, done.stderr
+        blocked = ("pytest", "vtk", "meshio", "dask", "distributed", "fortitude")
+        code = f"""
+import importlib.abc, runpy, sys
+class Refuse(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split('.')[0] in {blocked!r}:
+            raise ImportError('not installed for running a deck: ' + name)
+        return None
+sys.meta_path.insert(0, Refuse())
+sys.argv = ['plot.py', {str(out)!r}]
+sys.path.insert(0, {str(ROOT / 'scripts')!r})
+runpy.run_path({str(ROOT / 'scripts' / 'plot.py')!r}, run_name='__main__')
+"""
+        plotted = subprocess.run([str(ROOT / "scripts" / "python"), "-c", code], capture_output=True, text=True,
+                                 env=dict(debian_env(), MPLBACKEND="Agg"), timeout=600)
+        assert plotted.returncode == 0, plotted.stderr[-2000:]
+        assert (out / "paths.png").is_file()
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def test_the_readme_run_command_with_debians_python_first_on_path(tmp_path: Path) -> None:
+    """The README's `scripts/fekap decks/fourbar.deck` (here into tmp_path, without the
+    animation) with Debian's own python3 first on PATH, no pyenv: exit 0, the results and
+    the pictures. (The usual PATH is test_fekap_wrapper's.)"""
+    assert "    scripts/fekap decks/fourbar.deck\n" in (ROOT / "README.md").read_text()
+    out = tmp_path / "fourbar"
+    done = subprocess.run([str(ROOT / "scripts" / "fekap"), "--no-animation", "-q", "-o", str(out),
+                           "decks/fourbar.deck"], cwd=ROOT, capture_output=True, text=True, env=debian_env(),
+                          timeout=1200)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert (out / "points.csv").is_file() and (out / "paths.png").is_file()

@@ -40,6 +40,7 @@ module fekap_fem
    use fekap_fem_predict, only: predict, guard_extrapolation, drive_increment_residual, record_velocity
    use fekap_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
    use fekap_fem_fill, only: check_predictor, interpolate_fill, finish_fill, filled_state, next_output_time
+   use fekap_fem_determinacy, only: check_free_motion
    implicit none
    private
 
@@ -237,7 +238,7 @@ contains
 
    !> Advance the accepted state to time t under step control (the shared
    !> advance_by_cuts: cut after a failure, grow back after a success), each
-   !> try being fem_try's.
+   !> try being fem_try's; a run's step then looks for free motion (determinacy).
    recursive subroutine advance_to(self, t, depth, iterations, residual, cuts, error)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
@@ -252,6 +253,7 @@ contains
       t_from = self%state%t
       call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, cuts, iterations, error)
       if (.not. allocated(error) .and. self%state%t > t_from) residual = self%try_residual
+      if (depth == 0) call check_free_motion(self, t_from, error)
    end subroutine advance_to
 
    !> The FEM's try of a step to time t (for advance_by_cuts): Newton

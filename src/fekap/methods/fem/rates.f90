@@ -16,7 +16,7 @@ module fekap_fem_rates
    implicit none
    private
 
-   public :: pivot_note, solve_velocities, solve_accelerations
+   public :: pivot_note, singular_pivot, solve_velocities, solve_accelerations
    public :: root_velocities, root_accelerations, root_drive_response
 
    !> Solves of a rate in the square-root form: the plain solve and one
@@ -36,6 +36,13 @@ module fekap_fem_rates
 
 contains
 
+   !> Whether a tangent with pivot ratio `ratio` against the run's largest,
+   !> `reference`, is singular (see singular_drop).
+   pure logical function singular_pivot(ratio, reference) result(singular)
+      real(dp), intent(in) :: ratio, reference
+      singular = ratio < singular_drop*reference .or. ratio < singular_floor
+   end function singular_pivot
+
    !> The listing's note on a configuration at time t whose tangent has the
    !> pivot ratio `ratio` against the run's largest, `reference` ('' if
    !> regular), and whether rates can be solved there (not singular).
@@ -48,7 +55,7 @@ contains
       character(len=160) :: text
       character(:), allocatable :: consequence
       regular = .true.
-      if (ratio < singular_drop*reference .or. ratio < singular_floor) then
+      if (singular_pivot(ratio, reference)) then
          consequence = ''
          if (velocities) consequence = ': velocities and accelerations are left out of this step'
          write (text, '(a,es12.5,a)') 't = ', t, ': singular configuration (the tangent has no inverse)'
