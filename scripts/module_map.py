@@ -3,9 +3,9 @@
 src/ and app/ (file, module, what it is: the first sentence of its header
 comment), between the markers of the section "Map of modules".
 
-Usage: python3 scripts/module_map.py           print the map
-       python3 scripts/module_map.py --write   rewrite the section of docs/architecture.md
-       python3 scripts/module_map.py --check   exit 1 if the section is out of date
+Usage: scripts/module_map.py           print the map
+       scripts/module_map.py --write   rewrite the section of docs/architecture.md
+       scripts/module_map.py --check   exit 1 if the section is out of date
 """
 
 from __future__ import annotations

@@ -1,13 +1,15 @@
-"""Small shared pieces of the app-level tests (run by pytest, see conftest.py):
-the fekap executable, running it, reading its CSV output, and `check`, an
-assertion with a reason."""
+"""Small shared pieces of the app-level tests (run by pytest, see conftest.py): the
+fekap executable and running it (the package's fekap.run), reading its CSV output (the
+package's fekap.read), `check`, an assertion with a reason, and a study script as a module."""
 
 from __future__ import annotations
 
-import csv
-import os
-import subprocess
+import importlib.util
 from pathlib import Path
+
+from fekap.read import columns
+from fekap.read import rows as read_rows
+from fekap.run import fekap_binary, run_fekap
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -22,30 +24,21 @@ def check(condition: bool, reason: str) -> None:
         raise Failure(reason)
 
 
-def fekap_binary() -> str:
-    """The fekap executable: $FEKAP_BIN (set by scripts/test), else the one fpm builds."""
-    binary = os.environ.get("FEKAP_BIN")
-    if binary and Path(binary).is_file():
-        return binary
-    out = subprocess.run(["fpm", "run", "--runner", "echo"], cwd=ROOT, capture_output=True, text=True)
-    return str(ROOT / out.stdout.strip().splitlines()[-1])
-
-
-def run_fekap(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    """Run fekap from the repository root with ``args``."""
-    return subprocess.run([fekap_binary(), *args], cwd=ROOT, capture_output=True, text=True,
-                          timeout=timeout)
-
-
-def read_rows(path: Path) -> list[dict[str, str]]:
-    """The rows of a CSV file as dictionaries."""
-    with open(path, newline="") as handle:
-        return list(csv.DictReader(handle))
-
-
 def point_series(outdir: Path, point: str) -> dict[str, list[float]]:
     """Columns of points.csv for one point, as floats (empty fields are NaN)."""
-    rows = [row for row in read_rows(outdir / "points.csv") if row["point"] == point]
-    check(bool(rows), f"no rows for point {point} in {outdir / 'points.csv'}")
-    return {key: [float(row[key]) if row[key] else float("nan") for row in rows]
-            for key in rows[0] if key != "point"}
+    table = columns(outdir / "points.csv", point=point)
+    check(table["t"].size > 0, f"no rows for point {point} in {outdir / 'points.csv'}")
+    return {key: values.tolist() for key, values in table.items() if key != "point"}
+
+
+def study_module(path: str):
+    """A script of studies/ (``path`` below studies/) imported as a module, for the tests of
+    its functions: the studies are scripts, not a package."""
+    file = ROOT / "studies" / path
+    spec = importlib.util.spec_from_file_location(file.stem, file)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+__all__ = ["ROOT", "Failure", "check", "fekap_binary", "point_series", "read_rows", "run_fekap", "study_module"]

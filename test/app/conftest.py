@@ -2,7 +2,7 @@
 scratch directories under pytest's temporary area.
 
 scripts/test sets FEKAP_BIN to the executable it built with run-time checks;
-without it, apptest.fekap_binary() asks fpm for the default build."""
+without it, fekap.run.fekap_binary() takes the release build of scripts/build."""
 
 from __future__ import annotations
 

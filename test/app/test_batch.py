@@ -1,4 +1,4 @@
-"""fekap-batch (scripts/batch) on Dask, everything on 127.0.0.1: a 20-case sweep
+"""fekap-batch (python/fekap/batch) on Dask, everything on 127.0.0.1: a 20-case sweep
 gives the right table and a rerun does no work; the measures are computed with
 the cases and read back; a bad deck is recorded with its error; bad sweep files,
 sweeps over the case limit and an output that is a file are refused before
@@ -7,7 +7,7 @@ mid-case has its case retried and completed; Ctrl-C returns within seconds with
 the finished cases kept and counted, and the servers listen on 127.0.0.1 only;
 a sweep through --scheduler on a `dask scheduler` with two `dask worker`s.
 
-Each sweep runs `python3 -m batch` as a process, with bounded waits; every
+Each sweep runs `python -m fekap.batch` as a process, with bounded waits; every
 process a test starts is stopped by the test."""
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 
-from apptest import ROOT, fekap_binary
+from apptest import fekap_binary
 
 #: Example 1's four-bar with its lengths, run length and output rate as parameters.
 DECK = """\
@@ -77,11 +77,11 @@ def batch(cwd: Path, fekap: str, *args: str, timeout: float = 120, workers: int 
 
 
 def batch_command(fekap: str, *args: str, workers: int = 2) -> list[str]:
-    return [sys.executable, "-m", "batch", "--fekap", fekap, "--workers", str(workers), *args]
+    return [sys.executable, "-m", "fekap.batch", "--fekap", fekap, "--workers", str(workers), *args]
 
 
 def batch_env() -> dict[str, str]:
-    return dict(os.environ, PYTHONPATH=str(ROOT / "scripts"))
+    return dict(os.environ)
 
 
 def summary(output: Path) -> list[dict[str, str]]:
@@ -252,8 +252,7 @@ def test_sweep_over_its_case_limit_is_refused_before_anything_is_made(tmp_path, 
                                                                       monkeypatch, capsys):
     sweep = write_sweep(tmp_path, text)
     monkeypatch.chdir(tmp_path)
-    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
-    from batch import cli
+    from fekap.batch import cli
     start = time.monotonic()
     # No fekap at all: the count is checked before FEKAP is looked for (or built).
     assert cli.main([str(sweep), "-o", "out", "--fekap", str(tmp_path / "none"), *args]) == 2
@@ -267,8 +266,7 @@ def test_sweep_over_its_case_limit_is_refused_before_anything_is_made(tmp_path, 
 def test_case_limit_can_be_raised(tmp_path, monkeypatch, capsys):
     sweep = write_sweep(tmp_path, 'decks = ["p.deck"]\nmax_cases = 10\n[parameters]\ncrank = { linspace = [1, 2, 20] }\n')
     monkeypatch.chdir(tmp_path)
-    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
-    from batch import cli
+    from fekap.batch import cli
     # Past the count (--max-cases overrides the file's max_cases), on to the missing fekap.
     assert cli.main([str(sweep), "-o", "out", "--fekap", str(tmp_path / "none"), "--max-cases", "20"]) == 2
     assert "no fekap executable" in capsys.readouterr().err
@@ -278,8 +276,7 @@ def test_output_that_is_a_file_is_an_error(tmp_path, fekap, monkeypatch, capsys)
     sweep = write_sweep(tmp_path, 'decks = ["p.deck"]\noutput = "results"\n')
     (tmp_path / "results").write_text("mine\n")
     monkeypatch.chdir(tmp_path)
-    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
-    from batch import cli
+    from fekap.batch import cli
     for args in ((), ("-o", "results"), ("-o", "results/inside")):
         assert cli.main([str(sweep), "--fekap", fekap, *args]) == 2
         stderr = capsys.readouterr().err
@@ -362,8 +359,7 @@ def test_bad_sweep_file_is_refused_before_any_case_runs(tmp_path, fekap, text, w
                                                         capsys):
     sweep = write_sweep(tmp_path, text)
     monkeypatch.chdir(tmp_path)
-    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
-    from batch import cli  # in this process: the checks need no cluster, and no second Python
+    from fekap.batch import cli  # in this process: the checks need no cluster, and no second Python
     assert cli.main([str(sweep), "-o", "out", "--fekap", fekap]) == 2
     stderr = capsys.readouterr().err
     assert where in stderr and phrase in stderr, stderr
@@ -541,12 +537,11 @@ method = ["fem", "cartesian", "angles", "fem"]
 
 def test_streamed_measures_equal_those_of_the_loaded_run(sweep20, monkeypatch):
     """The workers' one-pass measures (batch.task.measures) against the same measures taken
-    from the whole run as fekap_csv loads it (results.Measure.value), every function on
+    from the whole run as fekap.read loads it (results.Measure.value), every function on
     points, links and steps of one case."""
     directory, first = sweep20
     assert first.returncode == 0, first.stderr
-    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
-    from batch import results, task
+    from fekap.batch import results, task
     case = next((directory / "out" / "cases").glob("*/case.json")).parent
     run = results.load(case)
     texts = [f"{function}({source})" for function in ("max", "min", "range", "mean", "first", "final", "absmax")
@@ -565,9 +560,8 @@ def test_streamed_measures_equal_those_of_the_loaded_run(sweep20, monkeypatch):
 def test_the_overlay_shows_every_case_with_units_and_title(sweep20, monkeypatch):
     """The paths overlay draws every finished case (both step sizes), its differences only for
     the cases on the first case's times and names the others; axes carry the deck's units."""
-    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
-    import compare
-    import fekap_stream as fs
+    from fekap import compare
+    from fekap import stream as fs
 
     directory, _ = sweep20
     cases = sorted((directory / "out" / "cases").iterdir())

@@ -14,14 +14,12 @@ Run with scripts/test (pytest): scripts/test change_points.
 from __future__ import annotations
 
 import math
-import sys
 
 import pytest
 
-from apptest import ROOT, check, read_rows, run_fekap  # noqa: E402
+from fekap.models import a02_kinematic as a02
 
-sys.path.insert(0, str(ROOT / "scripts"))
-import a02  # noqa: E402
+from apptest import ROOT, check, read_rows, run_fekap
 
 OUT = None  # a fresh scratch directory for each module, set by conftest.py
 GRID = [(n, dt) for n in a02.GRID_N for dt in a02.GRID_DT]

@@ -3,7 +3,7 @@
 pyarrow's CSV reader parsed on Arrow's CPU thread pool, and a pool still running at
 interpreter shutdown aborts the process at random (SIGABRT, "terminate called without an
 active exception"), even after plot.py printed its usage error: `plot.py DIR --only
-acceleration` on a positions-only run aborted 4 times in 40. scripts/fekap_stream.py now
+acceleration` on a positions-only run aborted 4 times in 40. python/fekap/stream.py now
 parses on the calling thread. Run alone: scripts/test clean_exit."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from pathlib import Path
 from apptest import ROOT, run_fekap
 
 PLOT = ROOT / "scripts" / "plot.py"
-OUT: Path
+OUT: Path = None  # a fresh scratch directory, set by conftest.py
 
 #: Repetitions of the error path: at the old rate of 1 in 10, 50 clean exits in a row
 #: would happen by chance with probability 0.9^50 = 0.5 %.
@@ -48,15 +48,14 @@ def test_plot_usage_error_exits_cleanly_every_time() -> None:
 
 
 def test_reading_starts_no_cpu_thread_pool() -> None:
-    """A fresh interpreter reads a run's points, links and steps through fekap_stream:
+    """A fresh interpreter reads a run's points, links and steps through fekap.stream:
     the reading adds at most one thread (the idle readahead thread of Arrow's I/O pool);
     a parse on the CPU pool would start one thread per core besides (3 or more here)."""
     out = positions_only_run()
     code = f"""
 import os, sys
 from pathlib import Path
-sys.path.insert(0, {str(ROOT / 'scripts')!r})
-import fekap_stream as fs
+from fekap import stream as fs
 import pyarrow
 def threads():
     return len(os.listdir('/proc/self/task'))

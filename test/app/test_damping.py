@@ -13,8 +13,9 @@ import math
 import re
 from pathlib import Path
 
+from fekap import dynamics as dc
+
 from apptest import ROOT, check, read_rows, run_fekap
-import dynamics_checks as dc  # noqa: E402
 
 #: The spin-up deck (decks/dynamics/spin-up.deck) without its drive: the hinged beam started
 #: spinning rigidly at 6 rad/s (VELOcities), for 5 s (4.8 turns).
@@ -25,7 +26,7 @@ SPIN_UP = ROOT / "decks" / "dynamics" / "spin-up.deck"
 CENTRIFUGAL_STRETCH = 5.14317e-4
 
 #: Exudyn 1.13.6's geometrically exact 2D beam on the spin-up deck with strain-rate damping
-#: beta = 0.01 (objective; 10 elements, dt 0.01): `scripts/exudyn_spin_up.py --beta 0.01
+#: beta = 0.01 (objective; 10 elements, dt 0.01): `studies/exudyn/exudyn_spin_up.py --beta 0.01
 #: --cases 10:0.01` (bench@38ed830). Peak transverse tip deflection in the hub's frame and
 #: its time, the deflection at t = 15 s, its largest magnitude after 15 s, the mean axial
 #: stretch over 20-30 s.

@@ -8,19 +8,17 @@ from __future__ import annotations
 import math
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from fekap import dynamics as dc  # the benchmarks' answers from a run's CSV files
+from fekap.exact import spin_up as reference  # the spin-up beam's linear rotating-beam model
+
 from apptest import ROOT, check, read_rows, run_fekap
 
-sys.path.insert(0, str(ROOT / "scripts"))
-import dynamics_checks as dc  # noqa: E402  (the benchmarks' answers from a run's CSV files)
-import spin_up_reference as reference  # noqa: E402  (the spin-up beam's linear rotating-beam model)
-
-#: Exudyn's run of the spin-up deck (scripts/exudyn_spin_up.py --store).
+#: Exudyn's run of the spin-up deck (studies/exudyn/exudyn_spin_up.py --store).
 SPIN_UP_EXUDYN = ROOT / "test" / "app" / "data" / "spin-up-exudyn.csv"
 
 
@@ -68,7 +66,7 @@ def a02_variant(tmp_path: Path, n: int, integrator: str) -> Path:
 def test_a02_chain_follows_its_energy_integral(tmp_path: Path, n: int, integrator: str | None, t_end: float | None,
                                                turns: int, limits: dict[str, float]) -> None:
     """The A02 N-four-bar's first crank against the rigid chain's exact motion
-    (scripts/a02_exact.py): its rate against the energy integral at the
+    (python/fekap/exact/a02.py): its rate against the energy integral at the
     computed angle (`energy`) and against the exact rate at the same time
     (`rate_away`), away from the change points; its angle over the run; the
     energy balance over G; and the turns it makes. The deck's plan says auto
@@ -135,7 +133,7 @@ def test_spin_up_transverse_tip_deflection_follows_the_rotating_beam_model(spin_
     """The transverse tip deflection in the hub's frame against an independent
     solution: the linear rotating-beam model with centrifugal stiffening of
     Kane, Ryan and Banerjee (1987), 4 cantilever modes, RK4
-    (scripts/spin_up_reference.py), driven by the deck's drive table. The
+    (python/fekap/exact/spin_up.py), driven by the deck's drive table. The
     model: peak -0.57439 at t = 6.7651 s, 1.33e-3 at t = 15, at most 3.71e-3
     after t = 15 (undamped: the vibration left by the spin-up). Measured, the
     deck (10 elements, dt 0.01): peak -0.57375 at 6.7615 s (6.4e-4 and
@@ -160,7 +158,7 @@ def test_spin_up_transverse_tip_deflection_follows_the_rotating_beam_model(spin_
 def test_spin_up_beam_agrees_with_exudyn(spin_up) -> None:
     """The deck (10 elements, dt 0.01, generalized-alpha 0.8) against Exudyn
     1.13.6's run of the same model, mesh and step (its geometrically exact 2D
-    beam, the same drive table; scripts/exudyn_spin_up.py --store wrote its tip
+    beam, the same drive table; studies/exudyn/exudyn_spin_up.py --store wrote its tip
     every 0.05 s to test/app/data/spin-up-exudyn.csv). Measured: transverse
     deflections within 1.06e-4 over 0-30 s (peak -0.57375 against Exudyn's
     -0.57368), axial stretches within 6.8e-6 (the axial vibration's phase),

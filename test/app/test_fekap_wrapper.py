@@ -7,14 +7,12 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT  # noqa: E402
+from apptest import ROOT
 
 WRAPPER = ROOT / "scripts" / "fekap"
 

@@ -5,20 +5,16 @@ first step (exit 2) with the free nodes and links named, as --method
 cartesian refuses it; a determined mechanism, a redundant one included,
 runs as before; a statics run that fails is not blamed on a dead point.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_free_motion.py
+Run alone:  scripts/test free_motion
 """
 
 from __future__ import annotations
 
-import re
 import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary  # noqa: E402
+from apptest import ROOT, fekap_binary
 
 FOURBAR = (ROOT / "decks" / "fourbar.deck").read_text()
 

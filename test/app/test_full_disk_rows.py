@@ -8,19 +8,16 @@ lists exactly the .vtu files left.
 The tests mount a small tmpfs of their own (test_robust.SmallFileSystem) and
 are skipped, saying why, where that is not allowed.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_full_disk_rows.py
+Run alone:  scripts/test full_disk_rows
 """
 
 from __future__ import annotations
 
-import sys
 import xml.etree.ElementTree as ElementTree
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT  # noqa: E402
+from apptest import ROOT
 from test_robust import VTK_DECK_LINE, SmallFileSystem, deck_text, fekap, whole_rows, write_deck  # noqa: E402
 
 FOURBAR = ROOT / "decks/fourbar.deck"

@@ -34,9 +34,9 @@ from pathlib import Path
 
 import pytest
 
-from apptest import ROOT, check, fekap_binary  # noqa: E402
+from apptest import ROOT, check, fekap_binary
 
-OUT: Path  # a fresh scratch directory for each run, set by conftest.py
+OUT: Path = None  # a fresh scratch directory for each run, set by conftest.py
 CASES = int(os.environ.get("FEKAP_FUZZ_CASES", "6000"))
 SEED = int(os.environ.get("FEKAP_FUZZ_SEED", "20240611"))
 TIMEOUT = 10.0

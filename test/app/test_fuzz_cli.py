@@ -26,8 +26,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary  # noqa: E402
+from apptest import ROOT, fekap_binary
 from test_fuzz import BAD_SIGNS, NUMBERS  # noqa: E402
 
 CASES = int(os.environ.get("FEKAP_FUZZ_CLI_CASES", "120"))

@@ -22,10 +22,12 @@ from pathlib import Path
 
 import pytest
 
-from apptest import ROOT, check, point_series, read_rows, run_fekap  # noqa: E402
-from test_examples import Dual, angle, compare, cos, fourbar_exact, quick_return_exact, sin, sqrt  # noqa: E402
+from fekap.exact.fourbar import Dual, angle, cos, fourbar_exact, quick_return_exact, sin, sqrt
 
-OUT: Path  # a fresh scratch directory for each run, set by conftest.py
+from apptest import ROOT, check, point_series, read_rows, run_fekap
+from test_examples import compare
+
+OUT: Path = None  # a fresh scratch directory for each run, set by conftest.py
 FOURBAR = "decks/fourbar.deck"
 PREDICTORS = ("previous", "extrapolate", "taylor")
 LARGE_STEPS = ("0.5", repr(1 / 3), "0.25")
@@ -110,7 +112,7 @@ def test_branch_jumps_caught():
 def test_peaucellier_fold_caught(predictor):
     """Example 4 at dt = 0.25: without the orientation test the rhombus folded
     (P = A) at t = 0.5 with the previous and extrapolate predictors."""
-    def p_exact(t, mean=math.radians(60), amp=math.radians(30)):
+    def p_exact(t, mean=math.pi / 3, amp=math.pi / 6):
         phi = Dual(mean + amp * math.cos(2 * math.pi * t), -amp * 2 * math.pi * math.sin(2 * math.pi * t),
                    -amp * (2 * math.pi) ** 2 * math.cos(2 * math.pi * t))
         ax, ay = 1.4 + 1.4 * cos(phi), 1.4 * sin(phi)
@@ -518,11 +520,9 @@ def test_no_nan_or_inf_anywhere():
 
 def scissor_errors(outdir: Path, cells: int) -> dict[str, float]:
     """Largest errors of the top ends' positions, velocities and accelerations
-    against the closed form (scripts/scissor.py's top_exact), each relative to
+    against the closed form (python/fekap/models/scissor.py's top_exact), each relative to
     the largest exact value of its kind."""
-    import sys
-    sys.path.insert(0, str(ROOT / "scripts"))
-    import scissor  # noqa: E402
+    from fekap.models import scissor
     worst = {"pos": 0.0, "vel": 0.0, "acc": 0.0}
     scale = dict(worst)
     for row in read_rows(outdir / "points.csv"):
@@ -539,7 +539,7 @@ def scissor_errors(outdir: Path, cells: int) -> dict[str, float]:
 @pytest.mark.parametrize("cells", (10, 100))
 def test_scissor_rates_match_closed_form(cells):
     """Issue #16 items 1-2: the scissor lift of N cells (decks/hard/scissor-N.deck,
-    made by scripts/scissor.py N --law sine --slider --dt 0.01) is exactly
+    made by python/fekap/models/scissor.py N --law sine --slider --dt 0.01) is exactly
     constrained, so its rates are solved in the square-root form: velocities
     and accelerations of the top ends within 1e-10 of the closed form
     (relative), positions within 1e-12, and Newton at most 2 iterations per
@@ -557,11 +557,9 @@ def test_scissor_rates_match_closed_form(cells):
 
 
 def test_scissor_deck_is_the_script_output():
-    """The committed scissor decks are what scripts/scissor.py writes (so a
+    """The committed scissor decks are what python/fekap/models/scissor.py writes (so a
     larger one made by the script is the same mechanism)."""
-    import sys
-    sys.path.insert(0, str(ROOT / "scripts"))
-    import scissor  # noqa: E402
+    from fekap.models import scissor
     for cells in (10, 100):
         text = scissor.deck_text(cells, 0.01, law="sine", slider=True)
         check((ROOT / f"decks/hard/scissor-{cells}.deck").read_text() == text, f"decks/hard/scissor-{cells}.deck")

@@ -6,13 +6,11 @@ effects run and why, and a type that cannot run is an input error (exit 2)."""
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, read_rows, run_fekap  # noqa: E402
+from apptest import ROOT, read_rows, run_fekap
 
 DECK = "decks/fourbar-kinetostatics.deck"
 

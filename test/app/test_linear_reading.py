@@ -7,7 +7,7 @@ from half a minute to over a minute when reading was quadratic (a 2 MiB
 TITLe, 100,000 PARAmeters lines); each is also checked for its result, so a
 fast wrong answer fails too.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_linear_reading.py
+Run alone:  scripts/test linear_reading
 """
 
 from __future__ import annotations
@@ -15,14 +15,12 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary  # noqa: E402
+from apptest import ROOT, fekap_binary
 
 FOURBAR = ROOT / "decks/fourbar.deck"
 TITLE = "TITLe   Four-bar linkage, dt = 0.025"

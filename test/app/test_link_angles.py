@@ -3,18 +3,16 @@
 last (issue #31, item 8), also for a link meshed with several elements,
 whose end rotations differ from it; and --tol says what it changes.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_link_angles.py
+Run alone:  scripts/test link_angles
 """
 
 from __future__ import annotations
 
 import math
 import subprocess
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary, read_rows  # noqa: E402
+from apptest import ROOT, fekap_binary, read_rows
 
 
 def fekap(*args) -> subprocess.CompletedProcess:

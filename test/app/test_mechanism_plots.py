@@ -15,12 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary  # noqa: E402
+from fekap import plot
+from fekap import stream as fs
 
-sys.path.insert(0, str(ROOT / "scripts"))
-import fekap_stream as fs  # noqa: E402
-import plot  # noqa: E402
+from apptest import ROOT, fekap_binary
 
 EXAMPLES = sorted(p.stem for p in (ROOT / "decks").glob("*.deck"))
 #: An axis label with a unit: "name (unit)".
@@ -297,7 +295,7 @@ def test_the_kinetostatics_torque_figure_draws_reactions_csv(runs):
     assert against_angle.axes.get_xlabel() == "angle of AB (deg)"
     # The supports' force magnitudes are those of reactions.csv's support rows.
     supports = reaction_rows(out / "reactions.csv", "support")
-    for (link, node), rows in supports.items():
+    for (_link, node), rows in supports.items():
         line, = [l for ax in fig.axes for l in ax.get_lines() if l.get_label() == f"support {node}"]
         np.testing.assert_allclose(line.get_ydata(), np.hypot(rows[:, 1], rows[:, 2]), rtol=1e-15)
     plot.fc.pyplot().close(fig)

@@ -2,18 +2,16 @@
 and predictor_names) read by the deck and the command line alike, each name
 taken in full or shortened to 4 letters (FEAP's rule), in any case.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_names.py
+Run alone:  scripts/test names
 """
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, read_rows, run_fekap  # noqa: E402
+from apptest import ROOT, read_rows, run_fekap
 
 DECK = ROOT / "decks" / "fourbar.deck"
 # (option, value as given, full name)
@@ -57,4 +55,5 @@ def test_deck_takes_the_same_abbreviations(tmp_path, option, short, full):
     a = run_fekap("-q", "-o", str(tmp_path / "deck"), str(deck))
     b = run(tmp_path / "cli", option, full)
     assert a.returncode == 0, f"deck with '{key} {short}': exit {a.returncode}: {a.stderr}"
+    assert b.returncode == 0, f"{option} {full}: exit {b.returncode}: {b.stderr}"
     assert read_rows(tmp_path / "deck" / "points.csv") == read_rows(tmp_path / "cli" / "points.csv")

@@ -4,7 +4,7 @@ a run (.fekap-manifest) lists its files and those scripts/plot.py draws; the
 next run removes those and no other; the deck is never written over; files
 of FEKAP's names that no manifest lists stop the run unless --force.
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_output_manifest.py
+Run alone:  scripts/test output_manifest
 """
 
 from __future__ import annotations
@@ -13,8 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary  # noqa: E402
+from apptest import ROOT, fekap_binary
 
 FOURBAR = ROOT / "decks/fourbar.deck"
 VTK = "OUTPut\n  files csv listing vtk\n"

@@ -9,7 +9,7 @@ scripts/test) in a few seconds. The full-disk tests mount a small tmpfs of
 their own and are skipped, saying why, where that is not allowed (not root,
 no mount).
 
-Run alone:  python3 -m pytest -c test/pytest.ini test/app/test_robust.py
+Run alone:  scripts/test robust
 """
 
 from __future__ import annotations
@@ -26,8 +26,7 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary  # noqa: E402
+from apptest import ROOT, fekap_binary
 
 FOURBAR = ROOT / "decks/fourbar.deck"
 VTK_DECK_LINE = "  files csv listing vtk\n"
@@ -401,7 +400,7 @@ def test_a_signal_stops_a_slow_step_between_newton_iterations(tmp_path, sig):
 
 
 def test_closed_standard_output_is_not_a_failure(tmp_path):
-    done = subprocess.run(["bash", "-c", f'"$0" -o "$1" "$2" | head -c 1 >/dev/null; echo "${{PIPESTATUS[0]}}"',
+    done = subprocess.run(["bash", "-c", '"$0" -o "$1" "$2" | head -c 1 >/dev/null; echo "${PIPESTATUS[0]}"',
                            fekap_binary(), str(tmp_path / "o"), str(FOURBAR)], capture_output=True, text=True,
                           timeout=60)
     assert done.stdout.strip() == "0", (done.stdout, done.stderr)

@@ -1,7 +1,7 @@
-"""The benchmark and study scripts on reduced sizes: scripts/paper_tables.py
---short, scripts/bench --quick, scripts/scissor.py (a 3-cell lift against its
+"""The benchmark and study scripts on reduced sizes: studies/tables/paper_tables.py
+--short, scripts/bench --quick, fekap.models.scissor (a 3-cell lift against its
 exact platform height, with the band and the dense solver) and
-scripts/accuracy_study.py --short. They run with the executable under test
+studies/accuracy/accuracy_study.py --short. They run with the executable under test
 ($FEKAP_BIN, set by scripts/test) and write nothing into docs/.
 
 Run with scripts/test (pytest): scripts/test NAME runs the tests whose names contain NAME.
@@ -15,12 +15,11 @@ import subprocess
 import sys
 from pathlib import Path
 
-from apptest import ROOT, check, read_rows, run_fekap  # noqa: E402
+from fekap.models import scissor
 
-sys.path.insert(0, str(ROOT / "scripts"))
-import scissor  # noqa: E402
+from apptest import ROOT, check, read_rows, run_fekap, study_module
 
-OUT: Path  # a fresh scratch directory for each run, set by conftest.py
+OUT: Path = None  # a fresh scratch directory for each run, set by conftest.py
 LAST_LINE = re.compile(r"^fourbar us_per_config_full=(\S+) us_per_config_positions=(\S+) "
                        r"us_per_config_with_output=(\S+) iterations_per_step=(\S+)$")
 
@@ -34,7 +33,7 @@ def script(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
 
 def test_paper_tables_short(fekap: Path) -> None:
     out = OUT / "tables.md"
-    result = script(sys.executable, "scripts/paper_tables.py", "--short", "--out", str(out),
+    result = script(sys.executable, "studies/tables/paper_tables.py", "--short", "--out", str(out),
                     "--bin", str(fekap))
     text = out.read_text()
     for method in ("angles", "cartesian", "fem"):
@@ -71,7 +70,7 @@ def test_bench_quick(fekap: Path) -> None:
 def test_bench_against_short(fekap: Path) -> None:
     """The before/after comparison of two executables (here the same one
     twice): both cases, both binaries, and the ratios of the medians."""
-    result = script(sys.executable, str(ROOT / "scripts" / "bench_against.py"), str(fekap), str(fekap),
+    result = script(sys.executable, str(ROOT / "studies" / "bench" / "bench_against.py"), str(fekap), str(fekap),
                     "--dt", "0.01", "--repeat", "1", timeout=120)
     lines = result.stdout.splitlines()
     for files in ("listing", "csv listing"):
@@ -87,7 +86,7 @@ def test_scissor_height_exact() -> None:
     cells = 3
     for solver in ("band", "dense"):
         deck = OUT / f"scissor3-{solver}.deck"
-        script(sys.executable, "scripts/scissor.py", str(cells), "--out", str(deck), "--solver", solver)
+        script(sys.executable, "-m", "fekap.models.scissor", str(cells), "--out", str(deck), "--solver", solver)
         outdir = OUT / f"scissor3-{solver}"
         result = run_fekap("-q", "-o", str(outdir), str(deck))
         check(result.returncode == 0, f"fekap on {deck} exited {result.returncode}: {result.stderr}")
@@ -112,7 +111,7 @@ def test_scissor_deck_text() -> None:
 
 
 def test_accuracy_study_short(fekap: Path) -> None:
-    result = script(sys.executable, "scripts/accuracy_study.py", "--short", "--bin", str(fekap),
+    result = script(sys.executable, "studies/accuracy/accuracy_study.py", "--short", "--bin", str(fekap),
                     timeout=300)
     rows = [line for line in result.stdout.splitlines() if line.startswith("| ") and "---" not in line][1:]
     check(len(rows) >= 15, f"too few rows:\n{result.stdout}")
@@ -138,7 +137,7 @@ def test_bench_check_verdict_and_record() -> None:
     every case of the fixed set, so that --check has something to compare."""
     import json
 
-    import bench_instructions as bi
+    bi = study_module("bench/bench_instructions.py")
 
     recorded = {"a": {"instructions_per_configuration": 10000}, "b": {"instructions_per_configuration": 10000}}
     quiet = lambda line: None  # noqa: E731

@@ -8,11 +8,9 @@ mass and a load, and the guide's force normal to the guide."""
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, read_rows, run_fekap  # noqa: E402
+from apptest import ROOT, read_rows, run_fekap
 
 CANTILEVER = "decks/statics-cantilever.deck"
 SLIDER_CRANK = "decks/slider-crank-kinetostatics.deck"

@@ -16,7 +16,7 @@ Newton solves (docs/theory.md, "Convergence").
 The answers:
 - the A01 pendulum (a 1 kg point mass on a massless 1 m link, released from
   the horizontal): its first pass through the bottom, for the rigid link
-  (dynamics_checks.BOTTOM_TIME) and, at EA = 1e8 where the link stretches by
+  (fekap.dynamics.BOTTOM_TIME) and, at EA = 1e8 where the link stretches by
   3e-7 m, for the spring pendulum (an RK4 integration at 1e-5 s, here);
 - a uniform rod (1 kg/m, 1 m) pinned at one end and released 30 degrees above
   the horizontal: the time and speed of its tip's pass through the bottom,
@@ -36,16 +36,14 @@ from __future__ import annotations
 
 import functools
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from apptest import ROOT, check, read_rows, run_fekap
+from fekap import dynamics as dc  # the bottom pass of a run's points.csv
 
-sys.path.insert(0, str(ROOT / "scripts"))
-import dynamics_checks as dc  # noqa: E402  (the bottom pass of a run's points.csv)
+from apptest import ROOT, check, read_rows, run_fekap
 
 G = 9.81
 #: The time steps of each order study.
@@ -58,7 +56,7 @@ LEAST_ORDER = 1.8
 #: where their errors at dt 1.25e-4 are 1e-8 and 3e-9 m.
 RIGID_EA = 1e11
 
-OUT: Path
+OUT: Path = None
 
 
 def section(ea: float, rho: str = "") -> str:
@@ -127,7 +125,7 @@ def spring_pendulum_bottom(k: float, m: float = 1.0, length: float = 1.0, h: flo
     """The first pass through x = 0 of a point mass m on a massless spring
     (stiffness k, rest length `length`) pinned at the origin, released at rest
     from (length, 0) under gravity: RK4 at step h, the crossing by the cubic
-    Hermite interpolant of the step around it (as dynamics_checks.bottom_pass)."""
+    Hermite interpolant of the step around it (as fekap.dynamics.bottom_pass)."""
 
     def rate(s):
         x, y, vx, vy = s
@@ -157,11 +155,11 @@ def spring_pendulum_bottom(k: float, m: float = 1.0, length: float = 1.0, h: flo
 
 def bottom_pass(outdir: Path, point: str = "B") -> tuple[float, float]:
     """Time and speed of the point's first pass through x = 0 (from x > 0): the time
-    as dynamics_checks.bottom_pass finds it (the cubic Hermite interpolant of x from
+    as fekap.dynamics.bottom_pass finds it (the cubic Hermite interpolant of x from
     the positions and velocities of the two steps around it), the speed from the
     quadratic interpolants of vx and vy through the three steps nearest to it (error
     O(h^3); velocities alone, since energy-momentum's accelerations are its steps'
-    mean ones). dynamics_checks interpolates the speed linearly, which at the
+    mean ones). fekap.dynamics interpolates the speed linearly, which at the
     bottom, where the speed is largest, is off by up to h^2 |speed''| / 8 (3e-7
     relative at dt 5e-4): of the size of the integrators' errors, with its own sign."""
     t_pass, _ = dc.bottom_pass(outdir, point)

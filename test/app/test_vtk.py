@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from apptest import ROOT, check, read_rows, run_fekap  # noqa: E402
+from apptest import ROOT, check, read_rows, run_fekap
 
-OUT: Path  # a fresh scratch directory for each run, set by conftest.py
+OUT: Path = None  # a fresh scratch directory for each run, set by conftest.py
 
 
 def vtk_deck(deck: str, name: str, *replace: tuple[str, str], extra: str = "") -> Path:
@@ -190,7 +190,7 @@ class Run:
             check([n.decode() for n in names] == self.node_names[:nnode] and nnode >= 2,
                   f"{file}: node_names {names[:4]}... are not the first points of points.csv")
 
-    def check_all(self) -> "Run":
+    def check_all(self) -> Run:
         self.check_files()
         self.check_fields()
         self.check_meshio()

@@ -11,11 +11,9 @@ when the run is killed.
 from __future__ import annotations
 
 import csv
-import os
 import shutil
 import signal
 import subprocess
-import sys
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -23,8 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from apptest import ROOT, fekap_binary  # noqa: E402
+from apptest import ROOT, fekap_binary
 
 vtk = pytest.importorskip("vtk", reason="the vtk package (scripts/setup --test installs it into build/venv)")
 

@@ -193,8 +193,8 @@ contains
       subroutine check_nodes_used()
          logical, allocatable :: used(:)
          integer :: k
-         ! One pass over the links (a search of every link for each node was
-         ! quadratic: 10 s for a chain of 100,000 links).
+         ! One pass over the links: a search of every link for each node would
+         ! be quadratic in the deck's size.
          allocate (used(size(model%nodes)), source=.false.)
          do k = 1, size(model%links)
             used(model%links(k)%node) = .true.

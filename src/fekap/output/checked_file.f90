@@ -1,8 +1,8 @@
 !> Writes that are checked: a file counts as written when its length on disk
 !> equals the position its unit reached. gfortran's I/O library loses a
 !> failed write(2) without a word (on a full file system a write statement, a
-!> flush and a close all report success, and the file simply ends short:
-!> measured with gfortran 12 on a full tmpfs). A file that came
+!> flush and a close all report success, and the file simply ends short, as
+!> test/app/test_full_disk_rows.py shows on a full file system). A file that came
 !> out short is cut back to the length last verified (whole lines: the
 !> writers hand over whole lines only), and the error names the file and
 !> the operating system's reason, found by appending one byte with write(2).

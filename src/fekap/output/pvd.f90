@@ -2,8 +2,8 @@
 !> with its time. Its lines are formatted once, as each .vtu is written, and
 !> held in memory; the run writes the file whole to a temporary name and
 !> renames it over the collection (fekap_driver_run), so that it is never seen cut
-!> short, not even after a SIGKILL. Rewriting it after every step made a run quadratic in its steps
-!> (16,000 steps: 107 s, of which 0.19 s analysis); it is rewritten only when
+!> short, not even after a SIGKILL. Rewriting it after every step would make a run quadratic in its steps
+!> (docs/performance.md); it is rewritten only when
 !> it has grown by an eighth since the last write (pvd_due) and at the end,
 !> so that all the rewrites together write at most about nine times its
 !> final size: linear in the steps.

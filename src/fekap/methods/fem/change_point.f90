@@ -20,11 +20,10 @@ module fekap_fem_change_point
 
    !> A tangent whose reciprocal condition number is below change_drop times
    !> the largest of the run's accepted configurations is near singular.
-   !> Measured at the predictors (docs/hard-cases.md): the A02 chains' steps
-   !> landing on a change point from 1e-23 (dt = 0.01) to 1.5e-5 (dt = 1/12)
-   !> of the run's best, every other step of the A02 grid and of the decks
-   !> at 8e-3 or more (lambda_min of K goes like the square of the distance
-   !> to the change point).
+   !> The threshold lies in the wide gap that docs/hard-cases.md measured at
+   !> the predictors between the steps landing on a change point and every
+   !> other step (lambda_min of K goes like the square of the distance to the
+   !> change point, so the gap is wide).
    real(dp), parameter, public :: change_drop = 1.0e-4_dp
    !> A filled row whose tangent's reciprocal condition number is below
    !> rates_drop times the run's best is singular: its rates are left out.
@@ -35,8 +34,8 @@ module fekap_fem_change_point
    !> best: the square of the 1e-3 that the study found on B, since lambda_min
    !> of K goes like sigma_min(B)**2. Below it (at and next to a change point)
    !> the response's size and signs are arbitrary. Smaller than change_drop:
-   !> the double crank at dt = 2e-4 has 2e-5 one step from its collinear
-   !> configuration, where the response is still right.
+   !> one step from a collinear configuration the response is still right
+   !> though the step is near singular (docs/hard-cases.md, the double crank).
    real(dp), parameter, public :: response_drop = 1.0e-6_dp
    !> Verdicts of change_verdict.
    integer, parameter, public :: change_regular = 0, change_near_singular = 1

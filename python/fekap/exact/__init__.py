@@ -1,0 +1,1 @@
+"""Exact and independent solutions that the tests and the studies compare FEKAP with."""
