@@ -211,11 +211,11 @@ module fekap_model
       !> frequency rho_inf in [0, 1] (1: the trapezoidal rule, no numerical damping).
       integer :: integrator = integrator_generalized_alpha
       real(dp) :: rho_inf = default_rho_inf(integrator_generalized_alpha)
-      !> Dynamics: the start unstrained with M a0 = -R (ANALysis start unstrained,
-      !> the default for now), or on the slow manifold (start consistent: the
-      !> rigid-link accelerations and the deflection that carries their forces,
-      !> docs/dynamics.md).
-      logical :: start_unstrained = .true.
+      !> Dynamics: the start on the slow manifold (ANALysis start consistent, the
+      !> default: the rigid-link accelerations and the deflection that carries
+      !> their forces, docs/dynamics.md), or unstrained with M a0 = -R (start
+      !> unstrained).
+      logical :: start_unstrained = .false.
       !> Where an energy-momentum integrator line is (for the errors of what it does not cover).
       type(source_loc_type) :: integrator_loc
       !> A spatial mechanism (ANALysis `type kinematics spatial`): the model's

@@ -42,6 +42,15 @@ module fekap_dynamics_consistent_start
    !> Passes of the linear solution, each on the residual the last one left
    !> (its terms of order delta^2): one more reaches round-off with stiff links.
    integer, parameter :: max_passes = 4
+   !> The start is used when its residual is below this fraction of the forces
+   !> in play (weights, loads, inertia): its deflection is linear in the
+   !> links' compliance, so a larger residual means links too flexible for it
+   !> (their deflection is not small against their length), and the start
+   !> falls back to the unstrained one.
+   real(dp), parameter :: usable_residual = 1.0e-2_dp
+   !> The residual's round-off: this many epsilons of the largest stiffness
+   !> times the largest coordinate, times sqrt(n) (as the Newton's floor).
+   real(dp), parameter :: round_off_factor = 10.0_dp
 
    !> What the start did: the iterations (relax) of the accelerations and of
    !> the deflection over its passes, whether all converged, the largest
@@ -50,6 +59,9 @@ module fekap_dynamics_consistent_start
    type :: start_report_type
       integer :: iterations_a = 0, iterations_delta = 0, passes = 0
       logical :: converged = .true.
+      !> False when the residual is above usable_residual of the forces (and
+      !> above its round-off): q and acc are then left as they came in.
+      logical :: usable = .true.
       real(dp) :: deflection = 0, residual = 0
    end type start_report_type
 
@@ -57,7 +69,10 @@ contains
 
    !> The consistent start at (q, v, t): q's free dofs become q_r + delta, acc's
    !> the rigid-link accelerations a (acc holds the drives' second rates on
-   !> theirs), system%r the residual at (q, v, acc) (the reactions).
+   !> theirs), system%r the residual at (q, v, acc) (the reactions). Each pass
+   !> is kept only if it lowers the residual; a start left above
+   !> usable_residual of the forces in play is not usable (report%usable):
+   !> q's free dofs are then q_r again, for the unstrained start.
    subroutine consistent_start(dyn, system, mesh, q, v, acc, t, seg, counts, report, error)
       type(dynamic_system_type), intent(inout) :: dyn
       type(linear_system_type), intent(inout) :: system
@@ -71,7 +86,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: kband(:, :), mband(:, :), f(:), c(:), a(:), delta(:), force(:), work(:), q0(:), &
          & da(:), ddelta(:)
-      real(dp) :: mu, kmax, mmax, fscale, last
+      real(dp), allocatable :: best_a(:), best_delta(:)
+      real(dp) :: mu, kmax, mmax, fscale, best, now, forces, round_off
       integer :: n, k, e, j, info, pass, iterations
       n = mesh%nfree
       if (n == 0) return
@@ -123,8 +139,14 @@ contains
          return
       end if
       fscale = max(maxval(abs(f)), mu*maxval(abs(c)))
+      ! The forces in play: f (weights, loads, the drives' inertia) and M a (below).
+      forces = maxval(abs(f))
+      round_off = round_off_factor*epsilon(1.0_dp)*kmax*maxval(abs(q0))*sqrt(real(n, dp))
       a = 0
       delta = 0
+      best = huge(1.0_dp)
+      best_a = a
+      best_delta = delta
       report%converged = .true.
       do pass = 1, max_passes
          ! The accelerations: K a = -c from A^-1 (f - mu c).
@@ -140,10 +162,8 @@ contains
          report%converged = report%converged .and. iterations <= relax_max_iterations
          a = a + da
          delta = delta + ddelta
-         do k = 1, n
-            q(mesh%eq_dof(k)) = q0(k) + delta(k)
-            acc(mesh%eq_dof(k)) = a(k)
-         end do
+         if (pass == 1) forces = max(forces, maxval(abs(band_times(mband, mesh%kd, a))))
+         call place(a, delta)
          ! The residual at (q_r + delta, v, a): the terms of order delta^2 and
          ! the damping's change with delta, corrected by the next pass (c = 0:
          ! the strains' second rates stay those of the first).
@@ -152,17 +172,70 @@ contains
             f(k) = -system%r(mesh%eq_dof(k))
          end do
          c = 0
+         now = maxval(abs(f))
+         ! A pass that does not lower the residual is not kept: the linear
+         ! solution's round-off, or links too flexible for it (then the passes diverge).
+         if (now >= best) then
+            a = best_a
+            delta = best_delta
+            call place(a, delta)
+            call assemble_dynamics(dyn, system, mesh, q, v, acc, t, seg, counts)
+            exit
+         end if
          report%passes = pass
-         last = report%residual
-         report%residual = 0
-         if (fscale > 0) report%residual = maxval(abs(f))/fscale
-         ! Done at the tolerance, or at the residual's round-off (it stops falling).
-         if (report%residual <= relax_tolerance*10 .or. (pass > 1 .and. report%residual > 0.5_dp*last)) exit
+         best = now
+         best_a = a
+         best_delta = delta
+         ! Done at the tolerance, or at the residual's round-off (it stops falling fast).
+         if (now <= relax_tolerance*10*max(forces, fscale)) exit
       end do
       report%deflection = maxval(abs(delta))
+      report%residual = 0
+      if (max(forces, round_off) > 0) report%residual = best/max(forces, round_off)
+      report%usable = best <= max(usable_residual*forces, round_off)
+      if (.not. report%usable) then
+         do k = 1, n
+            q(mesh%eq_dof(k)) = q0(k)
+         end do
+         return
+      end if
+      ! The residual left above round-off (the O(delta^2) terms the passes did
+      ! not remove) is taken up by the accelerations of the dofs with mass,
+      ! M da = f, so that the equations of motion hold at the start on them
+      ! (the integrators' recursion starts from them); a dof without mass
+      ! keeps its rigid-link acceleration (its equation is static). A residual
+      ! at round-off is noise: divided by the masses it would only move a.
+      if (best <= round_off) return
+      system%kff%a = mband
+      do k = 1, n
+         if (mband(mesh%kd + 1, k) <= 0) system%kff%a(mesh%kd + 1, k) = 1
+      end do
+      call factor_system(system, info, counts)
+      if (info /= 0) then
+         call analysis_error(error, 'the mass matrix is singular at the start: consistent accelerations '// &
+            & 'cannot be found (give every moving dof a mass)')
+         return
+      end if
+      do k = 1, n
+         f(k) = -system%r(mesh%eq_dof(k))
+         if (mband(mesh%kd + 1, k) <= 0) f(k) = 0
+      end do
+      a = a + precondition(f)
+      call place(a, delta)
+      call assemble_dynamics(dyn, system, mesh, q, v, acc, t, seg, counts)
       ! system%r: the start's residual with its accelerations, the reactions there.
 
    contains
+
+      !> q's free dofs q_r + delta, acc's the accelerations a.
+      subroutine place(a, delta)
+         real(dp), intent(in) :: a(:), delta(:)
+         integer :: i
+         do i = 1, n
+            q(mesh%eq_dof(i)) = q0(i) + delta(i)
+            acc(mesh%eq_dof(i)) = a(i)
+         end do
+      end subroutine place
 
       !> A^-1 b with the factor in the system.
       function precondition(b) result(x)

@@ -43,6 +43,7 @@ contains
                & self%counts, report, error)
             state%r = self%system%r
             call describe_start(self, report)
+            if (.not. allocated(error) .and. .not. report%usable) call start_accelerations(self, error)
          end if
          if (allocated(error)) return
          state%a = state%acc
@@ -73,6 +74,10 @@ contains
          & report%deflection, '; ', report%passes, ' passes of ', report%iterations_a, ' + ', report%iterations_delta, &
          & ' iterations; residual ', report%residual, ' of the forces)'
       if (.not. report%converged) line = trim(line)//': the iterations stopped short'
+      if (.not. report%usable) then
+         write (line, '(a,es9.2,a)') 'unstrained, accelerations of M a = -R: the consistent start left ', &
+            & report%residual, ' of the forces unbalanced (links too flexible for its linear deflection)'
+      end if
       self%start_state = line
    end subroutine describe_start
 
