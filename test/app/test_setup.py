@@ -139,7 +139,6 @@ class Refuse(importlib.abc.MetaPathFinder):
         return None
 sys.meta_path.insert(0, Refuse())
 sys.argv = ['plot.py', {str(out)!r}]
-sys.path.insert(0, {str(ROOT / 'scripts')!r})
 runpy.run_path({str(ROOT / 'scripts' / 'plot.py')!r}, run_name='__main__')
 """
         plotted = subprocess.run([str(ROOT / "scripts" / "python"), "-c", code], capture_output=True, text=True,
