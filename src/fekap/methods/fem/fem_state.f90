@@ -182,7 +182,7 @@ contains
    !> (The K form: kinetostatics, the only user, never takes the square-root form.)
    subroutine core_solve_at_accepted(self, rhs)
       class(fem_core_type), intent(inout) :: self
-      real(dp), intent(inout) :: rhs(:, :)
+      real(dp), contiguous, intent(inout) :: rhs(:, :)
       call self%system%kff%solve(rhs)
    end subroutine core_solve_at_accepted
 
