@@ -11,7 +11,7 @@
 !> square (docs/theory.md, "Rates at scale"). The rows are put in band
 !> order (sorted by their least equation in the mesh's equation order), so
 !> that B_f is a band matrix with kl sub- and ku superdiagonals; LAPACK's
-!> dgbtrf/dgbtrs factor and solve it.
+!> dgbtrf factors it; its solves are dgbtrs's, in loops.
 !>
 !> Two forms of B: at the strains of an iterate (the exact Jacobian of the
 !> strains, for Newton), and stress-free (the strains set to zero: it then
@@ -27,7 +27,7 @@ module fekap_assembly_strain_rate
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
    use fekap_assembly_assemble, only: gather
-   use fekap_linalg_lapack, only: band_lu_factor, dgbtrs, dlacn2
+   use fekap_linalg_lapack, only: band_lu_factor, band_lu_blocked, dlacn2
    implicit none
    private
 
@@ -41,6 +41,8 @@ module fekap_assembly_strain_rate
       logical :: applies = .false.
       !> Equations (rows = columns), sub- and superdiagonals of B_f.
       integer :: n = 0, kl = 0, ku = 0
+      !> Whether dgbtrf takes its blocked code for B_f's shape (band_lu_blocked).
+      logical :: lu_blocked = .true.
       !> (3, nelem): band row of each element's strains Gamma1, Gamma2, kappa L.
       integer, allocatable :: element_row(:, :)
       !> (nslide): band row of each slideline's gap.
@@ -148,6 +150,7 @@ contains
       self%slide_row = order(3*nelem + 1:)
       allocate (self%ab(2*self%kl + self%ku + 1, nrow), self%bd(nrow, mesh%ndriven), source=0.0_dp)
       allocate (self%ipiv(nrow), source=0)
+      self%lu_blocked = band_lu_blocked(nrow, self%kl, self%ku)
       allocate (self%column_max(nrow), source=0.0_dp)
       allocate (self%section(2, nelem), self%slide_ns(6, nslide), self%slide_ts(6, nslide), &
          & self%slide_nm(3, nslide), source=0.0_dp)
@@ -279,7 +282,7 @@ contains
          self%column_max(j) = maxval(abs(self%ab(:, j)))
          self%norm1 = max(self%norm1, sum(abs(self%ab(:, j))))
       end do
-      call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
+      call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info, self%lu_blocked)
       self%factored = info == 0
       self%pivot_ratio = 0
       if (.not. self%factored) return
@@ -304,7 +307,7 @@ contains
       type(strain_rate_type), intent(inout) :: self
       real(dp), intent(out) :: rcond
       real(dp) :: est
-      integer :: kase, isave(3), info
+      integer :: kase, isave(3)
       rcond = 0
       if (.not. self%factored .or. .not. self%norm1 > 0) return
       if (.not. allocated(self%rcond_work)) allocate (self%rcond_work(2*self%n), self%rcond_iwork(self%n))
@@ -317,7 +320,7 @@ contains
             if (kase == 1) then
                call band_lu_solve_loops(self%ab, self%kl, self%ku, self%ipiv, x)
             else
-               call dgbtrs('T', self%n, self%kl, self%ku, 1, self%ab, size(self%ab, 1), self%ipiv, x, self%n, info)
+               call band_lu_solve_transposed_loops(self%ab, self%kl, self%ku, self%ipiv, x)
             end if
          end do
       end associate
@@ -363,6 +366,44 @@ contains
          end do
       end do
    end subroutine band_lu_solve_loops
+
+   !> Solve with the transpose of the factor of dgbtrf as dgbtrs ('T') does,
+   !> the same operations in the same order (back substitution with U^T as
+   !> dtbsv, then L's multipliers as dgemv's dot products, each followed by
+   !> its row interchange), in loops, as band_lu_solve_loops.
+   pure subroutine band_lu_solve_transposed_loops(ab, kl, ku, ipiv, b)
+      real(dp), intent(in) :: ab(:, :)
+      integer, intent(in) :: kl, ku, ipiv(:)
+      real(dp), intent(inout) :: b(:)
+      real(dp) :: temp
+      integer :: n, kv, j, l, i, lm
+      n = size(b)
+      kv = kl + ku
+      do j = 1, n
+         temp = b(j)
+         l = kv + 1 - j
+         do i = max(1, j - kv), j - 1
+            temp = temp - ab(l + i, j)*b(i)
+         end do
+         b(j) = temp/ab(kv + 1, j)
+      end do
+      do j = n - 1, 1, -1
+         lm = min(kl, n - j)
+         if (lm > 0) then
+            temp = 0
+            do i = 1, lm
+               temp = temp + b(j + i)*ab(kv + 1 + i, j)
+            end do
+            b(j) = b(j) + (-1.0_dp)*temp
+         end if
+         l = ipiv(j)
+         if (l /= j) then
+            temp = b(l)
+            b(l) = b(j)
+            b(j) = temp
+         end if
+      end do
+   end subroutine band_lu_solve_transposed_loops
 
    !> r = B v by band rows, the strain and gap rates of the velocities v over
    !> all dofs (zero on fixed dofs), with the stress-free B at the section

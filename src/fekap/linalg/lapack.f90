@@ -8,7 +8,7 @@ module fekap_linalg_lapack
 
    public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dgeqp3, dlacn2
    public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
-   public :: band_lu_factor, band_lu_solve
+   public :: band_lu_factor, band_lu_solve, band_lu_blocked
 
    interface
       !> Cholesky factorisation of a symmetric positive definite band matrix.
@@ -41,6 +41,23 @@ module fekap_linalg_lapack
          integer, intent(out) :: ipiv(*)
          integer, intent(out) :: info
       end subroutine dgbtrf
+
+      !> dgbtrf's unblocked code (the one it calls for narrow bands).
+      pure subroutine dgbtf2(m, n, kl, ku, ab, ldab, ipiv, info)
+         import :: dp
+         implicit none
+         integer, intent(in) :: m, n, kl, ku, ldab
+         real(dp), intent(inout) :: ab(ldab, *)
+         integer, intent(out) :: ipiv(*)
+         integer, intent(out) :: info
+      end subroutine dgbtf2
+
+      !> LAPACK's tuning parameters (ispec 1: the block size of routine `name`).
+      integer function ilaenv(ispec, name, opts, n1, n2, n3, n4)
+         implicit none
+         integer, intent(in) :: ispec, n1, n2, n3, n4
+         character(*), intent(in) :: name, opts
+      end function ilaenv
 
       !> Solve with the factor of dgbtrf.
       pure subroutine dgbtrs(trans, n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
@@ -130,14 +147,37 @@ contains
    !> (dgbtrf): kl subdiagonals, ku superdiagonals, A(i, j) at
    !> ab(kl + ku + 1 + i - j, j) with rows 1:kl of ab free for the fill.
    !> info > 0: U(info, info) is exactly zero.
-   subroutine band_lu_factor(ab, kl, ku, ipiv, info)
+   !> With `blocked` (band_lu_blocked of the matrix's shape, found once) the
+   !> choice dgbtrf makes in every call is made by the caller: .false. calls
+   !> its unblocked code dgbtf2 directly (the same arithmetic, without
+   !> dgbtrf's query of ilaenv, which costs as much as the factorisation of
+   !> a narrow band).
+   subroutine band_lu_factor(ab, kl, ku, ipiv, info, blocked)
       !> (2 kl + ku + 1, n): the matrix on entry, its factors on return.
       real(dp), contiguous, intent(inout) :: ab(:, :)
       integer, intent(in) :: kl, ku
       integer, contiguous, intent(out) :: ipiv(:)
       integer, intent(out) :: info
+      logical, intent(in), optional :: blocked
+      if (present(blocked)) then
+         if (.not. blocked) then
+            call dgbtf2(size(ab, 2), size(ab, 2), kl, ku, ab, size(ab, 1), ipiv, info)
+            return
+         end if
+      end if
       call dgbtrf(size(ab, 2), size(ab, 2), kl, ku, ab, size(ab, 1), ipiv, info)
    end subroutine band_lu_factor
+
+   !> Whether dgbtrf factors an n x n band matrix of kl sub- and ku
+   !> superdiagonals with its blocked code: its own test, the block size
+   !> ilaenv gives (at most dgbtrf's nbmax, 64) above 1 and at most kl.
+   logical function band_lu_blocked(n, kl, ku) result(blocked)
+      integer, intent(in) :: n, kl, ku
+      integer, parameter :: nbmax = 64
+      integer :: nb
+      nb = min(ilaenv(1, 'DGBTRF', ' ', n, n, kl, ku), nbmax)
+      blocked = .not. (nb <= 1 .or. nb > kl)
+   end function band_lu_blocked
 
    !> Solve A x = b with the factors from band_lu_factor (dgbtrs); b becomes x.
    subroutine band_lu_solve(ab, kl, ku, ipiv, b, info)

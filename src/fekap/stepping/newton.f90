@@ -56,6 +56,13 @@ module fekap_stepping_newton
       real(dp) :: divergence = huge(1.0_dp)
       !> test_at_iterate, test_solved_from or test_relative_first.
       integer :: test = test_at_iterate
+      !> The force scale is the first iterate's residual, not force_scale (the
+      !> FEM's `previous` predictor: the residual of the drive increment alone
+      !> is the residual at the last configuration, known at the first assembly).
+      logical :: scale_by_first = .false.
+      !> test_solved_from: whether a first iterate whose residual is at the
+      !> floor is accepted without a correction (the FEM corrects it once).
+      logical :: accept_start_at_floor = .true.
    end type newton_contract_type
 
    !> What a solve did.
@@ -87,6 +94,10 @@ module fekap_stepping_newton
       !> current factor, apply it to the iterate, and return its length (an
       !> error: no correction, the solve stops with it).
       procedure(correct_interface), deferred :: correct
+      !> After a correction that the contract did not stop at, a method's
+      !> own stop (stop_converged or stop_at_floor; 0: go on), as the FEM's
+      !> on an estimate of the next correction. None by default.
+      procedure :: stop_test => system_stop_test
    end type newton_system_type
 
    abstract interface
@@ -252,9 +263,11 @@ contains
             exit
          end if
          if (contract%test == test_solved_from .and. trusted .and. correction <= contract%length) then
-            report%stopped = accepted(contract, r)
+            report%stopped = accepted(contract, r, scale_of(contract, report))
             if (report%stopped /= 0) exit
          end if
+         report%stopped = system%stop_test(report)
+         if (report%stopped /= 0) exit
       end do
       if (.not. report%converged()) call analysis_error(error, stop_text(report))
    contains
@@ -271,7 +284,7 @@ contains
             end if
          case (test_solved_from)
             ! An iterate that starts converged (at round-off): no correction.
-            if (report%iterations == 0 .and. r <= contract%floor) then
+            if (report%iterations == 0 .and. r <= contract%floor .and. contract%accept_start_at_floor) then
                report%stopped = stop_converged
                return
             end if
@@ -281,7 +294,7 @@ contains
                return
             end if
             if (report%iterations > 0 .and. trusted .and. report%last_correction <= contract%length) then
-               report%stopped = accepted(contract, r)
+               report%stopped = accepted(contract, r, scale_of(contract, report))
                if (report%stopped /= 0) return
             end if
          end select
@@ -292,16 +305,35 @@ contains
    !> The residual test of an iterate whose correction passed the length
    !> test: converged below the tolerance of the forces in play, else at the
    !> round-off floor as the last resort, else not (0).
-   pure integer function accepted(contract, r) result(stopped)
+   pure integer function accepted(contract, r, scale) result(stopped)
       type(newton_contract_type), intent(in) :: contract
-      real(dp), intent(in) :: r
+      !> The residual, and the force scale (scale_of).
+      real(dp), intent(in) :: r, scale
       stopped = 0
-      if (r <= contract%tolerance*contract%force_scale) then
+      if (r <= contract%tolerance*scale) then
          stopped = stop_converged
       else if (r <= contract%floor) then
          stopped = stop_at_floor
       end if
    end function accepted
+
+   !> The contract's force scale in a solve (see scale_by_first).
+   pure real(dp) function scale_of(contract, report) result(scale)
+      type(newton_contract_type), intent(in) :: contract
+      type(newton_report_type), intent(in) :: report
+      if (contract%scale_by_first) then
+         scale = report%first_residual
+      else
+         scale = contract%force_scale
+      end if
+   end function scale_of
+
+   !> No stop of the method's own.
+   integer function system_stop_test(self, report) result(stopped)
+      class(newton_system_type), intent(inout) :: self
+      type(newton_report_type), intent(in) :: report
+      stopped = 0
+   end function system_stop_test
 
    !> Whether the solve converged (at the tolerance, or at the round-off floor).
    pure logical function report_converged(self)

@@ -150,13 +150,10 @@ contains
    !> increment_residual (the scale) or at the floor, and the correction below
    !> the length tolerance; `paper`, the residual at the iterate below tol
    !> times the first. Iterations are counted as corrections.
-   !> The FEM's Newton (fem.f90's solve_step) shares this loop's parts (the
-   !> convergence test, divergence_length, the step loop advance_by_cuts) but
-   !> not yet the driver: it chooses its tangent each iteration (material, full, or
-   !> the square-root form's), accepts the predictor, stops on an estimate of
-   !> the next correction, relocates slidelines and detects a round-off stall,
-   !> none of which these methods' exactly determined equations need; and its
-   !> messages keep their formatted-write text (fem_state's no_convergence_error).
+   !> The FEM's Newton (fem_newton.f90) uses the same driver and contract and
+   !> adds what these methods' exactly determined equations do not need: its
+   !> tangent choice, the acceptance at the predictor, the estimated stop, the
+   !> round-off stall, slideline relocation.
    subroutine newton_positions(self, t, increment_residual, iterations, error)
       class(classical_stepper_type), target, intent(inout) :: self
       real(dp), intent(in) :: t, increment_residual

@@ -11,11 +11,13 @@
 !> accepted configuration and the square-root form of exactly constrained
 !> models (fem_factor; docs/theory.md, "Rates at scale"), the predictor
 !> (fem_predict), the checks and rates of a converged configuration
-!> (fem_converged), change points (fem_fill), the step loop shared with the
-!> classical methods (step_control's advance_by_cuts). What stays here is the
-!> Newton iteration of a step (solve_step), the try of a step with the
-!> step-doubling verification that the branch check asks for, and the step
-!> over a change point: they call one another recursively.
+!> (fem_converged), change points (fem_fill), the Newton workspace of a step
+!> for the shared driver newton_solve (fem_newton), the step loop shared
+!> with the other methods (step_control's advance_by_cuts). What stays here
+!> wraps them: the solve of a step (solve_step: Newton, slideline
+!> relocation, the check of an estimated stop, acceptance), the try of a
+!> step with the step-doubling verification that the branch check asks
+!> for, and the step over a change point: they call one another recursively.
 module fekap_fem
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
@@ -25,33 +27,27 @@ module fekap_fem
    use fekap_assembly_tracking, only: relocate
    use fekap_stepping_stepper, only: stepper_type, clock_seconds, phase_timed
    use fekap_fem_setup, only: start_configuration
-   use fekap_fem_convergence, only: is_converged, converged_by_estimate, estimate_margin, divergence_length
-   use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, factor_system, system_pivot, &
-      & residual_norm, newton_correction
-   use fekap_stepping_predictor, only: predictor_margin
-   use fekap_fem_rates, only: near_singular_drop
+   use fekap_fem_convergence, only: estimate_margin
+   use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, factor_system, residual_norm, &
+      & newton_correction
+   use fekap_stepping_newton, only: newton_contract_type, newton_report_type, always_refactor_type, newton_solve, &
+      & stop_spent, stop_diverged, stop_singular
    use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
       & try_ended
-   use fekap_stepping_interrupt, only: interrupt_error
    use fekap_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
       & prepend_cuts_note, model_distance, no_convergence_error
-   use fekap_fem_factor, only: refactor_at_accepted, newton_assembly, root_correction, factor_root, &
-      & take_correction, restore_state
-   use fekap_fem_predict, only: predict, guard_extrapolation, drive_increment_residual, record_velocity
+   use fekap_fem_factor, only: refactor_at_accepted, root_correction, factor_root, take_correction, restore_state
+   use fekap_fem_predict, only: predict, drive_increment_residual, record_velocity
    use fekap_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
-   use fekap_fem_fill, only: check_predictor, interpolate_fill, finish_fill, filled_state, next_output_time
+   use fekap_fem_fill, only: interpolate_fill, finish_fill, filled_state, next_output_time
+   use fekap_fem_newton, only: fem_newton_type, fem_contract
+   use fekap_fem_branch, only: branch_accept, branch_verify, branch_unverifiable
    use fekap_fem_determinacy, only: check_free_motion
    implicit none
    private
 
    public :: fem_stepper_type, new_fem_stepper, fem_state_type
 
-   !> Newton's tangent leaves out the geometric stiffness at Gauss points
-   !> strained less than this (see solve_step).
-   real(dp), parameter :: geometric_strain = 3.0e-3_dp
-   !> Iterations in a row with the residual below its floor after which
-   !> Newton has stalled at round-off.
-   integer, parameter :: stall_iterations = 3
    !> A verifying pair of half steps contradicts its step when their results
    !> differ by more than verify_agreement model sizes (or the admissible
    !> strain, if larger); see verify_step.
@@ -82,6 +78,7 @@ contains
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: clock
+      integer :: verdict
       clock = clock_seconds()
       self%system%timing = .true.
       call start_configuration(self, self%state%t, self%state%q, self%seg, error)
@@ -96,7 +93,7 @@ contains
       result%residual = residual_norm(self%system, self%mesh)
       if (self%loaded .and. result%residual > self%conv%residual_floor) then
          ! Loads at t_start /= 0: find the loaded configuration first.
-         call solve_step(self, self%state%t, result%iterations, result%residual, error)
+         call solve_step(self, self%state%t, 0, result%iterations, result%residual, verdict, error)
          if (allocated(error)) return
       else
          call accept(self, self%state%t, self%state%q)
@@ -269,29 +266,26 @@ contains
       type(error_type), allocatable, intent(out) :: reason
       character(:), allocatable :: rejection
       real(dp) :: residual
-      integer :: it
+      integer :: it, verdict
+      logical :: incomplete
       iterations = 0
       outcome = try_ended
       select type (self => stepper)
       type is (fem_stepper_type)
-         self%verify_depth = depth
-         call solve_step(self, t, iterations, residual, reason)
+         call solve_step(self, t, depth, iterations, residual, verdict, reason)
          ! Only a run's step, at its first try, checks for a change point.
          self%detect_change = .false.
          if (self%change_found) return
-         if (self%verify_pending) then
+         incomplete = verdict == branch_unverifiable
+         if (verdict == branch_verify .and. .not. allocated(reason)) then
             ! The branch-jump check asked for the step to be confirmed by two half steps.
-            self%verify_pending = .false.
-            if (.not. allocated(reason)) then
-               call verify_step(self, t, depth, it, residual, rejection, reason)
-               iterations = iterations + it
-            end if
+            call verify_step(self, t, depth, it, residual, rejection, incomplete, reason)
+            iterations = iterations + it
          end if
          if (allocated(reason)) then
             ! A verification that could not be completed ends every level above
             ! it at once (cutting there would repeat it); the run's step is cut.
-            if (self%verify_failed .and. depth > 0) return
-            self%verify_failed = .false.
+            if (incomplete .and. depth > 0) return
             outcome = try_failed
             return
          end if
@@ -318,21 +312,36 @@ contains
    end subroutine fem_between
 
    !> Predict and solve P(q) = 0 at time t; accept the configuration if it is
-   !> admissible. Leaves the accepted state untouched on failure.
-   subroutine solve_step(self, t, iterations, residual, error)
-      type(fem_stepper_type), intent(inout) :: self
+   !> admissible. Leaves the accepted state untouched on failure. Newton is
+   !> the shared driver's (newton_solve on the step's fekap_fem_newton
+   !> workspace); around it: if a slave has slid past its master segment, it
+   !> moves on to the neighbouring segment and Newton goes on from there; then,
+   !> if Newton stopped on its estimate, the estimate is checked (see below).
+   subroutine solve_step(self, t, depth, iterations, residual, verdict, error)
+      type(fem_stepper_type), target, intent(inout) :: self
       real(dp), intent(in) :: t
+      !> The halvings of the step (0: a step of the run), for its verification.
+      integer, intent(in) :: depth
       integer, intent(out) :: iterations
       real(dp), intent(out) :: residual
+      !> The branch check's verdict on an accepted step (branch_accept when
+      !> not checked; branch_verify: verify it by half steps).
+      integer, intent(out) :: verdict
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: r0, increment_residual, correction, previous, kg_above, stalled_correction, pivot
-      integer :: i, info, pass, at_floor
-      logical :: moved, by_estimate, at_predictor, root_solved
+      type(fem_newton_type) :: newton
+      type(newton_contract_type) :: contract
+      type(always_refactor_type) :: full
+      type(newton_report_type) :: report
+      real(dp) :: increment_residual, correction
+      integer :: info, pass
+      logical :: moved, root_solved, guard
       character(len=300) :: msg
-      associate (mesh => self%mesh, qt => self%qt, eqd => self%mesh%eq_dof, system => self%system)
+      iterations = 0
+      verdict = branch_accept
+      associate (mesh => self%mesh, qt => self%qt, system => self%system)
          self%seg = self%state%seg
          self%predictor_regular = .false.
-         call predict(self, t, qt)
+         call predict(self, t, qt, guard)
          ! Scale of the residual: what the drive (and load) increment alone
          ! produces from the last configuration, to first order -K_fd dq_d +
          ! dlambda f, with the free-driven block of the last tangent (at the
@@ -343,136 +352,26 @@ contains
          end if
          self%factor_current = .false.
          self%accepted_singular = .false.
-         iterations = 0
-         r0 = 0
-         previous = 0
-         at_floor = 0
-         stalled_correction = 0
-         ! Newton's tangent leaves out the geometric stiffness where the iterate
-         ! is strained less than geometric_strain. At a mechanism configuration
-         ! the stresses vanish, so near it the material tangent is the exact
-         ! tangent to first order and convergence stays quadratic (Gauss-Newton
-         ! on a zero-residual problem), while the geometric stiffness of a
-         ! predictor's small spurious strains, which can exceed the bending
-         ! stiffness of slender links, no longer bends the path of the
-         ! iteration (docs/performance.md has the iteration counts). Far from
-         ! it (large strains) the full tangent is the more robust.
-         kg_above = merge(0.0_dp, geometric_strain, self%loaded)
-         ! Newton; then, if a slave has slid past its master segment, move it on
-         ! to the neighbouring segment and iterate again from there; then, if
-         ! the iteration stopped on its estimate, check it (see below).
+         contract = fem_contract(self, increment_residual)
+         call newton%begin_step(self, t, contract, guard)
+         info = 0
          verification: do
-            by_estimate = .false.
+            newton%by_estimate = .false.
             relocations: do pass = 0, size(mesh%slides)*8
-               at_predictor = .false.
-               do i = 0, self%model%analysis%max_iter
-                  ! A signal ends the step here (a slow step would delay the stop).
-                  call interrupt_error(error)
-                  if (allocated(error)) return
-                  call newton_assembly(self, qt, t, kg_above)
-                  ! The predictor's guard, once per step: it needs the strains of this first assembly.
-                  if (self%guard_pending) then
-                     self%guard_pending = .false.
-                     if (guard_extrapolation(self, t, qt)) call newton_assembly(self, qt, t, kg_above)
-                  end if
-                  residual = residual_norm(system, mesh)
-                  if (i == 0) then
-                     r0 = residual
-                     if (self%model%analysis%predictor == predictor_previous) increment_residual = r0
-                  end if
-                  if (self%conv%mode == convergence_paper) then
-                     if (is_converged(self%conv, residual, r0, increment_residual, 0.0_dp)) exit
-                  end if
-                  if (i == self%model%analysis%max_iter) then
-                     call no_convergence_error(t, i, residual, error)
-                     return
-                  end if
-                  root_solved = .false.
-                  if (self%root_form .and. system%assembled_strain < kg_above) then
-                     call root_correction(self, qt, .false., correction, root_solved)
-                     ! B_f singular at the iterate: K's Newton step (its tangent was not assembled).
-                     if (.not. root_solved) call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
-                  end if
-                  if (.not. root_solved) call factor_system(system, info, self%counts)
-                  if (root_solved) info = 0
-                  if (i == 0 .and. self%detect_change) then
-                     ! A change point at the predictor: Newton does not iterate on a
-                     ! near-singular tangent (see step_over).
-                     call check_predictor(self, root_solved, info)
-                     if (self%change_found) return
-                  end if
-                  if (.not. root_solved .and. info > 0 .and. kg_above > 0) then
-                     ! The material tangent is singular at a stationary configuration;
-                     ! the geometric stiffness of the iterate's stresses may still
-                     ! carry Newton there (full Newton from here on in this step).
-                     kg_above = 0
-                     call assemble_system(system, mesh, qt, t, self%seg, kg_above, self%counts)
-                     residual = residual_norm(system, mesh)
-                     call factor_system(system, info, self%counts)
-                  end if
-                  if (info > 0) then
-                     write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
-                     call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
-                     return
-                  end if
-                  if (.not. root_solved) call newton_correction(system, mesh, self%dof_length, correction, self%counts)
-                  if (correction > divergence_length*self%model_length) then
-                     write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
-                     call analysis_error(error, trim(msg))
-                     return
-                  end if
-                  ! Converged where this pass starts (the predictor, or an
-                  ! iterate that a check below corrected): a first correction
-                  ! below predictor_margin times the length tolerance (at
-                  ! round-off with the default tolerance) leaves it as it is,
-                  ! and the tangent just factored, material only (every Gauss
-                  ! point strained less than kg_above), is the tangent at the
-                  ! accepted configuration: the branch-jump check and the rates
-                  ! need no assembly and factorisation of their own. Not near a
-                  ! stationary configuration: the residual there hardly sees an
-                  ! error along the near-singular direction (a predictor kept
-                  ! past collinear is then rejected by the branch-jump check).
-                  if (i == 0 .and. .not. self%loaded .and. self%conv%mode /= convergence_paper .and. &
-                     & .not. root_solved) then
-                     at_predictor = correction <= predictor_margin*self%predictor_length .and. &
-                        & system%assembled_strain < kg_above .and. &
-                        & is_converged(self%conv, residual, r0, increment_residual, correction)
-                     if (at_predictor) then
-                        call system_pivot(system, pivot)
-                        at_predictor = pivot >= near_singular_drop*self%state%reference_pivot
-                     end if
-                     if (at_predictor) exit
-                  end if
-                  call take_correction(self, qt, iterations)
-                  if (self%conv%mode /= convergence_paper) then
-                     if (is_converged(self%conv, residual, r0, increment_residual, correction)) exit
-                     by_estimate = .not. self%loaded
-                     if (by_estimate) by_estimate = converged_by_estimate(self%conv, self%model_length, &
-                        & self%newton_constant, residual, r0, increment_residual, correction, previous)
-                     if (by_estimate) exit
-                     ! Round-off: a residual at its floor for stall_iterations
-                     ! iterations gives corrections that are noise (the tangent's
-                     ! sensitivity times the round-off), so the length test cannot
-                     ! be met; the last correction is the accuracy left, reported
-                     ! in the listing.
-                     if (residual <= self%conv%residual_floor) then
-                        at_floor = at_floor + 1
-                     else
-                        at_floor = 0
-                     end if
-                     if (at_floor >= stall_iterations) then
-                        stalled_correction = correction
-                        exit
-                     end if
-                  end if
-                  previous = correction
-               end do
+               call newton%begin_pass()
+               call newton_solve(newton, contract, full, report, error)
+               iterations = newton%iterations
+               if (allocated(error)) then
+                  call newton_failure(self, t, report, error)
+                  return
+               end if
                if (size(mesh%slides) == 0) exit relocations
                call relocate(mesh, self%model, t, qt, self%seg, moved, error)
                if (allocated(error)) return
                if (.not. moved) exit relocations
             end do relocations
-            if (self%loaded .or. at_predictor) exit verification
+            residual = newton%residual
+            if (self%loaded .or. newton%at_predictor) exit verification
             ! The material tangent at the new configuration: the branch-jump
             ! check's response (and from it the predictor's velocity) and, once
             ! accepted, the rates' tangent. The last Newton factor, one correction
@@ -485,14 +384,14 @@ contains
                ! The estimate is checked by one more correction of B_f; then the
                ! factor of the stress-free B_f at qt serves as K's does below.
                root_solved = .false.
-               if (by_estimate) call root_correction(self, qt, .true., correction, root_solved)
+               if (newton%by_estimate) call root_correction(self, qt, .true., correction, root_solved)
                if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
                   call factor_root(self, qt, self%seg, info)
                   exit verification
                end if
             else
                call factor_system(system, info, self%counts)
-               if (.not. by_estimate .or. info /= 0) exit verification
+               if (.not. newton%by_estimate .or. info /= 0) exit verification
                ! A stop on the estimate is checked with this factor (one back
                ! substitution): the correction it gives must pass the estimate's own
                ! margin, or it is applied as one more Newton iteration and Newton
@@ -500,25 +399,26 @@ contains
                call newton_correction(system, mesh, self%dof_length, correction, self%counts)
                if (correction <= estimate_margin*self%conv%length) exit verification
             end if
-            call take_correction(self, qt, iterations)
+            call take_correction(self, qt, newton%iterations)
+            iterations = newton%iterations
             if (iterations >= self%model%analysis%max_iter) then
                call no_convergence_error(t, iterations, residual, error)
                return
             end if
-            previous = correction
+            newton%previous = correction
          end do verification
          if (.not. self%loaded) then
             call check_mechanism(self, t, qt, error)
             if (allocated(error)) return
-            call branch_jump(self, t, qt, info == 0, error)
+            call branch_jump(self, t, qt, info == 0, depth, verdict, error)
             if (allocated(error)) return
             self%factor_current = info == 0
             self%accepted_singular = info /= 0
          end if
          call accept(self, t, qt)
-         if (stalled_correction > 0) then
+         if (newton%stalled_correction > 0) then
             write (msg, '(a,es12.5,a,es9.2,a,es9.2,a)') 't = ', t, ': Newton stopped at the round-off floor of the '// &
-               & 'residual (', residual, '); the last correction, ', stalled_correction, &
+               & 'residual (', residual, '); the last correction, ', newton%stalled_correction, &
                & ', bounds the error of this configuration'
             self%state%note = trim(msg)
          end if
@@ -529,10 +429,37 @@ contains
       end associate
    end subroutine solve_step
 
+   !> A step's Newton that did not converge (newton_solve's error): the
+   !> FEM's messages, or no error at a change point at the predictor
+   !> (change_found: step_over takes it from there).
+   subroutine newton_failure(self, t, report, error)
+      type(fem_stepper_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      type(newton_report_type), intent(in) :: report
+      type(error_type), allocatable, intent(inout) :: error
+      character(len=300) :: msg
+      select case (report%stopped)
+      case (stop_spent)
+         deallocate (error)
+         call no_convergence_error(t, report%iterations, report%last_residual, error)
+      case (stop_diverged)
+         deallocate (error)
+         write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', report%iterations
+         call analysis_error(error, trim(msg))
+      case (stop_singular)
+         deallocate (error)
+         if (self%change_found) return
+         write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
+         call analysis_error(error, trim(msg)//' '//describe_dof(self%mesh, self%model, self%mesh%eq_dof(report%info)))
+      case default
+         ! An interrupt keeps its message.
+      end select
+   end subroutine newton_failure
+
    !> Step-doubling verification of a step to time t that the branch check
    !> found suspect (a hinged pair crossed collinear turning by more than
-   !> verify_turn): the step is accepted, the state before it is in
-   !> self%verify(depth). The same interval is solved again from that state as
+   !> verify_turn): the step is accepted, the state before it is on the
+   !> verification stack at `depth`. The same interval is solved again from that state as
    !> two half steps (advance_to one level deeper: cut if they fail, verified
    !> if suspect) and the results are compared. The state after the half
    !> steps stays: on agreement it is the same configuration to the tolerance;
@@ -541,7 +468,7 @@ contains
    !> rejected (error). A jump over a near-toggle turns the pair that flips by
    !> its distances from collinear at both ends, so it stays suspect however
    !> often it is halved, while a real crossing turns less with every halving.
-   recursive subroutine verify_step(self, t, depth, iterations, residual, rejection, error)
+   recursive subroutine verify_step(self, t, depth, iterations, residual, rejection, failed, error)
       type(fem_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       !> Verification depth of the step (0: a step of the run).
@@ -552,6 +479,9 @@ contains
       real(dp), intent(inout) :: residual
       !> Why the step was replaced by its half steps (not allocated if it was confirmed).
       character(:), allocatable, intent(out) :: rejection
+      !> Whether the half steps could not be solved (error allocated): the
+      !> verification is incomplete.
+      logical, intent(out) :: failed
       type(error_type), allocatable, intent(out) :: error
       type(error_type), allocatable :: half_error
       type(step_cuts_type) :: half_cuts
@@ -560,12 +490,10 @@ contains
       real(dp) :: t_end(2), distance
       integer :: half, it, worst_dof
       character(len=200) :: msg
+      failed = .false.
       q_whole = self%state%q
-      call restore_state(self, self%verification(depth)%before)
-      associate (c => self%verification(depth)%crossing)
-         pair = 'links '//self%model%links(c(1))%name//' and '//self%model%links(c(2))%name//' at node '// &
-            & self%model%nodes(c(3))%name
-      end associate
+      call restore_state(self, self%verification%level(depth)%before)
+      pair = self%verification%pair_text(depth, self%model)
       t_end = [self%state%t + (t - self%state%t)/2, t]
       iterations = 0
       do half = 1, 2
@@ -576,13 +504,13 @@ contains
          if (half == 1 .and. self%model%analysis%predictor == predictor_taylor) call solve_rates(self)
       end do
       if (allocated(half_error)) then
-         call restore_state(self, self%verification(depth)%before)
-         self%verify_failed = .true.
+         call restore_state(self, self%verification%level(depth)%before)
+         failed = .true.
          if (depth > 0) then
             call move_alloc(half_error, error)
          else
             write (msg, '(a,es12.5,a,f7.4,a)') 't = ', t, ': possible assembly-mode jump rejected ('//pair// &
-               & ' crossed collinear turning ', self%verification(depth)%turn, &
+               & ' crossed collinear turning ', self%verification%level(depth)%turn, &
                & ' rad; two half steps could not confirm it: '
             call analysis_error(error, trim(msg)//' '//half_error%message//')')
          end if

@@ -9,8 +9,7 @@ module fekap_fem_converged
    use fekap_error, only: error_type, analysis_error
    use fekap_assembly_tracking, only: check_gaps
    use fekap_fem_linear_system, only: apply_response
-   use fekap_fem_branch, only: drive_increment, branch_verdict, branch_reject, branch_verify, branch_unverifiable, &
-      & max_verify_depth
+   use fekap_fem_branch, only: drive_increment, branch_verdict, branch_reject, branch_verify, branch_unverifiable
    use fekap_fem_rates, only: pivot_note, solve_velocities, solve_accelerations, singular_floor, root_velocities, &
       & root_accelerations
    use fekap_fem_change_point, only: response_trusted
@@ -28,18 +27,23 @@ contains
    !> drive responses at its two ends: at the new configuration from the
    !> factor of its material tangent (one back substitution per drive; the
    !> same factor then serves the rates), at the last one kept from the last
-   !> step. A suspect step is accepted with its state before saved for
-   !> verify_step.
-   subroutine branch_jump(self, t, qt, factored, error)
+   !> step. A suspect step is accepted with its state before pushed on the
+   !> verification stack at `depth` for verify_step.
+   subroutine branch_jump(self, t, qt, factored, depth, verdict, error)
       class(fem_core_type), intent(inout) :: self
       real(dp), intent(in) :: t
       real(dp), contiguous, intent(in) :: qt(:)
       !> Whether the system holds the factor of the material tangent at qt.
       logical, intent(in) :: factored
+      !> The halvings of the step (0: a step of the run).
+      integer, intent(in) :: depth
+      !> fekap_fem_branch's verdict: branch_accept, branch_reject (error),
+      !> branch_verify (the step is to be verified), branch_unverifiable (error).
+      integer, intent(out) :: verdict
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: swap(:, :)
       real(dp) :: step_floor, turn, pivot, rcond
-      integer :: verdict, crossing(3)
+      integer :: crossing(3)
       logical :: has_response
       associate (state => self%state, resp => self%jump_response_new)
          call drive_increment(self%branch, self%mesh, state%q, qt, self%drive_step, step_floor)
@@ -70,21 +74,15 @@ contains
             self%dq_old = 0
          end if
          call branch_verdict(self%branch, self%mesh, self%model, t, state%q, qt, self%dq_old, self%dq_new, &
-            & step_floor, self%smooth_prediction, self%q_predicted, self%verify_depth < max_verify_depth, verdict, &
+            & step_floor, self%smooth_prediction, self%q_predicted, self%verification%can_verify(depth), verdict, &
             & error, crossing, turn)
          select case (verdict)
          case (branch_reject)
             return
          case (branch_unverifiable)
-            self%verify_failed = .true.
             return
          case (branch_verify)
-            associate (pending => self%verification(self%verify_depth))
-               pending%before = state
-               pending%crossing = crossing
-               pending%turn = turn
-            end associate
-            self%verify_pending = .true.
+            call self%verification%push(depth, state, crossing, turn)
          case default
             ! branch_accept: the step stands.
          end select

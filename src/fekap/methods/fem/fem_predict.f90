@@ -30,13 +30,16 @@ contains
    !> start from the tangent predictor, the linear response of the last
    !> configuration to the drive increment: rotating a driven link end alone
    !> would strain its element so much that Newton may leave the assembly branch.
-   subroutine predict(self, t, qt)
+   !> `guard`: the predictor extrapolated, and guard_extrapolation is to check
+   !> it with the strains of the step's first assembly.
+   subroutine predict(self, t, qt, guard)
       class(fem_core_type), intent(inout) :: self
       real(dp), intent(in) :: t
       real(dp), contiguous, intent(inout) :: qt(:)
+      logical, intent(out) :: guard
       integer :: i, made
       self%smooth_prediction = .false.
-      self%guard_pending = .false.
+      guard = .false.
       self%predictor_length = max(self%conv%length, roundoff_length(self)/predictor_margin)
       associate (state => self%state)
          select case (self%model%analysis%predictor)
@@ -52,7 +55,7 @@ contains
          case default
             call extrapolate_history(state%history, t, .true., self%predictor_length, self%dof_length, qt, made)
             self%smooth_prediction = made == prediction_smooth
-            self%guard_pending = made /= prediction_none
+            guard = made /= prediction_none
             if (made == prediction_none) call tangent_predictor(self, t, qt)
          end select
       end associate

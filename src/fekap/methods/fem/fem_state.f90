@@ -1,10 +1,12 @@
-!> The FEM stepper's data: the accepted state (fem_state_type, one type so
-!> that saving and restoring it is one assignment), the steps awaiting
-!> verification, and the stepper's storage and settings (fem_core_type,
+!> The FEM stepper's data: the accepted state (fem_state_type, of
+!> fekap_fem_accepted), the steps awaiting verification (fekap_fem_verification's
+!> stack), and the stepper's storage and settings (fem_core_type,
 !> allocated once by new_fem_core), with what a step does to them at its
 !> end: accept a configuration (push it on the predictor's history) and fill
-!> the step's result. The modules fem_factor, fem_predict, fem_converged and
-!> fem_fill act on fem_core_type; fekap_fem composes them.
+!> the step's result; and the procedures through which another method
+!> (reactions/) uses the FEM. The modules fem_factor, fem_predict,
+!> fem_converged, fem_fill and fem_newton act on fem_core_type; fekap_fem
+!> composes them.
 module fekap_fem_state
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
@@ -13,16 +15,19 @@ module fekap_fem_state
    use fekap_model_results, only: step_result_type, note_length, has_note
    use fekap_fem_setup, only: fem_base_type, new_fem_base, mesh_plan_line
    use fekap_fem_convergence, only: convergence_type
-   use fekap_stepping_predictor, only: predictor_history_type, new_predictor_history
-   use fekap_fem_branch, only: branch_check_type, new_branch_check, max_verify_depth
+   use fekap_stepping_predictor, only: new_predictor_history
+   use fekap_fem_branch, only: branch_check_type, new_branch_check
+   use fekap_fem_accepted, only: fem_state_type
+   use fekap_fem_verification, only: verification_stack_type
    use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate
    use fekap_fem_fields, only: fill_nodes_links, fill_fields
    use fekap_stepping_step_control, only: step_cuts_type
    use fekap_strings, only: es_text
+   use fekap_assembly_loads, only: load_set_type
    implicit none
    private
 
-   public :: fem_state_type, verification_type, fem_core_type, new_fem_core, accept, fill_result
+   public :: fem_state_type, fem_core_type, new_fem_core, accept, fill_result
    public :: note_response_pivot, prepend_cuts_note, model_distance, no_convergence_error
 
    !> Element strain above which a converged configuration is not a mechanism
@@ -31,42 +36,6 @@ module fekap_fem_state
    !> near the tolerance) but never reaches the strains of a self-stressed
    !> state, which are of order 0.1.
    real(dp), parameter :: min_admissible_strain = 1.0e-8_dp, max_admissible_strain = 1.0e-3_dp
-
-   !> The accepted state of the stepper: everything a step changes, so that
-   !> step-doubling verification saves and restores it by one assignment.
-   type :: fem_state_type
-      !> Time, configuration, velocity and acceleration over all dofs.
-      real(dp) :: t = 0
-      real(dp), allocatable :: q(:), v(:), a(:)
-      !> Whether v (and a) belong to the configuration.
-      logical :: has_velocity = .false., has_acceleration = .false.
-      !> The last accepted configurations, for the predictor.
-      type(predictor_history_type) :: history
-      !> Master segment of each slideline.
-      integer, allocatable :: seg(:)
-      !> Linear response of every dof to unit changes of the drives, (ndof,
-      !> ndriven), kept by the branch-jump check whatever rates the run
-      !> computes, and whether it is known.
-      real(dp), allocatable :: jump_response(:, :)
-      logical :: has_jump_response = .false.
-      !> Largest pivot ratio of a tangent at an accepted configuration so far
-      !> (the reference for singular and near-singular configurations).
-      real(dp) :: reference_pivot = 0
-      !> Largest reciprocal condition number (system_rcond) of the material
-      !> tangent at an accepted configuration so far: the reference of the
-      !> change-point detection and of the trust in a drive response.
-      real(dp) :: reference_rcond = 0
-      !> Remark on the configuration for the listing (empty if none).
-      character(len=note_length) :: note = ''
-   end type fem_state_type
-
-   !> A step awaiting verification: the state before it, and the hinged pair
-   !> that crossed collinear (link, link, node) with its turn, for the messages.
-   type :: verification_type
-      type(fem_state_type) :: before
-      integer :: crossing(3) = 0
-      real(dp) :: turn = 0
-   end type verification_type
 
    !> The model, mesh, linear system, drives' start values and scales are
    !> fem_base_type's (new_fem_base), as the dynamics stepper's.
@@ -106,17 +75,8 @@ module fekap_fem_state
       !> Element strain (and gap per model size) above which a converged
       !> configuration is rejected: min(1e-3, max(1e-8, 100 tol)).
       real(dp) :: admissible_strain = min_admissible_strain
-      !> Whether the step just accepted awaits step-doubling verification, and
-      !> the number of halvings of the step being solved (0: a step of the caller's).
-      logical :: verify_pending = .false.
-      integer :: verify_depth = 0
-      !> Whether a verification could not be completed (see advance_to).
-      logical :: verify_failed = .false.
-      !> The steps awaiting verification at each depth.
-      type(verification_type) :: verification(0:max_verify_depth)
-      !> Whether the predictor extrapolated: guard_extrapolation then checks it
-      !> with the strains of the step's first assembly.
-      logical :: guard_pending = .false.
+      !> The steps awaiting step-doubling verification, one per halving.
+      type(verification_stack_type) :: verification
       !> Steps advanced so far.
       integer :: advances = 0
       !> The length tolerance of the step's predictor (the Adams-Bashforth
@@ -149,6 +109,18 @@ module fekap_fem_state
       real(dp) :: ahead_residual = 0
    contains
       procedure :: plan_text => fem_plan_text
+      !> Take the external loads out of the mesh (kinetostatics: the motion
+      !> is the unloaded one, the loads act in the reactions only).
+      procedure :: release_loads => core_release_loads
+      !> The load columns of the mesh (statics' load steps scale them).
+      procedure :: set_loads => core_set_loads
+      !> The configuration the start's Newton begins from (statics' load
+      !> steps begin each solve from the last equilibrium).
+      procedure :: set_start => core_set_start
+      !> Whether the system holds the factor of the tangent at the accepted configuration.
+      procedure :: holds_accepted_factor => core_holds_accepted_factor
+      !> Solve with that factor, in place, right-hand sides over the free equations.
+      procedure :: solve_at_accepted => core_solve_at_accepted
    end type fem_core_type
 
 contains
@@ -181,6 +153,38 @@ contains
       call new_branch_check(self%branch, model, self%mesh)
       self%conv%residual_floor = self%residual_floor
    end subroutine new_fem_core
+
+   subroutine core_release_loads(self, loads)
+      class(fem_core_type), intent(inout) :: self
+      type(load_set_type), intent(out) :: loads
+      loads = self%mesh%loads
+      self%mesh%loads%f = 0
+      self%loaded = .false.
+   end subroutine core_release_loads
+
+   subroutine core_set_loads(self, f)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), intent(in) :: f(:, :)
+      self%mesh%loads%f = f
+   end subroutine core_set_loads
+
+   subroutine core_set_start(self, q0)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), intent(in) :: q0(:)
+      self%mesh%q0 = q0
+   end subroutine core_set_start
+
+   pure logical function core_holds_accepted_factor(self) result(holds)
+      class(fem_core_type), intent(in) :: self
+      holds = self%factor_current
+   end function core_holds_accepted_factor
+
+   !> (The K form: kinetostatics, the only user, never takes the square-root form.)
+   subroutine core_solve_at_accepted(self, rhs)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(inout) :: rhs(:, :)
+      call self%system%kff%solve(rhs)
+   end subroutine core_solve_at_accepted
 
    !> The mesh for the listing's plan: its size, band and slideline penalties.
    function fem_plan_text(self) result(text)

@@ -30,8 +30,8 @@ module fekap_reactions_reaction_stepper
    use fekap_model_reactions, only: reaction_count
    use fekap_stepping_stepper, only: stepper_type
    use fekap_fem, only: fem_stepper_type
-   use fekap_stepping_step_control, only: step_cuts_type, max_cuts
-   use fekap_stepping_interrupt, only: interrupt_error
+   use fekap_stepping_step_control, only: step_cuts_type, max_cuts, advance_by_cuts, try_accepted, try_failed, &
+      & try_ended
    use fekap_strings, only: es_text
    use fekap_assembly_loads, only: load_set_type
    use fekap_reactions_kinetostatics, only: kinetostatics_type, new_kinetostatics, kinetostatic_loads, &
@@ -41,6 +41,19 @@ module fekap_reactions_reaction_stepper
    private
 
    public :: reaction_stepper_type, new_reaction_stepper
+
+   !> Statics' load stepping of the start (load_steps): the full loads, the
+   !> full load's failure (replayed as the first try) and its iterations, the
+   !> steps taken, their factors and the last failure, for the note and the
+   !> error; the FEM's result through the tries.
+   type :: load_steps_type
+      real(dp), allocatable :: full(:, :)
+      type(error_type), allocatable :: failure
+      logical :: replay = .false.
+      integer :: steps = 0, first_iterations = 0
+      character(:), allocatable :: factors, last
+      type(step_result_type) :: result
+   end type load_steps_type
 
    type, extends(stepper_type) :: reaction_stepper_type
       type(fem_stepper_type) :: fem
@@ -61,6 +74,7 @@ module fekap_reactions_reaction_stepper
       integer :: largest_point = 0, largest_step = 0
       !> (npoint): the link of each mesh point (its name in the note).
       integer, allocatable :: point_link(:)
+      type(load_steps_type) :: load_steps
    contains
       procedure :: start => reaction_start
       procedure :: advance => reaction_advance
@@ -79,9 +93,7 @@ contains
       self%statics = effects == effects_statics
       if (.not. self%statics) then
          ! The motion is the kinematic one: the loads leave the FEM for the reactions.
-         self%loads = self%fem%mesh%loads
-         self%fem%mesh%loads%f = 0
-         self%fem%loaded = .false.
+         call self%fem%release_loads(self%loads)
       end if
       call new_kinetostatics(self%kinetostatics, fem%model, fem%mesh)
       self%deflection = .not. self%statics .and. fem%model%output%deflection
@@ -128,79 +140,99 @@ contains
 
    !> Statics' start when Newton could not take the start's loads at once
    !> (`failure`, the FEM's error): the loads times a factor stepped from 0
-   !> to 1 under the kinematics' step control, each solve (the FEM's start)
-   !> from the last equilibrium; the note of step 0 lists the factors.
+   !> to 1 by the shared step control (advance_by_cuts over the load factor,
+   !> load_try), each solve (the FEM's start) from the last equilibrium; the
+   !> note of step 0 lists the factors.
    subroutine load_steps(self, result, error)
       type(reaction_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(inout) :: error
-      type(error_type), allocatable :: failure, step_error
       type(step_cuts_type) :: cuts
-      real(dp), allocatable :: full(:, :), q_start(:)
-      real(dp) :: factor, try
-      integer :: steps, iterations
-      character(:), allocatable :: factors, last
+      real(dp), allocatable :: q_start(:)
+      integer :: iterations
       character(len=12) :: smallest
-      call move_alloc(error, failure)
-      associate (mesh => self%fem%mesh)
-         full = mesh%loads%f
-         q_start = mesh%q0
-         call cuts%begin(0.0_dp, 1.0_dp)
-         ! The full load, tried by the FEM's start, is the first cut.
-         call cuts%reject(failure, error)
-         factor = 0
-         steps = 0
-         iterations = result%iterations
-         factors = ''
-         last = failure%message
-         do while (factor < 1 .and. .not. allocated(error))
-            call interrupt_error(error)
-            if (allocated(error)) exit
-            try = cuts%next(factor)
-            mesh%loads%f = try*full
-            call self%fem%start(result, step_error)
-            iterations = iterations + result%iterations
-            if (allocated(step_error)) then
-               if (step_error%kind /= error_analysis) then
-                  call move_alloc(step_error, error)
-                  exit
+      associate (steps => self%load_steps)
+         call move_alloc(error, steps%failure)
+         steps%full = self%fem%mesh%loads%f
+         q_start = self%fem%mesh%q0
+         steps%replay = .true.
+         steps%steps = 0
+         steps%factors = ''
+         steps%last = steps%failure%message
+         steps%result = result
+         steps%first_iterations = result%iterations
+         call advance_by_cuts(self, load_try, load_between, 0.0_dp, 1.0_dp, 0, cuts, iterations, error)
+         call self%fem%set_start(q_start)
+         call self%fem%set_loads(steps%full)
+         result = steps%result
+         if (allocated(error)) then
+            if (error%kind == error_analysis) then
+               ! The step control's advice is about drives: the load steps' reason stands alone.
+               if (len(steps%factors) == 0) steps%factors = ' none'
+               write (smallest, '(i0)') 2**max_cuts
+               call analysis_error(error, 'the start''s loads did not converge at once, nor in load steps '// &
+                  & 'from 0 to 1 (down to 1/'//trim(smallest)//' of the load; factors reached:'// &
+                  & steps%factors//'): '//steps%failure%message//'; last: '//steps%last)
+            end if
+            return
+         end if
+         ! The full load's try (the FEM's start before load stepping) counts too.
+         result%iterations = steps%first_iterations + iterations
+         result%cuts = cuts%cuts
+         block
+            character(len=80) :: head
+            write (head, '(a,i0,a,i0,a)') 'load stepped: ', steps%steps, ' load steps (', cuts%cuts, &
+               & ' cuts) from the unloaded configuration, factors'
+            result%note = trim(head)//steps%factors//' (the full load at once: '//steps%failure%message//')'
+         end block
+      end associate
+   end subroutine load_steps
+
+   !> A try of statics' load stepping (for advance_by_cuts): the FEM's start
+   !> under the loads times `factor`. The full load's try was the FEM's start
+   !> itself, and its failure is replayed (the first cut) without solving again.
+   recursive subroutine load_try(stepper, factor, depth, iterations, outcome, reason)
+      class(stepper_type), intent(inout) :: stepper
+      real(dp), intent(in) :: factor
+      integer, intent(in) :: depth
+      integer, intent(out) :: iterations, outcome
+      type(error_type), allocatable, intent(out) :: reason
+      iterations = 0
+      outcome = try_ended
+      select type (self => stepper)
+      type is (reaction_stepper_type)
+         associate (steps => self%load_steps)
+            if (steps%replay) then
+               steps%replay = .false.
+               reason = steps%failure
+               outcome = try_failed
+               return
+            end if
+            call self%fem%set_loads(factor*steps%full)
+            call self%fem%start(steps%result, reason)
+            iterations = steps%result%iterations
+            if (allocated(reason)) then
+               if (reason%kind == error_analysis) then
+                  steps%last = reason%message
+                  outcome = try_failed
                end if
-               last = step_error%message
-               call cuts%reject(step_error, error)
-               deallocate (step_error)
-               cycle
+               return
             end if
             ! The next solve starts from this equilibrium (only free dofs move:
             ! the supported and driven ones keep their start values).
-            mesh%q0 = self%fem%state%q
-            factor = try
-            steps = steps + 1
-            factors = factors//' '//es_text(factor, 9, 3)
-            if (factor < 1) call cuts%grow()
-         end do
-         mesh%q0 = q_start
-         mesh%loads%f = full
-      end associate
-      if (allocated(error)) then
-         if (error%kind == error_analysis) then
-            ! The step control's advice is about drives: the load steps' reason stands alone.
-            if (len(factors) == 0) factors = ' none'
-            write (smallest, '(i0)') 2**max_cuts
-            call analysis_error(error, 'the start''s loads did not converge at once, nor in load steps from 0 '// &
-               & 'to 1 (down to 1/'//trim(smallest)//' of the load; factors reached:'//factors//'): '// &
-               & failure%message//'; last: '//last)
-         end if
-         return
-      end if
-      result%iterations = iterations
-      result%cuts = cuts%cuts
-      block
-         character(len=80) :: head
-         write (head, '(a,i0,a,i0,a)') 'load stepped: ', steps, ' load steps (', cuts%cuts, &
-            & ' cuts) from the unloaded configuration, factors'
-         result%note = trim(head)//factors//' (the full load at once: '//failure%message//')'
-      end block
-   end subroutine load_steps
+            call self%fem%set_start(self%fem%state%q)
+            steps%steps = steps%steps + 1
+            steps%factors = steps%factors//' '//es_text(factor, 9, 3)
+            outcome = try_accepted
+         end associate
+      end select
+   end subroutine load_try
+
+   !> Nothing between load steps.
+   subroutine load_between(stepper, factor)
+      class(stepper_type), intent(inout) :: stepper
+      real(dp), intent(in) :: factor
+   end subroutine load_between
 
    subroutine reaction_advance(self, t, result, error)
       class(reaction_stepper_type), intent(inout) :: self
@@ -229,7 +261,7 @@ contains
          ! The result lives through the run: a step without accelerations has no
          ! reactions and no deflection (not the last step's).
          result%has_deflection = .false.
-         result%has_reactions = self%fem%state%has_acceleration .and. self%fem%factor_current
+         result%has_reactions = self%fem%state%has_acceleration .and. self%fem%holds_accepted_factor()
          if (.not. result%has_reactions) then
             if (self%deflection) call note_largest(self, result)
             return
@@ -253,7 +285,7 @@ contains
          do k = 1, mesh%nfree
             self%rhs(k, 1) = self%f(mesh%eq_dof(k))
          end do
-         call self%fem%system%kff%solve(self%rhs)
+         call self%fem%solve_at_accepted(self%rhs)
          self%u = 0
          do k = 1, mesh%nfree
             self%u(mesh%eq_dof(k)) = self%rhs(k, 1)
