@@ -109,7 +109,7 @@ contains
          end if
          if (allocated(step_error)) then
             ! A message that names its own time (where the step was cut) gives the only time.
-            if (index(step_error%message, 't = ') == 1) then
+            if (allocated(step_error%time)) then
                write (where_, '(a,i0,a)') 'step ', n, ':'
             else
                write (where_, '(a,i0,a,a,a)') 'step ', n, ' (t = ', es_text(step_time(model, n, nsteps), 12, 5), '):'

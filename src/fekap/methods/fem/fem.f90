@@ -298,7 +298,7 @@ contains
          if (allocated(rejection)) then
             ! Contradicted by its half steps, which replaced it: a cut step.
             outcome = try_replaced
-            call analysis_error(reason, rejection)
+            call analysis_error(reason, rejection, t=t)
          end if
       end select
    end subroutine fem_try
@@ -410,13 +410,13 @@ contains
                   end if
                   if (info > 0) then
                      write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
-                     call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)))
+                     call analysis_error(error, trim(msg)//' '//describe_dof(mesh, self%model, eqd(info)), t=t)
                      return
                   end if
                   if (.not. root_solved) call newton_correction(system, mesh, self%dof_length, correction, self%counts)
                   if (correction > divergence_length*self%model_length) then
                      write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', i + 1
-                     call analysis_error(error, trim(msg))
+                     call analysis_error(error, trim(msg), t=t)
                      return
                   end if
                   ! Converged where this pass starts (the predictor, or an
@@ -582,7 +582,7 @@ contains
             write (msg, '(a,es12.5,a,f7.4,a)') 't = ', t, ': possible assembly-mode jump rejected ('//pair// &
                & ' crossed collinear turning ', self%verification(depth)%turn, &
                & ' rad; two half steps could not confirm it: '
-            call analysis_error(error, trim(msg)//' '//half_error%message//')')
+            call analysis_error(error, trim(msg)//' '//half_error%message//')', t=t)
          end if
          return
       end if
