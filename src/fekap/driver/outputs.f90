@@ -97,6 +97,9 @@ contains
       character(*), intent(in) :: stem, version, plan_text
       integer :: effects
       logical :: vel, acc
+      ! (A local array: gfortran 12 sizes an array constructor with a
+      ! character length expression wrongly.)
+      character(len=len(stem) + len(temporary_suffix) + 10) :: vtk_files(3)
       effects = planned_effects(model)
       vel = model%analysis%velocities
       acc = vel .and. model%analysis%accelerations
@@ -115,8 +118,10 @@ contains
       end if
       if (model%output%listing) call registry%table(stem//'.lis', listing_writer(version, step_count(model), plan_text))
       if (model%output%vtk) then
-         call registry%step_files(vtk_writer(registry%outdir, stem), 'vtk', [character(len=len(stem) + 20) :: &
-            & stem//'.pvd', stem//'.pvd'//temporary_suffix, 'vtk/'//stem//'_*.vtu'])
+         vtk_files(1) = stem//'.pvd'
+         vtk_files(2) = stem//'.pvd'//temporary_suffix
+         vtk_files(3) = 'vtk/'//stem//'_*.vtu'
+         call registry%step_files(vtk_writer(registry%outdir, stem), 'vtk', vtk_files)
       end if
    end subroutine register_outputs
 
