@@ -1,6 +1,6 @@
 """The dependency rules of src/ (docs/architecture.md): every module's `use`
 lines point down the layers, never up or sideways into a method; only app/
-prints; only app/ builds a concrete stepper. Read from the sources, so a new
+prints; only driver/ names a concrete stepper (its factory). Read from the sources, so a new
 `use` that breaks a rule fails here with the file and line."""
 
 from __future__ import annotations
@@ -45,14 +45,19 @@ MAY_USE = {
     "deck": {"core", "model"},
     # The output never uses the stepping or the methods.
     "output": {"core", "model"},
-    "driver": {"core", "model", "linalg", "element", "contact", "assembly", "stepping", "methods", "output"},
+    # The driver (the factory, the output registry, the time loop and the
+    # module `fekap` that the app uses) may use every layer below the app.
+    "driver": {"core", "model", "linalg", "element", "contact", "assembly", "stepping", "methods", "deck", "output"},
 }
 
 USE = re.compile(r"^\s*use\s+(\w+)", re.IGNORECASE | re.MULTILINE)
 MODULE = re.compile(r"^\s*module\s+(\w+)\s*(?:!.*)?$", re.IGNORECASE | re.MULTILINE)
 # Printing: a print statement, or a write to the default unit or a standard stream.
 PRINT = re.compile(r"^\s*(print\b|write\s*\(\s*(\*|output_unit|error_unit))", re.IGNORECASE)
+# Naming a concrete stepper: calling its constructor, or declaring its type.
 CONSTRUCTOR = re.compile(r"\bcall\s+(new_\w*_stepper)\b", re.IGNORECASE)
+STEPPER_TYPE = re.compile(r"\b(?:type|class)\s*\(\s*(\w+_stepper_type)\s*\)", re.IGNORECASE)
+APP = ROOT / "app"
 
 
 def layer_of(path: Path) -> str:
@@ -99,22 +104,51 @@ def test_only_app_prints():
     assert not printing, "src/ prints (errors are values; app/ prints):\n" + "\n".join(printing)
 
 
-def test_only_app_builds_steppers():
-    calls = [f"{path.relative_to(ROOT)}: {m.group(1)}"
-             for path in sources() for m in CONSTRUCTOR.finditer(path.read_text())]
-    assert not calls, "concrete steppers built outside app/:\n" + "\n".join(calls)
+def concrete_steppers_named_outside_the_driver() -> list[str]:
+    """Constructor calls of concrete steppers outside src/fekap/driver/, and
+    declarations of a concrete stepper type in app/ (a method's own modules
+    declare their types, and a method may hold another's stepper)."""
+    found = []
+    for path in [*sources(), *sorted(APP.rglob("*.f90"))]:
+        if path.is_relative_to(SRC) and layer_of(path) == "driver":
+            continue
+        text = path.read_text()
+        found += [f"{path.relative_to(ROOT)}: {m.group(1)}" for m in CONSTRUCTOR.finditer(text)]
+        if path.is_relative_to(APP):
+            found += [f"{path.relative_to(ROOT)}: {m.group(1)}" for m in STEPPER_TYPE.finditer(text)]
+    return found
+
+
+def test_only_the_driver_names_concrete_steppers():
+    named = concrete_steppers_named_outside_the_driver()
+    assert not named, "concrete steppers named outside driver/ (its factory builds them):\n" + "\n".join(named)
+
+
+def test_the_driver_builds_the_steppers():
+    """The rule above is not vacuous: the factory is where the constructors are called."""
+    calls = [m.group(1) for path in sources() if layer_of(path) == "driver"
+             for m in CONSTRUCTOR.finditer(path.read_text())]
+    assert "new_fem_stepper" in calls and "new_dynamic_stepper" in calls, calls
 
 
 def test_the_rules_see_a_breach(tmp_path, monkeypatch):
-    """The checks are not vacuous: a core module that uses a method, and one that prints, are caught."""
+    """The checks are not vacuous: a core module that uses a method, one that
+    prints, a method that builds a stepper and an app that declares one are caught."""
     fake = tmp_path / "src" / "fekap"
-    for folder in ("methods", "core"):
+    for folder in ("methods", "core", "driver"):
         (fake / folder).mkdir(parents=True)
+    (tmp_path / "app").mkdir()
     (fake / "methods" / "m.f90").write_text("module fekap_m\nend module fekap_m\n")
     (fake / "core" / "kinds.f90").write_text("module fekap_kinds\n   use fekap_m\nend module fekap_kinds\n")
     (fake / "core" / "posix.f90").write_text("module fekap_posix\ncontains\n   print *, 'x'\nend module fekap_posix\n")
+    (fake / "methods" / "r.f90").write_text("module fekap_r\ncontains\n   call new_fem_stepper(f, m)\nend module fekap_r\n")
+    (fake / "driver" / "factory.f90").write_text("module fekap_f\ncontains\n   call new_fem_stepper(f, m)\nend module\n")
+    (tmp_path / "app" / "main.f90").write_text("program p\n   type(fem_stepper_type) :: s\nend program p\n")
     monkeypatch.setattr(sys.modules[__name__], "SRC", fake)
     monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    monkeypatch.setattr(sys.modules[__name__], "APP", tmp_path / "app")
+    named = concrete_steppers_named_outside_the_driver()
+    assert named == ["src/fekap/methods/r.f90: new_fem_stepper", "app/main.f90: fem_stepper_type"], named
     for check in (test_uses_point_down_the_layers, test_only_app_prints):
         try:
             check()

@@ -91,7 +91,7 @@ contains
             write (msg, '(a,es12.5,a,f8.4,a)') 't = ', t, ': the slave left the slideline past its end (alpha = ', &
                & alpha, ') '
             call analysis_error(error, trim(msg)//': slave node '//model%nodes(mesh%slides(i)%slave)%name// &
-               & ', slideline '//model%slidelines(i)%name//'; lengthen the master line or shorten the run')
+               & ', slideline '//model%slidelines(i)%name//'; lengthen the master line or shorten the run', t=t)
             return
          end if
          if (status /= slide_on_element) then
@@ -118,7 +118,8 @@ contains
          call slide_geometry(xs, x1, x2, g, alpha, s1)
          if (abs(g) > admissible) then
             write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, ': Newton converged with a gap of ', g, ' at slideline '
-            call analysis_error(error, trim(msg)//' '//model%slidelines(i)%name//', not a mechanism configuration')
+            call analysis_error(error, trim(msg)//' '//model%slidelines(i)%name//', not a mechanism configuration', &
+               & t=t)
             return
          end if
       end do

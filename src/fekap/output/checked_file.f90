@@ -14,6 +14,10 @@ module fekap_output_checked_file
    private
 
    public :: unit_path, verified_length, write_failure, close_checked, replace_checked, whole_lines_length
+   public :: open_replace
+
+   !> A unit that is not open (newunit numbers are negative, so not -1).
+   integer, parameter, public :: no_unit = -huge(1)
 
 contains
 
@@ -121,5 +125,37 @@ contains
          code = os_unlink(temporary)
       end if
    end subroutine replace_checked
+
+   !> Open a file for writing, replacing it (no_unit and an error if it cannot
+   !> be written); formatted sequential, or with `stream` for stream access:
+   !> unformatted (the CSV files, written as bytes), or formatted with
+   !> `formatted` (the listing: formatted writes, and text of many lines
+   !> written at once, each newline ending a record).
+   subroutine open_replace(path, unit, error, stream, formatted)
+      character(*), intent(in) :: path
+      integer, intent(out) :: unit
+      type(error_type), allocatable, intent(out) :: error
+      logical, intent(in), optional :: stream, formatted
+      integer :: ios
+      character(len=512) :: message
+      logical :: as_stream, as_formatted
+      as_stream = .false.
+      if (present(stream)) as_stream = stream
+      as_formatted = .false.
+      if (present(formatted)) as_formatted = formatted
+      if (as_stream .and. as_formatted) then
+         open (newunit=unit, file=path, status='replace', action='write', access='stream', &
+            & form='formatted', iostat=ios, iomsg=message)
+      else if (as_stream) then
+         open (newunit=unit, file=path, status='replace', action='write', access='stream', &
+            & form='unformatted', iostat=ios, iomsg=message)
+      else
+         open (newunit=unit, file=path, status='replace', action='write', iostat=ios, iomsg=message)
+      end if
+      if (ios /= 0) then
+         unit = no_unit
+         call output_error(error, path//': cannot write this file: '//trim(message))
+      end if
+   end subroutine open_replace
 
 end module fekap_output_checked_file

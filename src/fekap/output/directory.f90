@@ -31,7 +31,7 @@ module fekap_output_directory
    !> The manifest of the files of the last run, in the output directory.
    character(*), parameter, public :: manifest_name = '.fekap-manifest'
    !> Suffix of a file written whole under a temporary name and renamed.
-   character(*), parameter :: temporary_suffix = '.fekap-tmp'
+   character(*), parameter, public :: temporary_suffix = '.fekap-tmp'
 
    !> Files FEKAP and its scripts may write into an output directory: a name,
    !> or a pattern with one `*` (docs: README, "What a run writes"). Only

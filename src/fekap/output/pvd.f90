@@ -1,7 +1,7 @@
 !> The ParaView collection `<stem>.pvd` of a run's .vtu files, listing each
 !> with its time. Its lines are formatted once, as each .vtu is written, and
 !> held in memory; the run writes the file whole to a temporary name and
-!> renames it over the collection (fekap_driver_run), so that it is never seen cut
+!> renames it over the collection (fekap_output_vtk_writer), so that it is never seen cut
 !> short, not even after a SIGKILL. Rewriting it after every step would make a run quadratic in its steps
 !> (docs/performance.md); it is rewritten only when
 !> it has grown by an eighth since the last write (pvd_due) and at the end,

@@ -7,7 +7,7 @@
 !> method's "try a step" (try_interface).
 module fekap_stepping_step_control
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, analysis_error
+   use fekap_error, only: error_type, analysis_error, at_time
    use fekap_stepping_stepper, only: stepper_type
    use fekap_stepping_interrupt, only: interrupt_signal
    implicit none
@@ -163,6 +163,7 @@ contains
             & 'where the driven link reaches a limit; a smaller time step will not help: drive another link, '// &
             & 'end the run before this point, or try another predictor)'
          call analysis_error(error, reason%message//trim(advice))
+         if (allocated(reason%time)) call at_time(error, reason%time)
          return
       end if
       call keep_reason(self, reason%message)

@@ -8,7 +8,7 @@
 !> D->C. The ground vector D - A need not be horizontal.
 module fekap_classical_angles
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, input_error, analysis_error
+   use fekap_error, only: error_type, input_error, analysis_error, at_time
    use fekap_model, only: model_type, model_size, dof_x, dof_y, dof_rot, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_model_results, only: step_result_type, new_step_result
@@ -259,7 +259,7 @@ contains
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
          & self%d(where_) - self%history%q(where_, self%history%newest), 'the angle of link '//trim(self%link_name(where_ + 1)))
       if (len(jump) > 0) then
-         call analysis_error(error, jump)
+         call analysis_error(error, jump, t=t)
          return
       end if
       self%branch = new
@@ -292,6 +292,7 @@ contains
       correction = 0
       if (allocated(error)) then
          error%message = 't = '//short_real_text(t)//': '//error%message
+         call at_time(error, t)
          return
       end if
       self%d = self%d + delta

@@ -290,7 +290,7 @@ contains
          if (maxval(abs(self%phi)) > redundant_tol*self%model_length) then
             call analysis_error(error, 't = '//short_real_text(t)// &
                & ': Newton converged to a configuration that violates the removed (redundant) equations (residual '// &
-               & short_real_text(maxval(abs(self%phi)))//'), not a configuration of the mechanism')
+               & short_real_text(maxval(abs(self%phi)))//'), not a configuration of the mechanism', t=t)
             return
          end if
       end if
@@ -316,7 +316,7 @@ contains
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
          & self%q(3*where_) - self%history%q(3*where_, self%history%newest), 'the angle of link '//trim(self%body_name(where_)))
       if (len(jump) > 0) then
-         call analysis_error(error, jump)
+         call analysis_error(error, jump, t=t)
          return
       end if
       self%branch = new
@@ -445,7 +445,7 @@ contains
       end if
       if (info /= 0) then
          call analysis_error(error, 't = '//short_real_text(t)//': the constraint Jacobian is singular '// &
-            & '(a singular configuration of the mechanism)')
+            & '(a singular configuration of the mechanism)', t=t)
          return
       end if
       call dense_lu_solve(self%jac, self%ipiv, self%rhs, info)

@@ -5,7 +5,7 @@
 !> and the assembly-mode (branch) jump check, and the texts of their messages.
 module fekap_classical_stepping
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, analysis_error, error_analysis
+   use fekap_error, only: error_type, analysis_error, error_analysis, at_time
    use fekap_model, only: analysis_type, predictor_previous, predictor_taylor, convergence_paper
    use fekap_model_drive_law, only: law_type
    use fekap_strings, only: int_text, short_real_text
@@ -178,8 +178,10 @@ contains
       select case (report%stopped)
       case (stop_spent)
          error%message = no_convergence_text(t, iterations, report%last_residual)
+         call at_time(error, t)
       case (stop_diverged)
          error%message = 't = '//short_real_text(t)//': Newton diverged at iteration '//int_text(iterations)
+         call at_time(error, t)
       case default
          ! The method's own error (a singular Jacobian), or an interrupt.
       end select

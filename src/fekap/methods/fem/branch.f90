@@ -155,14 +155,14 @@ contains
          write (msg, '(a,es12.5,a,f9.4,a,es9.2,a)') 't = ', t, ': assembly-mode jump rejected (rotation ', &
             & qt(worst_dof) - q(worst_dof), ' rad over the step, ', worst, &
             & ' times what the drive increment explains) at'
-         call analysis_error(error, trim(msg)//' '//describe_dof(mesh, model, worst_dof))
+         call analysis_error(error, trim(msg)//' '//describe_dof(mesh, model, worst_dof), t=t)
          return
       end if
       if (flip_link(1) > 0) then
          write (msg, '(a,es12.5,a)') 't = ', t, ': assembly-mode jump rejected (links'
          call analysis_error(error, trim(msg)//' '//model%links(flip_link(1))%name//' and '// &
             & model%links(flip_link(2))%name//' at node '//model%nodes(flip_node)%name// &
-            & ' passed through collinear against the drive increment''s sense)')
+            & ' passed through collinear against the drive increment''s sense)', t=t)
          return
       end if
       verdict = branch_accept
@@ -174,7 +174,7 @@ contains
             write (msg, '(a,es12.5,a,f7.4,a,i0,a)') 't = ', t, ': assembly-mode jump rejected (links '// &
                & model%links(crossing(1))%name//' and '//model%links(crossing(2))%name// &
                & ' crossed collinear turning ', turn, ' rad in a step halved ', max_verify_depth, ' times)'
-            call analysis_error(error, trim(msg))
+            call analysis_error(error, trim(msg), t=t)
             verdict = branch_unverifiable
          end if
       end if

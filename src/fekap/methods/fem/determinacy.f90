@@ -300,7 +300,7 @@ contains
       call analysis_error(error, 't = '//now//': the mechanism is not determined by its supports, drives and '// &
          & 'links: with the drives held, a part of it moves freely here and at t = '//then//' (a free motion, '// &
          & 'not a change point that the drives pass through): '//moved_parts(self%mesh, self%model, moved)// &
-         & '; support or drive the part that moves, or remove it')
+         & '; support or drive the part that moves, or remove it', t=self%state%t)
    end subroutine singular_free_motion
 
    !> A run whose first step failed (error, after its cuts) from a start

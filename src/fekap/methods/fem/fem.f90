@@ -294,7 +294,7 @@ contains
          if (allocated(rejection)) then
             ! Contradicted by its half steps, which replaced it: a cut step.
             outcome = try_replaced
-            call analysis_error(reason, rejection)
+            call analysis_error(reason, rejection, t=t)
          end if
       end select
    end subroutine fem_try
@@ -445,12 +445,12 @@ contains
       case (stop_diverged)
          deallocate (error)
          write (msg, '(a,es12.5,a,i0)') 't = ', t, ': Newton diverged at iteration ', report%iterations
-         call analysis_error(error, trim(msg))
+         call analysis_error(error, trim(msg), t=t)
       case (stop_singular)
          deallocate (error)
          if (self%change_found) return
          write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
-         call analysis_error(error, trim(msg)//' '//describe_dof(self%mesh, self%model, self%mesh%eq_dof(report%info)))
+         call analysis_error(error, trim(msg)//' '//describe_dof(self%mesh, self%model, self%mesh%eq_dof(report%info)), t=t)
       case default
          ! An interrupt keeps its message.
       end select
@@ -512,7 +512,7 @@ contains
             write (msg, '(a,es12.5,a,f7.4,a)') 't = ', t, ': possible assembly-mode jump rejected ('//pair// &
                & ' crossed collinear turning ', self%verification%level(depth)%turn, &
                & ' rad; two half steps could not confirm it: '
-            call analysis_error(error, trim(msg)//' '//half_error%message//')')
+            call analysis_error(error, trim(msg)//' '//half_error%message//')', t=t)
          end if
          return
       end if

@@ -180,7 +180,7 @@ contains
             write (msg, '(a,es12.5,a,es9.2,a)') 't = ', t, &
                & ': Newton converged to a self-stressed configuration (strain ', strain, ' in link '
             call analysis_error(error, trim(msg)//' '//self%model%links(self%mesh%elink(element))%name// &
-               & '), not a mechanism configuration')
+               & '), not a mechanism configuration', t=t)
             return
          end if
       end associate

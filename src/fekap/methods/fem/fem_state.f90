@@ -282,7 +282,7 @@ contains
       character(len=120) :: msg
       write (msg, '(a,es12.5,a,i0,a,es9.2)') 't = ', t, ': Newton did not converge in ', iterations, &
          & ' iterations (residual ', residual
-      call analysis_error(error, trim(msg)//')')
+      call analysis_error(error, trim(msg)//')', t=t)
    end subroutine no_convergence_error
 
 end module fekap_fem_state
