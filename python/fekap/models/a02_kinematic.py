@@ -20,7 +20,7 @@ import math
 import os
 import sys
 
-#: The grid of #16: chain lengths and time steps that land on (0.01, 0.025,
+#: The grid of the change-point study: chain lengths and time steps that land on (0.01, 0.025,
 #: 0.05, 1/12) or step over (0.02) the change points.
 GRID_N = (2, 4, 10, 40)
 GRID_DT = ("0.01", "0.02", "0.025", "0.05", "1/12")

@@ -18,7 +18,7 @@ so that L_i = (0, 2 i sin(theta)), R_i = (2 cos(theta), 2 i sin(theta)) and the
 platform (the top ends L_N, R_N) is exactly at height 2 N sin(theta).
 
 With --law sine the drive is instead theta(t) = 30 deg + 20 deg sin(2 pi t) (the
-layout of issue #16), and with --slider R0 slides on a floor slideline (a ground
+layout of the scale study), and with --slider R0 slides on a floor slideline (a ground
 guide along y = 0) instead of a roller support; both keep the closed form.
 
 Usage:  scripts/python -m fekap.models.scissor N [--out DECK] [--dt DT] [--theta0 DEG]
