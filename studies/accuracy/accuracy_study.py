@@ -80,7 +80,8 @@ import numpy as np
 from fekap import dynamics as dc  # the benchmarks' answers from a run's CSV files
 from fekap import read
 from fekap import run as fb
-from fekap.exact.fourbar import fourbar_exact  # hyper-dual closed form of Example 1
+from fekap.exact.fourbar import fourbar_exact
+from fekap.exact.pendulums import double_pendulum_rate, double_pendulum_tip, rk4_states  # hyper-dual closed form of Example 1
 
 
 def slider_exact(t: float) -> tuple[float, float]:
@@ -445,21 +446,6 @@ END
 """
 
 
-def rk4_states(rate, state: list[float], h: float, n: int) -> np.ndarray:
-    """RK4 of y' = rate(y) from `state`: all n + 1 states at step h."""
-    out = np.empty((n + 1, len(state)))
-    y = np.array(state, dtype=float)
-    out[0] = y
-    for i in range(n):
-        k1 = rate(y)
-        k2 = rate(y + 0.5 * h * k1)
-        k3 = rate(y + 0.5 * h * k2)
-        k4 = rate(y + h * k3)
-        y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out[i + 1] = y
-    return out
-
-
 def pendulum_reference(t_end: float, h: float = 1e-5):
     """The rigid pendulum from the horizontal (angle th below it, th'' = g cos th): B at time t."""
     states = rk4_states(lambda y: np.array([y[1], G * math.cos(y[0])]), [0.0, 0.0], h, round(t_end / h))
@@ -468,19 +454,8 @@ def pendulum_reference(t_end: float, h: float = 1e-5):
 
 def double_reference(t_end: float, h: float = 1e-5):
     """The double pendulum (angles from the downward vertical, both released at pi/2): C at time t."""
-    def rate(y):
-        a, b, wa, wb = y
-        d = a - b
-        den = 3 - math.cos(2 * d)
-        acc_a = (-3 * G * math.sin(a) - G * math.sin(a - 2 * b) - 2 * math.sin(d) * (wb**2 + wa**2 * math.cos(d))) / den
-        acc_b = 2 * math.sin(d) * (2 * wa**2 + 2 * G * math.cos(a) + wb**2 * math.cos(d)) / den
-        return np.array([wa, wb, acc_a, acc_b])
-    states = rk4_states(rate, [math.pi / 2, math.pi / 2, 0.0, 0.0], h, round(t_end / h))
-
-    def at(t: float) -> tuple[float, float]:
-        a, b = states[round(t / h), :2]
-        return math.sin(a) + math.sin(b), -math.cos(a) - math.cos(b)
-    return at
+    states = rk4_states(double_pendulum_rate, [math.pi / 2, math.pi / 2, 0.0, 0.0], h, round(t_end / h))
+    return lambda t: double_pendulum_tip(*states[round(t / h), :2])
 
 
 def run_text(binary: str, work: Path, name: str, text: str, repeat: int) -> dict:

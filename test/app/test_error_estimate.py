@@ -37,6 +37,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fekap.exact.pendulums import double_pendulum_rate
+
 from apptest import ROOT, check, read_rows, run_fekap
 
 G = 9.81
@@ -101,16 +103,6 @@ def rod_rate(s):
     return np.array([s[1], -0.5 * ROD_C * math.cos(s[0])])
 
 
-def double_rate(s):
-    """Double pendulum: the angles a, b from the downward vertical (Lagrange)."""
-    a, b, wa, wb = s
-    d = a - b
-    den = 3 - math.cos(2 * d)
-    acc_a = (-3 * G * math.sin(a) - G * math.sin(a - 2 * b) - 2 * math.sin(d) * (wb**2 + wa**2 * math.cos(d))) / den
-    acc_b = 2 * math.sin(d) * (2 * wa**2 + 2 * G * math.cos(a) + wb**2 * math.cos(d)) / den
-    return np.array([wa, wb, acc_a, acc_b])
-
-
 def pendulum_point(s):
     return [math.cos(s[0]), -math.sin(s[0])]
 
@@ -150,7 +142,7 @@ def double_deck(s, ea, integrator, time):
 CASES = {
     "pendulum": (pendulum_deck, pendulum_rate, pendulum_point, "B", [0.7, 3.0], [0.0, 0.0], 0.6),
     "rod": (rod_deck, rod_rate, rod_point, "B", [0.2, -2.5], [math.pi / 6, 0.0], 0.57),
-    "double": (double_deck, double_rate, double_point, "C", [1.0, 1.8, 1.5, -2.0], [math.pi / 2, math.pi / 2, 0, 0],
+    "double": (double_deck, double_pendulum_rate, double_point, "C", [1.0, 1.8, 1.5, -2.0], [math.pi / 2, math.pi / 2, 0, 0],
                0.3),
 }
 

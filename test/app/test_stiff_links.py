@@ -42,6 +42,8 @@ import numpy as np
 import pytest
 
 from fekap import dynamics as dc  # the bottom pass of a run's points.csv
+from fekap.exact.pendulums import double_pendulum_rate, rk4_states
+from fekap.exact.pendulums import double_pendulum_tip as tip_at
 
 from apptest import ROOT, check, read_rows, run_fekap
 
@@ -356,25 +358,8 @@ def double_pendulum_tip(t_end: float, h: float = 1e-5) -> np.ndarray:
     """The tip (x, y) at t_end of the double pendulum (m1 = m2 = 1, L1 = L2 =
     1, angles from the downward vertical, both released at pi/2): Lagrange's
     equations integrated by RK4 at step h."""
-
-    def rate(s):
-        a, b, wa, wb = s
-        d = a - b
-        den = 3 - math.cos(2 * d)
-        acc_a = (-3 * G * math.sin(a) - G * math.sin(a - 2 * b) - 2 * math.sin(d) * (wb**2 + wa**2 * math.cos(d))) / den
-        acc_b = 2 * math.sin(d) * (2 * wa**2 + 2 * G * math.cos(a) + wb**2 * math.cos(d)) / den
-        return (wa, wb, acc_a, acc_b)
-
-    s = (math.pi / 2, math.pi / 2, 0.0, 0.0)
-    n = round(t_end / h)
-    for _ in range(n):
-        k1 = rate(s)
-        k2 = rate(tuple(p + 0.5 * h * q for p, q in zip(s, k1)))
-        k3 = rate(tuple(p + 0.5 * h * q for p, q in zip(s, k2)))
-        k4 = rate(tuple(p + h * q for p, q in zip(s, k3)))
-        s = tuple(p + h / 6 * (q1 + 2 * q2 + 2 * q3 + q4) for p, q1, q2, q3, q4 in zip(s, k1, k2, k3, k4))
-    a, b = s[0], s[1]
-    return np.array([math.sin(a) + math.sin(b), -math.cos(a) - math.cos(b)])
+    last = rk4_states(double_pendulum_rate, [math.pi / 2, math.pi / 2, 0.0, 0.0], h, round(t_end / h))[-1]
+    return np.array(tip_at(last[0], last[1]))
 
 
 def test_double_pendulum_reference_keeps_its_energy() -> None:
