@@ -21,6 +21,9 @@ module fekap_output_csv
    public :: write_header, write_steps_row, write_mesh_csv, new_row_prefix
    public :: write_nodes_header, write_nodes_row, write_mechanism_csv, write_reactions_rows
    public :: write_energy_row, write_deflection_rows
+   !> For the tables of other modules (spatial runs): a header with rate columns, a row's
+   !> longest text, a row of a name's values and rates.
+   public :: write_rates_header, row_length, append_rates_row
 
    !> The fixed headers (write_header) of steps.csv, reactions.csv and
    !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.

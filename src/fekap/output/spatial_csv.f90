@@ -5,19 +5,15 @@
 !> fekap_model_spatial's reported_joints). Rows are appended to the file's
 !> text buffer as csv.f90's are; a planar run never calls these.
 module fekap_output_spatial_csv
-   use fekap_kinds, only: dp
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type
    use fekap_model_spatial, only: reported_joints
-   use fekap_output_format, only: append_real, append_text
    use fekap_output_buffer, only: text_buffer_type, reserve_text
+   use fekap_output_csv, only: write_rates_header, row_length, append_rates_row
    implicit none
    private
 
    public :: write_spatial_points_header, write_spatial_points_rows, write_joints_header, write_joints_rows
-
-   !> Longest text of a real, and of the prefix `step,t,` of a row (as csv.f90's).
-   integer, parameter :: real_width = 24, prefix_length = 11 + real_width + 2
 
 contains
 
@@ -25,7 +21,7 @@ contains
    subroutine write_spatial_points_header(out, velocities, accelerations)
       type(text_buffer_type), intent(inout) :: out
       logical, intent(in) :: velocities, accelerations
-      call header(out, 'step,t,point,x,y,z', ',vx,vy,vz', ',ax,ay,az', velocities, accelerations)
+      call write_rates_header(out, 'step,t,point,x,y,z', ',vx,vy,vz', ',ax,ay,az', velocities, accelerations)
    end subroutine write_spatial_points_header
 
    !> One row per tracked point, with z.
@@ -39,8 +35,8 @@ contains
       integer :: i, node
       do i = 1, size(model%output%points)
          node = model%output%points(i)
-         call reserve_text(out, prefix_length + len(model%nodes(node)%name) + 9*(real_width + 1) + 1)
-         call row(out, prefix, model%nodes(node)%name, [result%pos(:, node), result%pos_z(node)], &
+         call reserve_text(out, row_length(len(model%nodes(node)%name), 9))
+         call append_rates_row(out%text, out%n, prefix, model%nodes(node)%name, [result%pos(:, node), result%pos_z(node)], &
             & [result%vel(:, node), result%vel_z(node)], [result%acc(:, node), result%acc_z(node)], &
             & result%has_velocity, velocities, accelerations)
       end do
@@ -50,7 +46,7 @@ contains
    subroutine write_joints_header(out, velocities, accelerations)
       type(text_buffer_type), intent(inout) :: out
       logical, intent(in) :: velocities, accelerations
-      call header(out, 'step,t,joint,angle', ',rate', ',acceleration', velocities, accelerations)
+      call write_rates_header(out, 'step,t,joint,angle', ',rate', ',acceleration', velocities, accelerations)
    end subroutine write_joints_header
 
    !> One row per reported joint.
@@ -65,52 +61,11 @@ contains
       joints = reported_joints(model%spatial)
       do i = 1, size(joints)
          associate (name => model%spatial%joints(joints(i))%name)
-            call reserve_text(out, prefix_length + len(name) + 3*(real_width + 1) + 1)
-            call row(out, prefix, name, result%joint_motion(1:1, i), result%joint_motion(2:2, i), &
+            call reserve_text(out, row_length(len(name), 3))
+            call append_rates_row(out%text, out%n, prefix, name, result%joint_motion(1:1, i), result%joint_motion(2:2, i), &
                & result%joint_motion(3:3, i), result%has_velocity, velocities, accelerations)
          end associate
       end do
    end subroutine write_joints_rows
-
-   subroutine header(out, values, rates, second_rates, velocities, accelerations)
-      type(text_buffer_type), intent(inout) :: out
-      character(*), intent(in) :: values, rates, second_rates
-      logical, intent(in) :: velocities, accelerations
-      call reserve_text(out, len(values) + len(rates) + len(second_rates) + 1)
-      call append_text(out%text, out%n, values)
-      if (velocities) call append_text(out%text, out%n, rates)
-      if (velocities .and. accelerations) call append_text(out%text, out%n, second_rates)
-      call append_text(out%text, out%n, new_line('a'))
-   end subroutine header
-
-   !> `step,t,name,q[,dq[,ddq]]`; the rates empty where they are not known.
-   subroutine row(out, prefix, name, q, dq, ddq, has_velocity, velocities, accelerations)
-      type(text_buffer_type), intent(inout) :: out
-      character(*), intent(in) :: prefix, name
-      real(dp), intent(in) :: q(:), dq(:), ddq(:)
-      logical, intent(in) :: has_velocity, velocities, accelerations
-      integer :: i
-      call append_text(out%text, out%n, prefix)
-      call append_text(out%text, out%n, name)
-      call values(q)
-      if (velocities .and. .not. has_velocity) then
-         do i = 1, size(q)*merge(2, 1, accelerations)
-            call append_text(out%text, out%n, ',')
-         end do
-      else if (velocities) then
-         call values(dq)
-         if (accelerations) call values(ddq)
-      end if
-      call append_text(out%text, out%n, new_line('a'))
-   contains
-      subroutine values(x)
-         real(dp), intent(in) :: x(:)
-         integer :: k
-         do k = 1, size(x)
-            call append_text(out%text, out%n, ',')
-            call append_real(out%text, out%n, x(k))
-         end do
-      end subroutine values
-   end subroutine row
 
 end module fekap_output_spatial_csv
