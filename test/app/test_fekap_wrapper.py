@@ -18,10 +18,12 @@ WRAPPER = ROOT / "scripts" / "fekap"
 
 
 def default_sigint() -> None:
-    """In the child: SIGINT as a terminal's shell leaves it. A test run started in the background
-    of a non-interactive shell inherits SIGINT ignored, and bash cannot trap a signal ignored on
-    entry (nor Python raise KeyboardInterrupt for it)."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    """In the child: SIGINT, SIGTERM and SIGHUP as a terminal's shell leaves them. A test run
+    started in the background of a non-interactive shell inherits SIGINT ignored, and one started
+    under nohup SIGHUP ignored; bash cannot trap a signal ignored on entry (nor Python raise
+    KeyboardInterrupt for it)."""
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
 
 
 def start(*args: str) -> subprocess.Popen:
