@@ -14,7 +14,7 @@ module fekap_deck_geometry
    private
 
    public :: read_sections, read_nodes, read_links, read_welds, read_supports
-   public :: has_end, welded, lookup_node, lookup_link
+   public :: has_end, welded, lookup_node, lookup_link, too_many
 
    !> Links shorter than this times the model size have zero length.
    real(dp), parameter :: zero_length = 1.0e-12_dp

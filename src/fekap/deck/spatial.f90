@@ -7,6 +7,7 @@
 !> place, a missing node.
 module fekap_deck_spatial
    use fekap_kinds, only: dp
+   use fekap_vectors, only: cross
    use fekap_model, only: model_type, section_type, node_type, link_type, source_loc_type
    use fekap_model_spatial, only: spatial_section_type, spatial_joint_type, spatial_drive_type, joint_names, &
       & joint_spherical, joint_revolute, joint_universal, joint_prismatic, joint_cylindrical, joint_weld
@@ -14,7 +15,7 @@ module fekap_deck_spatial
    use fekap_strings, only: lower, same_name, word_index, short_real_text
    use fekap_deck_name_index, only: new_name_index
    use fekap_deck_context, only: context_type
-   use fekap_deck_geometry, only: lookup_node, max_coordinate
+   use fekap_deck_geometry, only: lookup_node, max_coordinate, too_many
    use fekap_deck_motion, only: read_law
    implicit none
    private
@@ -439,20 +440,5 @@ contains
       end do
       model%spatial%drives = model%spatial%drives(:n)
    end subroutine read_spatial_drives
-
-   logical function too_many(ctx, iline, nmax, form, what)
-      type(context_type), intent(inout) :: ctx
-      integer, intent(in) :: iline, nmax
-      character(*), intent(in) :: form, what
-      too_many = ctx%nfields(iline) > nmax
-      if (too_many) call ctx%error(iline, nmax + 1, "unexpected field '"//ctx%field(iline, nmax + 1)//"'", &
-         & label=what//' is: '//form)
-   end function too_many
-
-   pure function cross(a, b) result(c)
-      real(dp), intent(in) :: a(3), b(3)
-      real(dp) :: c(3)
-      c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
-   end function cross
 
 end module fekap_deck_spatial

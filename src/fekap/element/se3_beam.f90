@@ -31,6 +31,7 @@
 !> e2, e3.
 module fekap_element_se3_beam
    use fekap_kinds, only: dp
+   use fekap_vectors, only: cross
    use fekap_error, only: error_type, input_error
    use fekap_element_se3, only: hat, se3_log, se3_tangent_inverse, se3_tangent_inverse_derivative, &
       & se3_tangent_inverse_directional
@@ -196,12 +197,6 @@ contains
       c = matmul(se3_tangent_inverse_directional(-d, dd), z(1:6)) &
          & + matmul(se3_tangent_inverse_directional(d, dd), z(7:12)) + matmul(p, zd)
    end function se3_beam_convective
-
-   pure function cross(a, b) result(c)
-      real(dp), intent(in) :: a(3), b(3)
-      real(dp) :: c(3)
-      c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
-   end function cross
 
    !> Section resultants (N, V2, V3, T, M2, M3) = C eps in the section axes.
    pure function se3_beam_resultants(self, x, r) result(sig)

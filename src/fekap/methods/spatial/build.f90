@@ -11,6 +11,7 @@
 !> start time, law(t) - law(t_start).
 module fekap_spatial_build
    use fekap_kinds, only: dp
+   use fekap_vectors, only: cross
    use fekap_error, only: error_type, input_error
    use fekap_union_find, only: find_root, join
    use fekap_model, only: model_type
@@ -318,11 +319,5 @@ contains
       case default                                       ! no law: nothing to shift
       end select
    end function shifted_law
-
-   pure function cross(a, b) result(c)
-      real(dp), intent(in) :: a(3), b(3)
-      real(dp) :: c(3)
-      c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
-   end function cross
 
 end module fekap_spatial_build

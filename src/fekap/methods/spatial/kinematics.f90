@@ -17,6 +17,7 @@
 !> frames (their rotation matrices are the state, updated multiplicatively).
 module fekap_spatial_kinematics
    use fekap_kinds, only: dp
+   use fekap_vectors, only: cross
    use fekap_error, only: error_type, analysis_error
    use fekap_linalg_lapack, only: dense_lu_factor, dense_lu_solve
    use fekap_element_se3, only: so3_exp, so3_update
@@ -197,12 +198,6 @@ contains
          end associate
       end do
    end function frame_curvature
-
-   pure function cross(a, b) result(c)
-      real(dp), intent(in) :: a(3), b(3)
-      real(dp) :: c(3)
-      c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
-   end function cross
 
    !> The residual r = sum G^T f and, if asked, the material tangent
    !> K = sum G^T B^T k B G at state s. With v (and kappa, from
