@@ -5,9 +5,7 @@
 !> The graph side of the numbering (the free dofs' adjacency and its
 !> Cuthill-McKee order) is fekap_assembly_ordering's.
 !>
-!> Why just over 600 lines: the rest is one construction (new_mesh) whose
-!> steps (dofs, statuses, numbering, scatter map, envelope, slidelines) each
-!> fill part of the same mesh_type and need the parts before.
+!> The slidelines in mesh terms are fekap_assembly_slides'.
 !>
 !> Points 1..size(model%nodes) are the model's nodes in order; a link meshed
 !> with several elements adds its interior points after them. Every point has
@@ -17,9 +15,9 @@
 !> consecutive elements share the rotation of their common point.
 module fekap_assembly_mesh
    use fekap_kinds, only: dp
-   use fekap_model, only: model_type, dof_x, dof_y, dof_rot, joint_prismatic
+   use fekap_model, only: model_type, dof_x, dof_y, dof_rot
    use fekap_element_beam, only: beam_type, new_beam
-   use fekap_contact_slideline, only: default_penalty
+   use fekap_assembly_slides, only: slide_type, new_slides
    use fekap_union_find, only: find_root, join, flatten
    use fekap_model, only: load_type, effects_statics, effects_dynamics
    use fekap_model_effects, only: planned_effects, has_masses
@@ -33,24 +31,6 @@ module fekap_assembly_mesh
 
    !> Status of a degree of freedom.
    integer, parameter, public :: dof_free = 0, dof_fixed = 1, dof_driven = 2
-
-   !> A slideline in mesh terms: the slave point and the chain of master
-   !> segments (pairs of points, in order along the line), or a fixed guide.
-   type :: slide_type
-      integer :: slave = 0
-      !> joint_pin_in_slot or joint_prismatic.
-      integer :: kind = 0
-      !> Prismatic joints: the slave link's rotation dof at the slave point.
-      integer :: slave_rot = 0
-      logical :: ground = .false.
-      real(dp) :: guide(2, 2) = 0
-      !> (2, nseg): the master points of each segment along the chain.
-      integer, allocatable :: seg(:, :)
-      !> Penalty constants of the gap spring and of the rotational tie.
-      real(dp) :: kp = 0, kr = 0
-      !> Prismatic joints: initial chord angle of each segment (the tie's offset).
-      real(dp), allocatable :: c0(:)
-   end type slide_type
 
    type :: mesh_type
       integer :: npoint = 0
@@ -238,7 +218,7 @@ contains
       end do
 
       call set_status(self, model)
-      call new_slides(self, model, first_interior)
+      call new_slides(self%slides, model, first_interior, self%x0, self%elements, self%edof, self%tdof, self%link_rot)
       call number_equations(self)
       call build_scatter_map(self)
 
@@ -532,83 +512,6 @@ contains
          group_start(nel + i + 1) = k + 1
       end do
    end subroutine coupling_groups
-
-   !> Slidelines in mesh terms: master chains of segments oriented along the
-   !> chain, default penalties scaled from the stiffness of the elements coupled.
-   subroutine new_slides(self, model, first_interior)
-      type(mesh_type), intent(inout) :: self
-      type(model_type), intent(in) :: model
-      integer, intent(in) :: first_interior(:)
-      integer :: i, j, k, l, m, nseg, last, e
-      integer, allocatable :: pts(:)
-      real(dp) :: ea_m, l_m, ei_m, ea_s, l_s, ei_s, d(2)
-      if (.not. allocated(model%slidelines)) then
-         allocate (self%slides(0))
-         return
-      end if
-      allocate (self%slides(size(model%slidelines)))
-      do i = 1, size(model%slidelines)
-         associate (ms => model%slidelines(i), sl => self%slides(i))
-            sl%slave = ms%slave
-            sl%kind = ms%kind
-            sl%ground = ms%ground
-            sl%guide = ms%guide
-            ea_m = 0
-            ei_m = 0
-            l_m = 0
-            if (ms%ground) then
-               allocate (sl%seg(2, 1), source=0)
-               nseg = 1
-               d = ms%guide(:, 2) - ms%guide(:, 1)
-               sl%c0 = [atan2(d(2), d(1))]
-            else
-               nseg = sum(model%links(ms%master_links)%nelem)
-               allocate (sl%seg(2, nseg), sl%c0(nseg))
-               k = 0
-               last = 0
-               do j = 1, size(ms%master_links)
-                  l = ms%master_links(j)
-                  m = model%links(l)%nelem
-                  pts = [model%links(l)%node(1), (first_interior(l) + e - 1, e=1, m - 1), model%links(l)%node(2)]
-                  ! Continue the chain from where the last link ended.
-                  if (last /= 0 .and. pts(m + 1) == last) pts = pts(m + 1:1:-1)
-                  do e = 1, m
-                     k = k + 1
-                     sl%seg(:, k) = pts(e:e + 1)
-                     d = self%x0(:, pts(e + 1)) - self%x0(:, pts(e))
-                     sl%c0(k) = atan2(d(2), d(1))
-                  end do
-                  last = pts(m + 1)
-                  associate (sec => model%sections(model%links(l)%section))
-                     l_m = norm2(d)
-                     ea_m = max(ea_m, sec%ea)
-                     ei_m = max(ei_m, sec%ei)
-                  end associate
-               end do
-            end if
-            ! The slave's own elements: the stiffest one touching the slave point.
-            ea_s = 0
-            ei_s = 0
-            l_s = 0
-            do e = 1, size(self%elements)
-               if (any(self%edof(1:2, e) == self%tdof(1, sl%slave)) .or. &
-                  & any(self%edof(4:5, e) == self%tdof(1, sl%slave))) then
-                  if (self%elements(e)%ea/self%elements(e)%length > ea_s/max(l_s, tiny(1.0_dp))) then
-                     ea_s = self%elements(e)%ea
-                     ei_s = self%elements(e)%ei
-                     l_s = self%elements(e)%length
-                  end if
-               end if
-            end do
-            sl%kp = default_penalty(ea_m, ea_s, l_m, l_s)
-            sl%kr = default_penalty(ei_m, ei_s, l_m, l_s)
-            if (ms%penalty > 0) sl%kp = ms%penalty
-            if (ms%kind == joint_prismatic) sl%slave_rot = end_dof(self, model, ms%slave_link, ms%slave)
-         end associate
-      end do
-   end subroutine new_slides
-
-
 
    !> A readable name of a dof, for messages: "x of node C", "rotation of link AB at node A".
    function describe_dof(self, model, dof) result(text)

@@ -11,25 +11,23 @@
 !> atan2(y,x) exp log abs; the deck's parameters (PARAmeters block), when the
 !> caller passes them. Names are case-insensitive.
 !>
-!> Why one module of over 600 lines (just over): the recursive-descent
-!> parser, its tokens and the overflow-safe arithmetic it evaluates with
-!> share private state of one expression and are tested together.
-!>
-!> Every operation is checked before it is carried out, so that no NaN, no
-!> infinity and no overflow is ever computed (the tests run with floating-point
-!> traps): a result that would not be a finite number is reported instead.
+!> Every operation is checked before it is carried out (the overflow-safe
+!> arithmetic of fekap_deck_safe_arithmetic, numbers read by
+!> fekap_deck_decimal), so that no NaN, no infinity and no overflow is ever
+!> computed (the tests run with floating-point traps): a result that would
+!> not be a finite number is reported instead.
 module fekap_deck_expression
-   use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
    use fekap_strings, only: lower, same_name
    use fekap_model, only: parameter_type
    use fekap_deck_name_index, only: name_index_type
+   use fekap_deck_safe_arithmetic, only: safe_add, safe_multiply, safe_divide
+   use fekap_deck_decimal, only: decimal_value, decimal_too_large
    implicit none
    private
 
    public :: evaluate_expression, evaluate_integer, known_names
-   public :: safe_add, safe_multiply, safe_divide
 
    !> Headline of an error in the form of the field.
    character(*), parameter, public :: msg_not_a_number = 'expected a real number'
@@ -41,11 +39,6 @@ module fekap_deck_expression
    real(dp), parameter :: log_huge = log(huge(1.0_dp)) - 1.0e-6_dp
 
    integer, parameter :: ok = 0, bad_syntax = 1, bad_value = 2
-
-   !> 10**k, k = 0..22: every one an exact double.
-   real(dp), parameter :: exact_powers(0:22) = [1.0e0_dp, 1.0e1_dp, 1.0e2_dp, 1.0e3_dp, 1.0e4_dp, 1.0e5_dp, &
-      & 1.0e6_dp, 1.0e7_dp, 1.0e8_dp, 1.0e9_dp, 1.0e10_dp, 1.0e11_dp, 1.0e12_dp, 1.0e13_dp, 1.0e14_dp, 1.0e15_dp, &
-      & 1.0e16_dp, 1.0e17_dp, 1.0e18_dp, 1.0e19_dp, 1.0e20_dp, 1.0e21_dp, 1.0e22_dp]
 
    !> Deepest nesting of parentheses, signs and powers in a field: far beyond
    !> any real deck, and a bound on the parser's recursion (20,000 nested
@@ -134,56 +127,6 @@ contains
       end if
       value = nint(x)
    end subroutine evaluate_integer
-
-   !> a + b, or ok = .false. if it would overflow.
-   pure subroutine safe_add(a, b, c, ok_)
-      real(dp), intent(in) :: a, b
-      real(dp), intent(out) :: c
-      logical, intent(out) :: ok_
-      ! Halving is exact at this end of the range, so a/2 + b/2 rounds like a + b.
-      c = a/2 + b/2
-      ok_ = abs(c) <= huge(c)/2
-      c = 0
-      if (ok_) c = a + b
-   end subroutine safe_add
-
-   !> a * b, or ok = .false. if it would overflow.
-   pure subroutine safe_multiply(a, b, c, ok_)
-      real(dp), intent(in) :: a, b
-      real(dp), intent(out) :: c
-      logical, intent(out) :: ok_
-      integer :: e
-      c = 0
-      ok_ = .true.
-      if (a == 0 .or. b == 0) return
-      e = exponent(a) + exponent(b)
-      ok_ = e <= maxexponent(a)
-      if (ok_ .and. e >= maxexponent(a) - 1) then
-         c = (a/4)*b   ! below 2**1022: cannot overflow
-         ok_ = abs(c) <= huge(c)/4
-      end if
-      c = 0
-      if (ok_) c = a*b
-   end subroutine safe_multiply
-
-   !> a / b, or ok = .false. if b is zero or the quotient would overflow.
-   pure subroutine safe_divide(a, b, c, ok_)
-      real(dp), intent(in) :: a, b
-      real(dp), intent(out) :: c
-      logical, intent(out) :: ok_
-      integer :: e
-      c = 0
-      ok_ = b /= 0
-      if (.not. ok_ .or. a == 0) return
-      e = exponent(a) - exponent(b)
-      ok_ = e <= maxexponent(a)
-      if (ok_ .and. e >= maxexponent(a) - 1) then
-         c = (a/4)/b   ! below 2**1023: cannot overflow
-         ok_ = abs(c) <= huge(c)/4
-      end if
-      c = 0
-      if (ok_) c = a/b
-   end subroutine safe_divide
 
    pure subroutine fail(p, status, detail)
       type(parser_type), intent(inout) :: p
@@ -531,10 +474,8 @@ contains
    pure subroutine parse_number(p, v)
       type(parser_type), intent(inout) :: p
       real(dp), intent(out) :: v
-      integer :: start, exponent, point, first, ndigits, decimal, ios, scale, i
-      integer(int64) :: significand
-      character(:), allocatable :: mantissa, digits
-      character(len=16) :: exponent_text
+      integer :: start, exponent, point, first, ndigits, ios
+      character(:), allocatable :: mantissa
       logical :: negative_exponent
       v = 0
       start = p%pos
@@ -579,64 +520,13 @@ contains
          return
       end if
       if (first == 0) return   ! zero
-      ! Most deck numbers have at most 15 digits and a small exponent: then
-      ! the digits as an integer and 10**scale are exact doubles, and one
-      ! product or quotient of them is the correctly rounded value, the same
-      ! as the formatted read gives (Clinger's fast path), at a fraction of its
-      ! cost (a 100,000-link deck has 200,000 coordinates).
-      scale = exponent - (ndigits - (point - 1))
-      if (ndigits <= 15 .and. abs(scale) <= 22) then
-         significand = 0
-         do i = 1, ndigits
-            significand = 10*significand + (iachar(mantissa(i:i)) - iachar('0'))
-         end do
-         if (scale >= 0) then
-            v = real(significand, dp)*exact_powers(scale)
-         else
-            v = real(significand, dp)/exact_powers(-scale)
-         end if
-         return
-      end if
-      ! Decimal exponent of the leading digit: the number is d.ddd * 10**decimal.
-      decimal = exponent + (point - 1) - first
-      if (decimal > 308 .or. (decimal == 308 .and. above_huge(mantissa(first:)))) then
+      call decimal_value(mantissa(first:), exponent + (point - 1) - first, v, ios)
+      if (ios == decimal_too_large) then
          call fail(p, bad_value, 'the number is too large')
-         return
-      end if
-      if (decimal < -400) return   ! underflows to zero
-      write (exponent_text, '(i0)') decimal
-      digits = mantissa(first:first)//'.'//mantissa(first + 1:)//'e'//trim(exponent_text)
-      read (digits, *, iostat=ios) v
-      if (ios /= 0) then
+      else if (ios /= 0) then
          call fail(p, bad_syntax, 'not a number')
-         v = 0
       end if
    end subroutine parse_number
-
-   !> Whether the significant digits d.ddd... of a number times 1e308 exceed
-   !> huge(1.0_dp) = 1.7976931348623157e308 (a little conservatively: digits
-   !> beyond these 17 that are not all zero count as too large).
-   pure logical function above_huge(significant)
-      character(*), intent(in) :: significant
-      character(*), parameter :: top = '17976931348623157'
-      character(len=len(top)) :: head
-      head = significant   ! padded with blanks, compared as zeros below
-      head = translate_blanks(head)
-      above_huge = head > top
-      if (head == top .and. len(significant) > len(top)) then
-         above_huge = verify(significant(len(top) + 1:), '0') > 0
-      end if
-   end function above_huge
-
-   pure function translate_blanks(text) result(out)
-      character(*), intent(in) :: text
-      character(len(text)) :: out
-      integer :: i
-      out = text
-      do i = 1, len(text)
-         if (out(i:i) == ' ') out(i:i) = '0'
-      end do
-   end function translate_blanks
 
    pure subroutine expect(p, c)
       type(parser_type), intent(inout) :: p

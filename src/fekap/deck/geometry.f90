@@ -9,7 +9,7 @@ module fekap_deck_geometry
    use fekap_strings, only: lower, same_name, int_text
    use fekap_deck_name_index, only: new_name_index
    use fekap_deck_context, only: context_type
-   use fekap_deck_expression, only: safe_multiply
+   use fekap_deck_safe_arithmetic, only: safe_multiply
    implicit none
    private
 

@@ -11,7 +11,7 @@ module fekap_deck_motion
    use fekap_deck_card, only: is_word_of
    use fekap_strings, only: lower, same_name
    use fekap_deck_context, only: context_type
-   use fekap_deck_expression, only: safe_add, safe_multiply
+   use fekap_deck_safe_arithmetic, only: safe_add, safe_multiply
    use fekap_deck_geometry, only: has_end, welded, lookup_node, lookup_link, max_coordinate
    implicit none
    private

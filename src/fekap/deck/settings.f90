@@ -13,7 +13,7 @@ module fekap_deck_settings
    use fekap_strings, only: lower, word_index
    use fekap_deck_context, only: context_type
    use fekap_deck_geometry, only: lookup_node, lookup_link
-   use fekap_deck_expression, only: safe_add
+   use fekap_deck_safe_arithmetic, only: safe_add
    implicit none
    private
 
