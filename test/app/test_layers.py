@@ -155,3 +155,44 @@ def test_the_rules_see_a_breach(tmp_path, monkeypatch):
         except AssertionError:
             continue
         raise AssertionError(f"{check.__name__} let a breach through")
+
+
+# The FEM stepper's component records whose fields are public for reading
+# (Fortran has no read-only components): the component's name on
+# fem_core_type and the one file whose procedures may assign its fields. (The
+# factor record's fields are private: the compiler checks that one.)
+RECORD_OWNER = {
+    "change": SRC / "methods" / "fem" / "change_point.f90",
+    "prediction": SRC / "methods" / "fem" / "prediction.f90",
+}
+# An assignment to a field of a record, `x%change%found = ...` (not `==`).
+RECORD_ASSIGNMENT = re.compile(r"%(" + "|".join(RECORD_OWNER) + r")%\w+\s*(\([^=]*\))?\s*=(?!=)", re.IGNORECASE)
+
+
+def records_assigned_outside_their_owners(paths: list[Path]) -> list[tuple[Path, int]]:
+    """(file, line) of every assignment to a record's field outside its owner."""
+    found = []
+    for path in paths:
+        for n, line in enumerate(path.read_text().splitlines(), start=1):
+            code = line.split("!", 1)[0]
+            found += [(path, n) for m in RECORD_ASSIGNMENT.finditer(code)
+                      if path != RECORD_OWNER[m.group(1).lower()]]
+    return found
+
+
+def test_component_records_are_assigned_by_their_owners():
+    """No flags as a protocol between files: the change-point and predictor
+    records change only through their modules' procedures (src/ and the tests)."""
+    paths = [*sources(), *sorted((ROOT / "test").glob("*.pf"))]
+    assigned = [f"{path.relative_to(ROOT)}:{n}" for path, n in records_assigned_outside_their_owners(paths)]
+    assert not assigned, "component records assigned outside their modules:\n" + "\n".join(assigned)
+
+
+def test_record_check_sees_a_breach(tmp_path):
+    """The check above is not vacuous: fields assigned elsewhere are caught;
+    a comparison, a comment and the owners' own procedures are not."""
+    other = tmp_path / "fem.f90"
+    other.write_text("if (self%change%found == x) y = 1\n      self%change%found = .false.\n"
+                     "fem%prediction%q(3) = 0 ! guard\n! fem%change%detect = .true.\n")
+    assert records_assigned_outside_their_owners([other]) == [(other, 2), (other, 3)]
+    assert records_assigned_outside_their_owners(list(RECORD_OWNER.values())) == []

@@ -6,9 +6,15 @@
 !> as one double step, and fills the skipped row for output only from its two
 !> regular neighbours (hermite_fill), its positions then corrected in the
 !> range of the tangent (correct_fill). docs/hard-cases.md (Change points)
-!> has the measurements behind the thresholds.
+!> has the measurements behind the thresholds. The stepper's change-point
+!> record (change_record_type) is this module's: whether a step checks its
+!> predictor, what the check found, and the regular states on either side of
+!> a change point stepped over; its procedures are the only ones that assign
+!> its fields (Fortran has no read-only components: they are public for
+!> reading without a copy; test/app/test_layers.py checks the assignments).
 module fekap_fem_change_point
    use fekap_kinds, only: dp
+   use fekap_fem_accepted, only: fem_state_type
    use fekap_model_work, only: work_counts_type
    use fekap_assembly_mesh, only: mesh_type
    use fekap_fem_linear_system, only: linear_system_type, assemble_system, assemble_system_residual, &
@@ -16,7 +22,7 @@ module fekap_fem_change_point
    implicit none
    private
 
-   public :: change_verdict, response_trusted, hermite_fill, correct_fill, fill_order
+   public :: change_verdict, response_trusted, hermite_fill, correct_fill, fill_order, change_record_type
 
    !> A tangent whose reciprocal condition number is below change_drop times
    !> the largest of the run's accepted configurations is near singular.
@@ -47,7 +53,103 @@ module fekap_fem_change_point
    !> Corrections of a filled row's positions at most.
    integer, parameter, public :: fill_iterations = 4
 
+   !> The FEM stepper's change-point record (see fekap_fem's step_over).
+   type :: change_record_type
+      !> Whether the step being solved checks its predictor's tangent (a run's
+      !> step, at its first try), and whether it found it near singular.
+      logical :: detect = .false., found = .false.
+      !> The condition estimate of the predictor's tangent, and whether it was
+      !> found regular: the estimate then stands for the accepted
+      !> configuration's in the branch-jump check (one estimate a step, not two).
+      real(dp) :: predictor_rcond = 0
+      logical :: predictor_regular = .false.
+      !> The regular states on either side of a change point stepped over: the
+      !> state before it, and the one solved at the next output time, kept for
+      !> the next advance with its iterations, residual and cuts (has_ahead).
+      type(fem_state_type) :: before, ahead
+      logical :: has_ahead = .false.
+      integer :: ahead_iterations = 0, ahead_cuts = 0
+      real(dp) :: ahead_residual = 0
+   contains
+      !> An advance begins: it checks its predictor if `detect`; nothing found yet.
+      procedure :: begin_advance => record_begin_advance
+      !> No more checks of a predictor in this advance.
+      procedure :: stop_detecting => record_stop_detecting
+      !> A step's predictor is not (yet) known regular.
+      procedure :: forget_predictor => record_forget_predictor
+      !> The check of a predictor's tangent: its condition estimate against the
+      !> run's best (change_verdict); found if near singular. Ends the detection.
+      procedure :: record_predictor => record_record_predictor
+      !> The change point found has been dealt with.
+      procedure :: clear_found => record_clear_found
+      !> Keep the regular state before a change point.
+      procedure :: keep_before => record_keep_before
+      !> Keep the state solved beyond a change point for the next advance.
+      procedure :: keep_ahead => record_keep_ahead
+      !> Whether a state ahead was kept; it is the next advance's once (taken).
+      procedure :: take_ahead => record_take_ahead
+   end type change_record_type
+
 contains
+
+   pure subroutine record_begin_advance(self, detect)
+      class(change_record_type), intent(inout) :: self
+      logical, intent(in) :: detect
+      self%detect = detect
+      self%found = .false.
+   end subroutine record_begin_advance
+
+   pure subroutine record_stop_detecting(self)
+      class(change_record_type), intent(inout) :: self
+      self%detect = .false.
+   end subroutine record_stop_detecting
+
+   pure subroutine record_forget_predictor(self)
+      class(change_record_type), intent(inout) :: self
+      self%predictor_regular = .false.
+   end subroutine record_forget_predictor
+
+   pure subroutine record_record_predictor(self, rcond, reference)
+      class(change_record_type), intent(inout) :: self
+      !> The predictor tangent's reciprocal condition number (0: its factor failed).
+      real(dp), intent(in) :: rcond
+      !> The run's best so far.
+      real(dp), intent(in) :: reference
+      self%detect = .false.
+      self%predictor_rcond = rcond
+      self%predictor_regular = change_verdict(rcond, reference) == change_regular
+      if (.not. self%predictor_regular) self%found = .true.
+   end subroutine record_record_predictor
+
+   pure subroutine record_clear_found(self)
+      class(change_record_type), intent(inout) :: self
+      self%found = .false.
+   end subroutine record_clear_found
+
+   subroutine record_keep_before(self, state)
+      class(change_record_type), intent(inout) :: self
+      type(fem_state_type), intent(in) :: state
+      self%before = state
+   end subroutine record_keep_before
+
+   subroutine record_keep_ahead(self, state, iterations, residual, cuts)
+      class(change_record_type), intent(inout) :: self
+      type(fem_state_type), intent(in) :: state
+      integer, intent(in) :: iterations, cuts
+      real(dp), intent(in) :: residual
+      self%ahead = state
+      self%ahead_iterations = iterations
+      self%ahead_residual = residual
+      self%ahead_cuts = cuts
+      self%has_ahead = .true.
+   end subroutine record_keep_ahead
+
+   pure subroutine record_take_ahead(self, taken)
+      class(change_record_type), intent(inout) :: self
+      logical, intent(out) :: taken
+      taken = self%has_ahead
+      self%has_ahead = .false.
+   end subroutine record_take_ahead
 
    !> Whether a tangent with reciprocal condition number rcond is near
    !> singular against the largest of the run so far, reference (a run

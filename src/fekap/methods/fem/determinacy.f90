@@ -265,8 +265,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: ratio
       if (self%loaded) return
-      if (.not. self%accepted_singular) then
-         if (.not. self%factor_current) return
+      if (.not. self%factor%is_singular()) then
+         if (.not. self%factor%is_current()) return
          ratio = accepted_pivot(self)
          if (.not. (singular_pivot(ratio, self%state%reference_pivot) .or. ratio < probe_pivot)) return
       end if

@@ -79,15 +79,16 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: clock
       integer :: verdict
+      logical :: ahead
       clock = clock_seconds()
       self%system%timing = .true.
       call start_configuration(self, self%state%t, self%state%q, self%seg, error)
       if (allocated(error)) return
       self%state%seg = self%seg
       self%state%history%filled = 0
-      self%factor_current = .false.
+      call self%factor%invalidate()
       self%state%has_jump_response = .false.
-      self%has_ahead = .false.
+      call self%change%take_ahead(ahead)
       result%iterations = 0
       call assemble_system_residual(self%system, self%mesh, self%state%q, self%state%t, self%seg, self%counts)
       result%residual = residual_norm(self%system, self%mesh)
@@ -114,36 +115,35 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(step_cuts_type) :: cuts
       real(dp) :: clock
-      logical :: filled
+      logical :: filled, ahead
       self%advances = self%advances + 1
       ! The phases are timed on a sample of the steps (and at the start); the
       ! summary scales them to the run (see phase_seconds).
       self%system%timing = phase_timed(self%advances)
       if (self%system%timing) clock = clock_seconds()
-      if (self%has_ahead) then
-         self%has_ahead = .false.
-         if (t == self%ahead%t) then
+      call self%change%take_ahead(ahead)
+      if (ahead) then
+         if (t == self%change%ahead%t) then
             ! The step over a change point solved this time already (with its rates).
-            call restore_state(self, self%ahead)
-            result%iterations = self%ahead_iterations
-            result%residual = self%ahead_residual
-            self%last_cuts = self%ahead_cuts
+            call restore_state(self, self%change%ahead)
+            result%iterations = self%change%ahead_iterations
+            result%residual = self%change%ahead_residual
+            self%last_cuts = self%change%ahead_cuts
             result%cuts = self%last_cuts
             call fill_result(self, result)
             if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
             return
          end if
          ! Another time: from the regular state before the change point.
-         call restore_state(self, self%before_change)
+         call restore_state(self, self%change%before)
       end if
       ! The paper's `previous` predictor is the last configuration: its tangent
       ! says nothing about the new time's.
-      self%detect_change = .not. self%loaded .and. self%model%analysis%predictor /= predictor_previous
-      self%change_found = .false.
+      call self%change%begin_advance(.not. self%loaded .and. self%model%analysis%predictor /= predictor_previous)
       call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
-      self%detect_change = .false.
+      call self%change%stop_detecting()
       if (allocated(error)) return
-      if (self%change_found) then
+      if (self%change%found) then
          call step_over(self, t, result, cuts, filled, error)
          if (allocated(error)) return
          if (filled) then
@@ -189,42 +189,38 @@ contains
       integer :: its, order, info
       logical :: singular
       filled = .false.
-      rcond = self%predictor_rcond
-      self%change_found = .false.
+      rcond = self%change%predictor_rcond
+      call self%change%clear_found()
       ! The tangent at the accepted state again (the drive increment's residual scale).
-      self%factor_current = .false.
+      call self%factor%invalidate()
       call refactor_at_accepted(self, info)
-      self%before_change = self%state
+      call self%change%keep_before(self%state)
       call advance_to(self, next_output_time(self, t), 0, its, residual, over_cuts, over_error)
-      if (allocated(over_error) .or. self%change_found) then
+      if (allocated(over_error) .or. self%change%found) then
          ! The double step failed: solve at t itself, as without the detection.
-         self%change_found = .false.
-         call restore_state(self, self%before_change)
+         call self%change%clear_found()
+         call restore_state(self, self%change%before)
          call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
          return
       end if
       call solve_rates(self)
       call prepend_cuts_note(self%state%note, over_cuts)
-      self%ahead = self%state
-      self%ahead_iterations = its
-      self%ahead_residual = residual
-      self%ahead_cuts = over_cuts%cuts
-      self%has_ahead = .true.
+      call self%change%keep_ahead(self%state, its, residual, over_cuts%cuts)
       call interpolate_fill(self, t, q_fill, its, residual, order, rcond_fill, singular)
       if (.not. singular) then
          ! Near, not on, a change point (the tangent at the filled configuration
          ! is regular enough): solve the row itself as without the detection,
          ! from the state before it; the state at the next time stays ahead.
-         call restore_state(self, self%before_change)
+         call restore_state(self, self%change%before)
          call advance_to(self, t, 0, result%iterations, result%residual, cuts, near_error)
          if (.not. allocated(near_error)) then
-            self%change_found = .false.
+            call self%change%clear_found()
             return
          end if
          call finish_fill(self, t, q_fill, its, residual, rcond_fill)
       end if
       call filled_state(self, t, q_fill, order, rcond, rcond_fill, residual, singular)
-      self%factor_current = .false.
+      call self%factor%invalidate()
       result%iterations = its
       result%residual = residual
       result%cuts = 0
@@ -274,8 +270,8 @@ contains
       type is (fem_stepper_type)
          call solve_step(self, t, depth, iterations, residual, verdict, reason)
          ! Only a run's step, at its first try, checks for a change point.
-         self%detect_change = .false.
-         if (self%change_found) return
+         call self%change%stop_detecting()
+         if (self%change%found) return
          incomplete = verdict == branch_unverifiable
          if (verdict == branch_verify .and. .not. allocated(reason)) then
             ! The branch-jump check asked for the step to be confirmed by two half steps.
@@ -340,7 +336,7 @@ contains
       verdict = branch_accept
       associate (mesh => self%mesh, qt => self%qt, system => self%system)
          self%seg = self%state%seg
-         self%predictor_regular = .false.
+         call self%change%forget_predictor()
          call predict(self, t, qt, guard)
          ! Scale of the residual: what the drive (and load) increment alone
          ! produces from the last configuration, to first order -K_fd dq_d +
@@ -350,8 +346,7 @@ contains
          if (self%conv%mode /= convergence_paper .and. self%model%analysis%predictor /= predictor_previous) then
             call drive_increment_residual(self, t, qt, increment_residual)
          end if
-         self%factor_current = .false.
-         self%accepted_singular = .false.
+         call self%factor%reset()
          contract = fem_contract(self, increment_residual)
          call newton%begin_step(self, t, contract, guard)
          info = 0
@@ -412,8 +407,7 @@ contains
             if (allocated(error)) return
             call branch_jump(self, t, qt, info == 0, depth, verdict, error)
             if (allocated(error)) return
-            self%factor_current = info == 0
-            self%accepted_singular = info /= 0
+            call self%factor%mark(info)
          end if
          call accept(self, t, qt)
          if (newton%stalled_correction > 0) then
@@ -431,7 +425,7 @@ contains
 
    !> A step's Newton that did not converge (newton_solve's error): the
    !> FEM's messages, or no error at a change point at the predictor
-   !> (change_found: step_over takes it from there).
+   !> (change%found: step_over takes it from there).
    subroutine newton_failure(self, t, report, error)
       type(fem_stepper_type), intent(in) :: self
       real(dp), intent(in) :: t
@@ -448,7 +442,7 @@ contains
          call analysis_error(error, trim(msg), t=t)
       case (stop_singular)
          deallocate (error)
-         if (self%change_found) return
+         if (self%change%found) return
          write (msg, '(a,es12.5,a)') 't = ', t, ': singular tangent stiffness at '
          call analysis_error(error, trim(msg)//' '//describe_dof(self%mesh, self%model, self%mesh%eq_dof(report%info)), t=t)
       case default

@@ -54,8 +54,8 @@ contains
          rcond = 0
          if (factored) then
             pivot = accepted_pivot(self)
-            if (self%predictor_regular) then
-               rcond = self%predictor_rcond
+            if (self%change%predictor_regular) then
+               rcond = self%change%predictor_rcond
             else
                call accepted_rcond(self, rcond)
             end if
@@ -74,7 +74,7 @@ contains
             self%dq_old = 0
          end if
          call branch_verdict(self%branch, self%mesh, self%model, t, state%q, qt, self%dq_old, self%dq_new, &
-            & step_floor, self%smooth_prediction, self%q_predicted, self%verification%can_verify(depth), verdict, &
+            & step_floor, self%prediction%smooth, self%prediction%q, self%verification%can_verify(depth), verdict, &
             & error, crossing, turn)
          select case (verdict)
          case (branch_reject)
@@ -108,9 +108,9 @@ contains
       ! noted also when only positions are computed (the tangent is factored
       ! for the branch-jump check anyway, so at no cost).
       if (self%model%analysis%velocities) call refactor_at_accepted(self, info)
-      if (self%accepted_singular) then
+      if (self%factor%is_singular()) then
          ratio = 0
-      else if (self%factor_current) then
+      else if (self%factor%is_current()) then
          ratio = accepted_pivot(self)
       else
          return
@@ -149,7 +149,7 @@ contains
          self%counts%velocity_solves = self%counts%velocity_solves + 1
          state%has_velocity = .true.
          if (.not. self%model%analysis%accelerations) return
-         ! The system holds the factor of the tangent at q (factor_current), so
+         ! The system holds the factor of the tangent at q (the factor record), so
          ! its last tangent assembly, whose section angles it keeps, was at q.
          if (self%loaded .and. size(self%mesh%loads%f, 2) > 1) then
             ! Loads with laws of their own have second rates (the load factor t has none).

@@ -33,7 +33,7 @@ contains
       class(fem_core_type), intent(inout) :: self
       integer, intent(out) :: info
       info = 0
-      if (self%factor_current) return
+      if (self%factor%is_current()) return
       call assemble_system(self%system, self%mesh, self%state%q, self%state%t, self%seg, &
          & merge(0.0_dp, huge(1.0_dp), self%loaded), self%counts)
       if (self%root_form) then
@@ -41,8 +41,7 @@ contains
       else
          call factor_system(self%system, info, self%counts)
       end if
-      self%factor_current = info == 0
-      self%accepted_singular = info /= 0
+      call self%factor%mark(info)
    end subroutine refactor_at_accepted
 
    !> The assembly of a Newton iteration at qt: the residual and the tangent
@@ -163,7 +162,7 @@ contains
       integer :: root_info
       call assemble_system(self%system, self%mesh, q, t, self%seg, huge(1.0_dp), self%counts)
       call factor_system(self%system, info, self%counts)
-      self%factor_current = .false.
+      call self%factor%invalidate()
       rcond = 0
       if (self%root_form) then
          ! On the scale of the run's best, which is B_f's in the square-root form.
@@ -192,7 +191,7 @@ contains
       integer :: info
       self%state = before
       self%seg = before%seg
-      self%factor_current = .false.
+      call self%factor%invalidate()
       call refactor_at_accepted(self, info)
    end subroutine restore_state
 

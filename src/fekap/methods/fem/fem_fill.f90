@@ -13,7 +13,7 @@ module fekap_fem_fill
    use fekap_stepping_predictor, only: predictor_margin
    use fekap_fem_rates, only: solve_velocities, solve_accelerations
    use fekap_assembly_strain_rate, only: strain_rate_rcond
-   use fekap_fem_change_point, only: change_verdict, change_regular, hermite_fill, correct_fill, fill_order, &
+   use fekap_fem_change_point, only: hermite_fill, correct_fill, fill_order, &
       & rates_drop, fill_shift
    use fekap_fem_state, only: fem_state_type, fem_core_type
    use fekap_fem_factor, only: fill_tangent
@@ -27,23 +27,19 @@ contains
    !> The change-point test of a step's predictor (a run's step, at its first
    !> try), with the factor Newton's first iteration just made there (B_f's if
    !> root_solved, else K's unless info > 0): its condition estimate against
-   !> the run's best; change_found if it is near singular, predictor_regular
-   !> (the estimate then stands for the accepted configuration's) if not.
+   !> the run's best, recorded in the change-point record (record_predictor).
    subroutine check_predictor(self, root_solved, info)
       class(fem_core_type), intent(inout) :: self
       logical, intent(in) :: root_solved
       integer, intent(in) :: info
       real(dp) :: rcond
-      self%detect_change = .false.
       rcond = 0
       if (root_solved) then
          call strain_rate_rcond(self%root, rcond)
       else if (info == 0) then
          call system_rcond(self%system, rcond, self%counts)
       end if
-      self%predictor_rcond = rcond
-      self%predictor_regular = change_verdict(rcond, self%state%reference_rcond) == change_regular
-      if (.not. self%predictor_regular) self%change_found = .true.
+      call self%change%record_predictor(rcond, self%state%reference_rcond)
    end subroutine check_predictor
 
    !> The row at time t of a change point stepped over (see fekap_fem's
@@ -65,7 +61,7 @@ contains
       integer :: i
       logical :: has_v0, has_a0, has_v1, has_a1
       ! The rates of the two sides: the solved ones, else the predictor's history velocities.
-      associate (bf => self%before_change, n => self%ahead, q => self%qt)
+      associate (bf => self%change%before, n => self%change%ahead, q => self%qt)
          call side_rates(bf, v0, a0, has_v0, has_a0)
          call side_rates(n, v1, a1, has_v1, has_a1)
          order = fill_order(has_v0 .and. has_v1, has_a0 .and. has_a1)
@@ -115,7 +111,7 @@ contains
       logical, intent(in) :: singular
       character(:), allocatable :: what
       character(len=360) :: text
-      associate (bf => self%before_change, n => self%ahead)
+      associate (bf => self%change%before, n => self%change%ahead)
          self%state = bf
          self%state%t = t
          self%state%q = q_fill

@@ -9,7 +9,7 @@
 !>   when predict extrapolated);
 !> - factor: the square-root form's B_f solve, or K's factor; at the step's
 !>   first factor the change-point probe (check_predictor: a near-singular
-!>   tangent at the predictor ends the solve, `change_found`); a singular
+!>   tangent at the predictor ends the solve, `change%found`); a singular
 !>   material tangent switches to the full tangent for the rest of the step;
 !> - correct: the correction, applied unless it diverges or the predictor
 !>   has converged already (at_predictor: a first correction at round-off);
@@ -45,7 +45,7 @@ module fekap_fem_newton
    integer, parameter :: stall_iterations = 3
 
    !> factor's info when the change-point probe found the predictor's tangent
-   !> near singular (the solve stops; change_found on the stepper says why).
+   !> near singular (the solve stops; the stepper's change%found says why).
    integer, parameter, public :: info_change_point = -1
 
    !> The Newton workspace of one FEM step at time t: the stepper it solves
@@ -189,11 +189,11 @@ contains
          end if
          info = 0
          if (.not. self%root_solved) call factor_system(fem%system, info, fem%counts)
-         if (self%tries == 0 .and. fem%detect_change) then
+         if (self%tries == 0 .and. fem%change%detect) then
             ! A change point at the predictor: Newton does not iterate on a
             ! near-singular tangent (see fekap_fem's step_over).
             call check_predictor(fem, self%root_solved, info)
-            if (fem%change_found) then
+            if (fem%change%found) then
                info = info_change_point
                return
             end if
@@ -239,7 +239,7 @@ contains
          ! rejected by the branch-jump check). The contract's test, the same
          ! as is_converged's, then stops the pass.
          if (first .and. .not. fem%loaded .and. fem%conv%mode /= convergence_paper .and. .not. self%root_solved) then
-            self%at_predictor = self%correction <= predictor_margin*fem%predictor_length .and. &
+            self%at_predictor = self%correction <= predictor_margin*fem%prediction%length .and. &
                & fem%system%assembled_strain < self%kg_above .and. &
                & is_converged(fem%conv, self%residual, self%r0, self%increment_residual, self%correction)
             if (self%at_predictor) then

@@ -38,9 +38,10 @@ contains
       real(dp), contiguous, intent(inout) :: qt(:)
       logical, intent(out) :: guard
       integer :: i, made
-      self%smooth_prediction = .false.
+      logical :: smooth
+      smooth = .false.
       guard = .false.
-      self%predictor_length = max(self%conv%length, roundoff_length(self)/predictor_margin)
+      call self%prediction%begin(max(self%conv%length, roundoff_length(self)/predictor_margin))
       associate (state => self%state)
          select case (self%model%analysis%predictor)
          case (predictor_previous)
@@ -49,12 +50,12 @@ contains
             if (state%has_acceleration) then
                call taylor_predict(state%q, state%v, state%a, t - state%t, qt)
             else
-               call extrapolate_history(state%history, t, .false., self%predictor_length, self%dof_length, qt, made)
+               call extrapolate_history(state%history, t, .false., self%prediction%length, self%dof_length, qt, made)
                if (made == prediction_none) call tangent_predictor(self, t, qt)
             end if
          case default
-            call extrapolate_history(state%history, t, .true., self%predictor_length, self%dof_length, qt, made)
-            self%smooth_prediction = made == prediction_smooth
+            call extrapolate_history(state%history, t, .true., self%prediction%length, self%dof_length, qt, made)
+            smooth = made == prediction_smooth
             guard = made /= prediction_none
             if (made == prediction_none) call tangent_predictor(self, t, qt)
          end select
@@ -63,7 +64,7 @@ contains
          if (self%mesh%status(i) == dof_fixed) qt(i) = self%mesh%q0(i)
       end do
       call set_driven(self, t, qt)
-      self%q_predicted = qt
+      call self%prediction%record(qt, smooth)
    end subroutine predict
 
    !> The round-off of the accepted configuration's dofs in lengths: one unit
@@ -101,8 +102,7 @@ contains
       call max_strain(self%mesh, self%work, strain_previous, element)
       if (strain_previous < self%system%assembled_strain) then
          qt = self%work
-         self%q_predicted = qt
-         self%smooth_prediction = .false.
+         call self%prediction%replace(qt)
          replaced = .true.
       end if
    end function guard_extrapolation

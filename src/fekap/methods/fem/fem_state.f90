@@ -1,7 +1,9 @@
 !> The FEM stepper's data: the accepted state (fem_state_type, of
 !> fekap_fem_accepted), the steps awaiting verification (fekap_fem_verification's
 !> stack), and the stepper's storage and settings (fem_core_type,
-!> allocated once by new_fem_core), with what a step does to them at its
+!> allocated once by new_fem_core, with its component records: the factor
+!> (fekap_fem_factor_record), the predictor (fekap_fem_prediction) and the
+!> change points (fekap_fem_change_point)), with what a step does to them at its
 !> end: accept a configuration (push it on the predictor's history) and fill
 !> the step's result; and the procedures through which another method
 !> (reactions/) uses the FEM. The modules fem_factor, fem_predict,
@@ -19,6 +21,9 @@ module fekap_fem_state
    use fekap_fem_branch, only: branch_check_type, new_branch_check
    use fekap_fem_accepted, only: fem_state_type
    use fekap_fem_verification, only: verification_stack_type
+   use fekap_fem_factor_record, only: factor_record_type
+   use fekap_fem_prediction, only: prediction_type, new_prediction
+   use fekap_fem_change_point, only: change_record_type
    use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate
    use fekap_fem_fields, only: fill_nodes_links, fill_fields
    use fekap_stepping_step_control, only: step_cuts_type
@@ -46,14 +51,13 @@ module fekap_fem_state
       !> Whether the system holds the factor of the tangent at (within
       !> tolerance of) the accepted configuration, and whether factoring the
       !> tangent there failed (a singular configuration).
-      logical :: factor_current = .false., accepted_singular = .false.
+      type(factor_record_type) :: factor
       !> Quadratic-convergence constant M of Newton (c(k+1) = M c(k)**2) measured
       !> in the last step that showed it, for the estimated stop.
       real(dp) :: newton_constant = 0
-      !> The last predictor, and whether it was a smooth (Hermite or Adams)
-      !> extrapolation of the history.
-      real(dp), allocatable :: q_predicted(:)
-      logical :: smooth_prediction = .false.
+      !> The last predictor, whether it was a smooth (Hermite or Adams)
+      !> extrapolation of the history, and its length tolerance.
+      type(prediction_type) :: prediction
       !> Pivot ratio of the factor behind the last drive response.
       real(dp) :: response_pivot = 0
       !> Whether the model has external loads (a flexible, stressed analysis).
@@ -79,34 +83,16 @@ module fekap_fem_state
       type(verification_stack_type) :: verification
       !> Steps advanced so far.
       integer :: advances = 0
-      !> The length tolerance of the step's predictor (the Adams-Bashforth
-      !> choice and the acceptance at the predictor, see predictor_margin): the
-      !> length tolerance, or the round-off of the dofs over predictor_margin
-      !> where that is larger (fem_predict's roundoff_length).
-      real(dp) :: predictor_length = 0
       !> The strain-rate operator B_f and its factor (see the module header),
-      !> and whether the square-root form is used (then factor_current refers
+      !> and whether the square-root form is used (then the factor record refers
       !> to the factor of the stress-free B_f in root).
       type(strain_rate_type) :: root
       logical :: root_form = .false.
       !> Scratch over the equations for the square-root form's solves.
       real(dp), allocatable :: root_work(:)
-      !> Change points (see step_over): whether the step being solved checks its
-      !> predictor's tangent, whether it found it near singular, and that
-      !> tangent's condition estimate.
-      logical :: detect_change = .false., change_found = .false.
-      real(dp) :: predictor_rcond = 0
-      !> Whether this step's predictor was checked and found regular: its
-      !> estimate then stands for the accepted configuration's in the
-      !> branch-jump check (one estimate a step, not two).
-      logical :: predictor_regular = .false.
-      !> The regular states on either side of a change point stepped over: the
-      !> state before it, and the one solved at the next output time, kept for
-      !> the next advance with its iterations, residual and cuts.
-      type(fem_state_type) :: before_change, ahead
-      logical :: has_ahead = .false.
-      integer :: ahead_iterations = 0, ahead_cuts = 0
-      real(dp) :: ahead_residual = 0
+      !> Change points (see step_over): the predictor's check and the regular
+      !> states on either side of a change point stepped over.
+      type(change_record_type) :: change
    contains
       procedure :: plan_text => fem_plan_text
       !> Take the external loads out of the mesh (kinetostatics: the motion
@@ -135,7 +121,7 @@ contains
          allocate (state%q(n), state%v(n), state%a(n), self%qt(n), self%work(n), self%dq_new(n), self%dq_old(n), &
             & source=0.0_dp)
          call new_predictor_history(state%history, n)
-         allocate (self%q_predicted(n), source=0.0_dp)
+         call new_prediction(self%prediction, n)
          allocate (state%jump_response(n, nd), self%jump_response_new(n, nd), source=0.0_dp)
          allocate (self%seg(size(self%mesh%slides)), state%seg(size(self%mesh%slides)), source=1)
       end associate
@@ -176,7 +162,7 @@ contains
 
    pure logical function core_holds_accepted_factor(self) result(holds)
       class(fem_core_type), intent(in) :: self
-      holds = self%factor_current
+      holds = self%factor%is_current()
    end function core_holds_accepted_factor
 
    !> (The K form: kinetostatics, the only user, never takes the square-root form.)

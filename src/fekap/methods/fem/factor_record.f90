@@ -1,0 +1,62 @@
+!> The FEM stepper's factor record: whether the linear system (or, in the
+!> square-root form, the strain-rate operator B_f) holds the factor of the
+!> tangent at the accepted configuration, and whether factoring it there
+!> failed (a singular configuration). Its fields are private: a step marks
+!> the factor it made at the accepted configuration (mark), anything that
+!> overwrites the factor invalidates it, a new step resets both; the rates,
+!> the free-motion probe and kinetostatics ask (is_current, is_singular).
+module fekap_fem_factor_record
+   implicit none
+   private
+
+   public :: factor_record_type
+
+   type :: factor_record_type
+      private
+      logical :: current = .false., singular = .false.
+   contains
+      !> Whether the system holds the factor of the tangent at the accepted configuration.
+      procedure :: is_current => record_is_current
+      !> Whether factoring the tangent at the accepted configuration failed.
+      procedure :: is_singular => record_is_singular
+      !> The factorisation at the accepted configuration ended with LAPACK's
+      !> info: held if 0, singular if not.
+      procedure :: mark => record_mark
+      !> The factor was overwritten (another configuration's, a shifted one):
+      !> no longer the accepted configuration's. Whether that one is singular stays known.
+      procedure :: invalidate => record_invalidate
+      !> A new configuration is being solved: nothing is known about its factor.
+      procedure :: reset => record_reset
+   end type factor_record_type
+
+contains
+
+   pure logical function record_is_current(self) result(current)
+      class(factor_record_type), intent(in) :: self
+      current = self%current
+   end function record_is_current
+
+   pure logical function record_is_singular(self) result(singular)
+      class(factor_record_type), intent(in) :: self
+      singular = self%singular
+   end function record_is_singular
+
+   pure subroutine record_mark(self, info)
+      class(factor_record_type), intent(inout) :: self
+      integer, intent(in) :: info
+      self%current = info == 0
+      self%singular = info /= 0
+   end subroutine record_mark
+
+   pure subroutine record_invalidate(self)
+      class(factor_record_type), intent(inout) :: self
+      self%current = .false.
+   end subroutine record_invalidate
+
+   pure subroutine record_reset(self)
+      class(factor_record_type), intent(inout) :: self
+      self%current = .false.
+      self%singular = .false.
+   end subroutine record_reset
+
+end module fekap_fem_factor_record
