@@ -49,15 +49,14 @@ import argparse
 import csv
 import json
 import math
-import resource
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 from fekap import run as fb  # the Exudyn environment, shared with the other exudyn_*.py
+from fekap.timing import listing_summary, run_timed
 
 ROOT = fb.ROOT
 
@@ -157,12 +156,6 @@ def run_exudyn(n: int, dt: float, t_end: float, rho_inf: float, details: dict | 
     return times, values, seconds, settings.timeIntegration.numberOfSteps
 
 
-def children_cpu() -> float:
-    """User + system CPU seconds of the finished child processes so far."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
-
-
 def run_fekap(n: int, dt: float, t_end: float, rho_inf: float, details: dict | None = None,
               every: int = 1) -> tuple[list[float], list[float], float, int]:
     """Times, midpoint deflections, seconds in analysis (the listing's wall
@@ -180,13 +173,9 @@ def run_fekap(n: int, dt: float, t_end: float, rho_inf: float, details: dict | N
         path = Path(work) / "slider-crank.deck"
         path.write_text(deck)
         start = time.perf_counter()
-        cpu = children_cpu()
-        run = subprocess.run([str(binary), str(path), "-o", str(Path(work) / "out"), "--set", f"dt={dt!r}",
-                              "--set", f"t_end={t_end!r}"], capture_output=True, text=True)
-        cpu = children_cpu() - cpu
+        _, cpu, _ = run_timed([str(binary), str(path), "-o", str(Path(work) / "out"), "--set", f"dt={dt!r}",
+                               "--set", f"t_end={t_end!r}"])
         seconds = time.perf_counter() - start
-        if run.returncode != 0:
-            sys.exit(f"fekap failed: {run.stderr}")
         steps: dict[int, dict[str, tuple[float, float]]] = {}
         times: dict[int, float] = {}
         with open(Path(work) / "out" / "points.csv", newline="") as handle:
@@ -195,13 +184,7 @@ def run_fekap(n: int, dt: float, t_end: float, rho_inf: float, details: dict | N
                 steps.setdefault(step, {})[row["point"]] = (float(row["x"]), float(row["y"]))
                 times[step] = float(row["t"])
         listing = (Path(work) / "out" / "slider-crank.lis").read_text()
-    summary = {}
-    for line in listing.split("SUMMARY", 1)[-1].splitlines():
-        label, _, value = line.strip().rpartition(" ")
-        try:
-            summary[label.strip()] = float(value)
-        except ValueError:
-            pass
+    summary = listing_summary(listing)
     if details is not None:
         details.update(summary, cpu=cpu)
     order = sorted(steps)

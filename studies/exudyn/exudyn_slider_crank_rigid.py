@@ -47,8 +47,6 @@ import argparse
 import csv
 import json
 import math
-import re
-import resource
 import shutil
 import subprocess
 import sys
@@ -57,6 +55,7 @@ import time
 from pathlib import Path
 
 from fekap import run as fb  # the Exudyn environment, shared with the other exudyn_*.py
+from fekap.timing import callgrind_count, listing_summary, run_timed
 
 ROOT = fb.ROOT
 DECK = ROOT / "decks" / "dynamics" / "slider-crank-rigid-crank.deck"
@@ -207,11 +206,6 @@ def run_exudyn(n: int, dt: float, t_end: float, write_period: float | None = Non
 
 # ----------------------------------------------------------------------------------- FEKAP
 
-def children_cpu() -> float:
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
-
-
 def fekap_deck(start: str, every: int) -> str:
     text = DECK.read_text()
     if "  start consistent" not in text:
@@ -233,19 +227,7 @@ def run_fekap(n: int, dt: float, t_end: float, start: str = "unstrained", every:
         path.write_text(fekap_deck(start, every))
         command = [binary, "-q", "-o", str(Path(work) / "out"), "--set", f"n={n}", "--set", f"dt={dt!r}",
                    "--set", f"t_end={t_end!r}", str(path)]
-        instructions = None
-        if callgrind:
-            command = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={work}/cg.out", *command]
-        cpu = children_cpu()
-        run = subprocess.run(command, capture_output=True, text=True)
-        cpu = children_cpu() - cpu
-        if run.returncode != 0:
-            raise SystemExit(f"fekap failed ({run.returncode}): {run.stderr}")
-        if callgrind:
-            found = re.search(r"Collected\s*:\s*(\d+)", run.stderr)
-            if not found:
-                raise SystemExit(f"callgrind gave no count: {run.stderr[-400:]}")
-            instructions = int(found.group(1))
+        _, cpu, instructions = run_timed(command, Path(work) / "cg.out" if callgrind else None)
         points: dict[int, dict[str, tuple[float, float]]] = {}
         times: dict[int, float] = {}
         with open(Path(work) / "out" / "points.csv", newline="") as handle:
@@ -254,13 +236,7 @@ def run_fekap(n: int, dt: float, t_end: float, start: str = "unstrained", every:
                 points.setdefault(step, {})[row["point"]] = (float(row["x"]), float(row["y"]))
                 times[step] = float(row["t"])
         listing = (Path(work) / "out" / "rigid.lis").read_text()
-    summary = {}
-    for line in listing.split("SUMMARY", 1)[-1].splitlines():
-        label, _, value = line.strip().rpartition(" ")
-        try:
-            summary[label.strip()] = float(value)
-        except ValueError:
-            pass
+    summary = listing_summary(listing)
     order = sorted(points)
     return {"times": [times[s] for s in order],
             "values": [deflection(points[s]["A"], points[s]["M"], points[s]["B"]) for s in order],
@@ -333,10 +309,9 @@ def exudyn_instructions(n: int, dt: float, t_end: float, solver: str) -> int:
         run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={work}/cg.out", sys.executable,
                               __file__, "--exudyn-run", str(n), repr(dt), repr(t_end), solver],
                              capture_output=True, text=True)
-    found = re.search(r"Collected\s*:\s*(\d+)", run.stderr)
-    if run.returncode != 0 or not found:
+    if run.returncode != 0:
         raise SystemExit(f"callgrind of Exudyn failed: {run.stderr[-400:]}")
-    return int(found.group(1))
+    return callgrind_count(run.stderr)
 
 
 def benchmark(repeat: int, callgrind: bool, json_path: Path | None, check: bool) -> int:

@@ -125,6 +125,8 @@ contains
          do i = 1, nn
             if (has_frame(i)) has_frame(find_root(frame_set, i)) = .true.
          end do
+         call check_free_spin(model, frame_set, error)
+         if (allocated(error)) return
          allocate (class_frame(nn), source=0)
          allocate (queue(nn), source=0)
          allocate (used(nj), source=.false.)
@@ -277,6 +279,54 @@ contains
       end function position
 
    end subroutine build_spatial_mechanism
+
+   !> A beam whose two end rotations nothing else holds (no other beam, no
+   !> joint but a spherical one) turns freely about its own axis: its
+   !> strains do not change, so the tangent has a zero pivot that round-off
+   !> hides (a beam between two spherical joints). An input error at its
+   !> LINKs line: a truss is the element for it (docs/spatial.md). Only the
+   !> single beam is caught: links welded into a straight chain between two
+   !> spherical joints spin too, and stop later at a singular tangent.
+   subroutine check_free_spin(model, frame_set, error)
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: frame_set(:)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: holders(size(frame_set)), k, i
+      character(len=24) :: where_
+      holders = 0
+      do k = 1, size(model%links)
+         if (model%spatial%truss(k)) cycle
+         do i = 1, 2
+            associate (c => find_root(frame_set, model%links(k)%node(i)))
+               holders(c) = holders(c) + 1
+            end associate
+         end do
+      end do
+      do k = 1, size(model%spatial%joints)
+         associate (joint => model%spatial%joints(k))
+            if (joint%kind == joint_spherical) cycle
+            do i = 1, 2
+               if (joint%node(i) == 0) cycle
+               associate (c => find_root(frame_set, joint%node(i)))
+                  holders(c) = holders(c) + 1
+               end associate
+            end do
+         end associate
+      end do
+      do k = 1, size(model%links)
+         associate (link => model%links(k))
+            if (model%spatial%truss(k)) cycle
+            if (holders(find_root(frame_set, link%node(1))) > 1 .or. &
+               & holders(find_root(frame_set, link%node(2))) > 1) cycle
+            write (where_, '(i0,a,i0)') link%loc%line, ':', link%loc%col
+            call input_error(error, link%loc%file//':'//trim(where_)//': error: link '//link%name// &
+               & ' turns freely about its own axis: nothing but the link holds the rotation of either end '// &
+               & '(a beam between two spherical joints); write `truss` after its section, or hold one '// &
+               & 'end''s rotation with a revolute, universal or weld joint')
+            return
+         end associate
+      end do
+   end subroutine check_free_spin
 
    !> Whether a joint to the ground fixes its point (not a line to slide on).
    pure logical function grounds_point(joint)

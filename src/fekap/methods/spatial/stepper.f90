@@ -1,7 +1,8 @@
 !> The time stepper of a spatial deck's kinematics (fekap_spatial_kinematics
 !> driven by the time loop): each step predicts the new configuration by
 !> a Taylor series along the last rates, q (+) (h v + h^2/2 a + h^3/6 j +
-!> h^4/24 k), j and k from the last three accelerations, then runs
+!> h^4/24 k), j and k the third and fourth rates of the motion at the last
+!> configuration (see curve_rates), then runs
 !> Newton-Raphson on the free dofs with the material tangent (exact at the
 !> stress-free solution). Every Newton iteration assembles and factors the
 !> tangent at its iterate; the iteration whose correction is below the
@@ -47,9 +48,14 @@ module fekap_spatial_stepper
       type(spatial_state_type) :: s
       real(dp) :: t = 0
       real(dp), allocatable :: v(:), a(:)
-      !> The accelerations and step before the last accepted ones (for the predictor's third term).
-      real(dp), allocatable :: a_prev(:), a_prev2(:)
-      real(dp) :: h_prev = 0, h_prev2 = 0
+      !> The third and fourth rates of the motion there (the predictor's last terms).
+      real(dp), allocatable :: jerk(:), snap(:)
+      !> The third rates at the two configurations before, their times and how many there are.
+      real(dp), allocatable :: jerk1(:), jerk2(:)
+      real(dp) :: t1 = 0, t2 = 0
+      integer :: jerks = 0
+      !> The parameter step of the differences that give them (a quarter of the deck's step).
+      real(dp) :: difference_step = 0
       !> Newton: length tolerance of the correction, most iterations.
       real(dp) :: tol = 1.0e-12_dp
       integer :: max_iter = 25
@@ -76,8 +82,9 @@ contains
       self%tol = model%analysis%length_tol
       self%max_iter = model%analysis%max_iter
       self%fdof = free_dofs(self%m)
-      allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%a_prev(self%m%ndof), self%a_prev2(self%m%ndof), &
-         & source=0.0_dp)
+      self%difference_step = model%analysis%dt/4
+      allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%jerk(self%m%ndof), self%snap(self%m%ndof), &
+         & self%jerk1(self%m%ndof), self%jerk2(self%m%ndof), source=0.0_dp)
    end subroutine new_spatial_stepper
 
    !> The deck's configuration at the start time, solved (it is stress free:
@@ -94,8 +101,6 @@ contains
          call analysis_error(error, 'the start configuration does not assemble: '//why)
          return
       end if
-      self%h_prev = 0
-      self%h_prev2 = 0
       result%t = self%t
       result%iterations = iterations
       call fill_result(self, result)
@@ -108,8 +113,8 @@ contains
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
       type(spatial_state_type) :: saved
-      real(dp), allocatable :: v0(:), a0(:), ap0(:), ap20(:)
-      real(dp) :: h, t_try, t0, hp0, hp20
+      real(dp), allocatable :: v0(:), a0(:), j0(:), k0(:)
+      real(dp) :: h, t_try, t0
       integer :: cuts, iterations, total
       logical :: converged
       character(:), allocatable :: why
@@ -123,30 +128,22 @@ contains
          saved = self%s
          v0 = self%v
          a0 = self%a
-         ap0 = self%a_prev
-         ap20 = self%a_prev2
+         j0 = self%jerk
+         k0 = self%snap
          t0 = self%t
-         hp0 = self%h_prev
-         hp20 = self%h_prev2
          call predict(self, t_try - self%t)
          call solve(self, t_try, iterations, converged, why)
          total = total + iterations
          if (converged) then
-            self%a_prev2 = ap0
-            self%h_prev2 = hp0
-            self%a_prev = a0
-            self%h_prev = t_try - t0
             self%t = t_try
             cycle
          end if
          self%s = saved
          self%v = v0
          self%a = a0
-         self%a_prev = ap0
-         self%a_prev2 = ap20
+         self%jerk = j0
+         self%snap = k0
          self%t = t0
-         self%h_prev = hp0
-         self%h_prev2 = hp20
          cuts = cuts + 1
          if (cuts > max_cuts) then
             write (text, '(a,i0,a)') 'Newton failed even with the step cut ', max_cuts, ' times ('
@@ -163,26 +160,89 @@ contains
       call fill_result(self, result)
    end subroutine spatial_advance
 
-   !> The predictor: s (+) (h v + h^2/2 a + h^3/6 j + h^4/24 k), j and k the
-   !> first and second rates of the quadratic through the last three
-   !> accelerations (with two: j their difference quotient, k = 0).
+   !> The predictor: s (+) (h v + h^2/2 a + h^3/6 j + h^4/24 k), the Taylor
+   !> series of the motion to its fourth rate (an O(h^5) error).
    subroutine predict(self, h)
       type(spatial_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: h
-      real(dp) :: dq(self%m%ndof), j(self%m%ndof), k(self%m%ndof), h1, hh
-      dq = h*self%v + h**2/2*self%a
-      if (self%h_prev > 0 .and. self%h_prev2 > 0) then
-         ! a(tau) = a + j tau + k tau^2/2 through (-h1, a_prev), (-h1 - h2, a_prev2).
-         h1 = self%h_prev
-         hh = self%h_prev + self%h_prev2
-         k = 2*((self%a_prev2 - self%a)*h1 - (self%a_prev - self%a)*hh)/(h1*hh*(hh - h1))
-         j = (self%a - self%a_prev)/h1 + k*h1/2
-         dq = dq + h**3/6*j + h**4/24*k
-      else if (self%h_prev > 0) then
-         dq = dq + h**3/6*(self%a - self%a_prev)/self%h_prev
-      end if
-      call update_state(self%m, self%s, dq)
+      call update_state(self%m, self%s, h*self%v + h**2/2*self%a + h**3/6*self%jerk + h**4/24*self%snap)
    end subroutine predict
+
+   !> The third and fourth rates (jerk j and snap k) of the motion at the
+   !> accepted state s at time t, in the predictor's form: along the curve
+   !> s (+) (sigma v + sigma^2/2 a), whose strains vanish to O(sigma^3), the
+   !> residual is sigma^3/6 R3 + O(sigma^4), and K j = -R3 (the free rows;
+   !> the drives' j given) makes them vanish to O(sigma^4); with sigma^3/6 j
+   !> added, the residual is sigma^4/24 R4 + O(sigma^5) and K k = -R4. R3
+   !> and R4 are the odd and even parts of the residual at sigma = +-d
+   !> (errors O(d^2) relative); the drives' j and k are differences of their
+   !> second rates. In the predictor's own form, the free frames' terms
+   !> include what body rates alone would miss (the commutator of omega and
+   !> its rate in the third term). Where the two configurations before have
+   !> their j (every step but the first two), k is instead the rate at t of
+   !> the quadratic through the three j, which saves two of the four
+   !> residuals: for additive dofs an O(h^2) error (O(h^6) in the
+   !> predictor); a free frame's j is a body quantity, whose rate differs
+   !> from its k by commutator terms (an O(h^4) error in the predictor).
+   subroutine curve_rates(self, t, k, kff, ipiv)
+      type(spatial_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, k(:, :)
+      real(dp), contiguous, intent(in) :: kff(:, :)
+      integer, contiguous, intent(in) :: ipiv(:)
+      type(spatial_state_type) :: sd
+      real(dp) :: vd(self%m%ndof), ap(self%m%ndof), am(self%m%ndof), a0(self%m%ndof), rp(self%m%ndof), &
+         & rm(self%m%ndof), d, h1, hh
+      real(dp), allocatable :: rhs(:)
+      integer :: info
+      d = self%difference_step
+      sd = self%s
+      call set_drives(self%m, t + d, sd, vd, ap)
+      call set_drives(self%m, t - d, sd, vd, am)
+      call set_drives(self%m, t, sd, vd, a0)
+      ! The drives' own rates (zero at the free dofs, whose ad is zero).
+      self%jerk = (ap - am)/(2*d)
+      self%snap = (ap - 2*a0 + am)/d**2
+      rp = residual_along(d*self%v + d**2/2*self%a)
+      rm = residual_along(-d*self%v + d**2/2*self%a)
+      rhs = -3*(rp(self%fdof) - rm(self%fdof))/d**3 - matmul(k(self%fdof, :), self%jerk)
+      call dense_lu_solve(kff, ipiv, rhs, info)
+      self%jerk(self%fdof) = rhs
+      if (self%jerks >= 2 .and. t > self%t1 .and. self%t1 > self%t2) then
+         ! j(tau) through (0, j), (-h1, j1), (-hh, j2): its rate at 0.
+         h1 = t - self%t1
+         hh = t - self%t2
+         self%snap = (h1 + hh)/(h1*hh)*self%jerk - hh/(h1*(hh - h1))*self%jerk1 + h1/(hh*(hh - h1))*self%jerk2
+         call remember_jerk()
+         return
+      end if
+      call remember_jerk()
+      rp = residual_along(d*self%v + d**2/2*self%a + d**3/6*self%jerk)
+      rm = residual_along(-d*self%v + d**2/2*self%a - d**3/6*self%jerk)
+      rhs = -12*(rp(self%fdof) + rm(self%fdof))/d**4 - matmul(k(self%fdof, :), self%snap)
+      call dense_lu_solve(kff, ipiv, rhs, info)
+      self%snap(self%fdof) = rhs
+   contains
+      !> The last two configurations' j for the next ones' k.
+      subroutine remember_jerk()
+         self%jerk2 = self%jerk1
+         self%t2 = self%t1
+         self%jerk1 = self%jerk
+         self%t1 = t
+         self%jerks = min(self%jerks + 1, 2)
+      end subroutine remember_jerk
+
+      !> The residual at s (+) dq.
+      function residual_along(dq) result(res)
+         real(dp), intent(in) :: dq(:)
+         real(dp) :: res(self%m%ndof)
+         type(spatial_configuration_type) :: c
+         type(spatial_state_type) :: moved
+         moved = self%s
+         call update_state(self%m, moved, dq)
+         call configure(self%m, moved, c)
+         call assemble_spatial(self%m, c, res)
+      end function residual_along
+   end subroutine curve_rates
 
    !> Newton from the current state at time t (the drives set exactly); on
    !> convergence the rates at the solution. `why` says why it failed.
@@ -237,6 +297,7 @@ contains
             self%counts%velocity_solves = self%counts%velocity_solves + 1
             self%counts%acceleration_solves = self%counts%acceleration_solves + 1
             call update_state(self%m, self%s, dq)
+            call curve_rates(self, t, k, kff, ipiv)
             converged = .true.
             return
          end if
