@@ -73,9 +73,6 @@ module fekap_dynamics_dynamic_data
       !> and its dof, and the largest of the current advance's accepted steps.
       real(dp) :: try_estimate = 0, advance_estimate = 0
       integer :: try_estimate_dof = 0
-      !> The weight of each dof in the estimate: 1 on the translations, 0 on
-      !> the rotations (the estimate is the local error of the points' positions).
-      real(dp), allocatable :: error_weight(:)
       !> Adaptive steps: the length of the next step to try (0: none yet).
       real(dp) :: h_next = 0
       !> Generalized-alpha's kept factor (fekap_stepping_newton's

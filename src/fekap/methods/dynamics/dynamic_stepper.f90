@@ -20,7 +20,7 @@
 module fekap_dynamics_dynamic_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
-   use fekap_model, only: model_type, integrator_energy_momentum, dof_rot
+   use fekap_model, only: model_type, integrator_energy_momentum
    use fekap_model_results, only: step_result_type, has_note
    use fekap_assembly_mesh, only: dof_driven, describe_dof
    use fekap_assembly_tracking, only: relocate
@@ -40,8 +40,7 @@ module fekap_dynamics_dynamic_stepper
    use fekap_dynamics_alpha_step, only: alpha_newton
    use fekap_dynamics_em_step, only: em_newton
    use fekap_dynamics_step_result, only: fill_result, keep_step_start
-   use fekap_dynamics_local_error, only: alpha_error_scale, midpoint_error_scale, largest_local_error, adapted_step, &
-      & least_step
+   use fekap_dynamics_local_error, only: step_local_error, adapted_step, least_step
    use fekap_stepping_interrupt, only: interrupt_signal
    implicit none
    private
@@ -85,7 +84,6 @@ contains
          & self%state%r(n), source=0.0_dp)
       allocate (self%qt(n), self%vt(n), self%acct(n), self%at(n), self%gt(n), self%zt(n), self%dzt(n), source=0.0_dp)
       allocate (self%state%seg(size(self%mesh%slides)), source=1)
-      self%error_weight = merge(0.0_dp, 1.0_dp, self%mesh%dof_kind == dof_rot)
    end subroutine new_dynamic_stepper
 
    !> The mesh and the integrator for the listing's plan.
@@ -286,7 +284,7 @@ contains
             call analysis_error(error, 'the configuration is not finite')
             return
          end if
-         call local_error(self, t_new - state%t, em)
+         call step_local_error(self, t_new - state%t)
          if (self%try_estimate > limit) return
          ! Work over the step: the trapezoidal rule of the forces on the
          ! displacement (exact for the trapezoidal integrator of a linear system);
@@ -368,27 +366,5 @@ contains
          end if
       end associate
    end subroutine solve_step
-
-   !> The local error estimate of the iterate's step of length h (from the
-   !> accepted state): generalized-alpha's from the change of its
-   !> acceleration variable a over the step; energy-momentum's from the
-   !> change of the mean acceleration (v1 - v0)/h since the last step's
-   !> (h_prev; the start's acceleration at the first step). Into try_estimate
-   !> and try_estimate_dof.
-   subroutine local_error(self, h, em)
-      type(dynamic_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: h
-      logical, intent(in) :: em
-      associate (state => self%state, mesh => self%mesh)
-         if (em) then
-            call largest_local_error(midpoint_error_scale(h, self%h_prev), state%acc, self%acct, self%error_weight, &
-               & mesh%eq_dof(1:mesh%nfree), self%try_estimate, self%try_estimate_dof)
-         else
-            call largest_local_error(alpha_error_scale(new_alpha_coefficients(self%model%analysis%rho_inf, h), h), &
-               & state%a, self%at, self%error_weight, mesh%eq_dof(1:mesh%nfree), self%try_estimate, &
-               & self%try_estimate_dof)
-         end if
-      end associate
-   end subroutine local_error
 
 end module fekap_dynamics_dynamic_stepper
