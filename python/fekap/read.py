@@ -5,7 +5,8 @@ A FEKAP run writes into its output directory (README.md, "What a run writes"):
 
 - ``points.csv``: ``step,t,point,x,y[,vx,vy[,ax,ay]]``, one row per tracked point per step;
 - ``links.csv``: ``step,t,link,angle[,omega[,alpha]]`` (angles in radians, unwrapped);
-- ``steps.csv``: ``step,t,iterations,residual,cuts[,floor]``;
+- ``steps.csv``: ``step,t,iterations,residual,cuts[,floor[,error_estimate]]`` (``floor``: but
+  for a spatial run; ``error_estimate``: dynamics);
 - ``nodes.csv``: ``step,t,A.x,A.y,...``, every node (and meshed links' interior points) per step;
 - ``reactions.csv``: ``step,t,kind,link,node,fx,fy,m``; ``energy.csv``: ``step,t,kinetic,...``;
   ``deflection.csv``: ``step,t,node,ux,uy``;

@@ -12,7 +12,7 @@ Files (see README.md, "What a run writes"):
 
 - ``nodes.csv``: ``step,t,A.x,A.y,B.x,...``, every node's position at every written step;
 - ``points.csv``: ``step,t,point,x,y[,vx,vy[,ax,ay]]``; ``links.csv``: ``step,t,link,angle[,...]``;
-- ``steps.csv``: ``step,t,iterations,residual,cuts``;
+- ``steps.csv``: ``step,t,iterations,residual,cuts[,floor[,error_estimate]]``;
 - ``mesh.csv``: ``link,node1,node2``; ``mechanism.txt``: title, units, supports, guides, drives,
   loads, masses, the analysis, the nodes' initial coordinates;
 - ``reactions.csv``: ``step,t,kind,link,node,fx,fy,m`` (kinetostatics, statics, dynamics).

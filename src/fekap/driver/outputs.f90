@@ -113,7 +113,10 @@ contains
             call registry%table('points.csv', points_writer(vel, acc))
             call registry%table('links.csv', links_writer(vel, acc))
          end if
-         call registry%table('steps.csv', steps_writer(dynamics=effects == effects_dynamics))
+         ! Every planar method's Newton reports the round-off floor (steps.csv's
+         ! `floor`); the spatial kinematics' has no floor.
+         call registry%table('steps.csv', steps_writer(dynamics=effects == effects_dynamics, &
+            & floor=.not. model%analysis%spatial))
          call registry%table('nodes.csv', nodes_writer())
          call registry%whole('mesh.csv', write_mesh_csv, model)
          if (effects /= effects_kinematics) call registry%table('reactions.csv', reactions_writer())

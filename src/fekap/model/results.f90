@@ -21,9 +21,10 @@ module fekap_model_results
       real(dp) :: residual = 0
       !> Times the step was cut in halves to converge.
       integer :: cuts = 0
-      !> Dynamics: the (sub-)steps of this step accepted at the round-off
-      !> floor with the residual above the tolerance; -1: not reported (steps.csv's
-      !> `floor` column is written only for results that report it).
+      !> The (sub-)steps of this step accepted at the round-off floor with the
+      !> residual above the tolerance (the FEM, the classical methods,
+      !> dynamics); -1: not reported (steps.csv's `floor` column is written
+      !> only for results that report it: not the spatial kinematics').
       integer :: floor = -1
       !> Dynamics: the largest local error estimate (a length) of the step's
       !> (sub-)steps (fekap_dynamics_local_error); negative: not reported

@@ -27,10 +27,12 @@ module fekap_output_csv
 
    !> The fixed headers (write_header) of steps.csv, reactions.csv and
    !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.
-   !> (dynamics_steps_header: a dynamics run's steps.csv, with the `floor`
-   !> and, last, the `error_estimate` columns.)
+   !> (floor_steps_header: the steps.csv of a method whose Newton reports the
+   !> round-off floor, with the `floor` column; dynamics_steps_header: a
+   !> dynamics run's, with `floor` and, last, the `error_estimate` column.)
    character(*), parameter, public :: steps_header = 'step,t,iterations,residual,cuts', &
-      & dynamics_steps_header = steps_header//',floor,error_estimate', &
+      & floor_steps_header = steps_header//',floor', &
+      & dynamics_steps_header = floor_steps_header//',error_estimate', &
       & reactions_header = 'step,t,kind,link,node,fx,fy,m', deflection_header = 'step,t,node,ux,uy'
 
    !> Longest text of a real (es25.16e3 without its leading blank) and of an
@@ -185,8 +187,9 @@ contains
       call append_text(out%text, out%n, header//new_line('a'))
    end subroutine write_header
 
-   !> `step,t,iterations,residual,cuts` (and `,floor` and `,error_estimate`
-   !> when the result reports them: dynamics).
+   !> `step,t,iterations,residual,cuts` (and `,floor` when the result reports
+   !> it: the FEM, the classical methods and dynamics; and `,error_estimate`
+   !> when it reports that: dynamics).
    subroutine write_steps_row(out, result, prefix)
       type(text_buffer_type), intent(inout) :: out
       type(step_result_type), intent(in) :: result

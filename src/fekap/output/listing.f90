@@ -369,7 +369,7 @@ contains
       write (unit, '(2x,a30,i12)') 'Newton iterations', counts%iterations
       if (counts%steps > 0) write (unit, '(2x,a30,f12.3)') 'iterations per configuration', &
          & real(counts%iterations, dp)/counts%steps
-      ! Dynamics: steps whose residual stayed above the tolerance at round-off (steps.csv's floor column).
+      ! Every method's steps whose residual stayed above the tolerance at round-off (steps.csv's floor column).
       if (counts%floor_steps > 0) write (unit, '(2x,a30,i12)') 'accepted at round-off floor', counts%floor_steps
       ! Dynamics: the largest local error estimate (steps.csv's error_estimate column) and where.
       if (counts%largest_estimate >= 0) write (unit, '(2x,a30,a,a,a,a,a)') 'largest local error estimate', &

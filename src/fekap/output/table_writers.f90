@@ -9,7 +9,8 @@ module fekap_output_table_writers
    use fekap_model_results, only: step_result_type
    use fekap_output_buffer, only: text_buffer_type, new_text_buffer, flush_text_buffer
    use fekap_output_csv, only: row_prefix_type, write_points_header, write_points_rows, write_links_header, &
-      & write_links_rows, write_header, steps_header, dynamics_steps_header, reactions_header, deflection_header, &
+      & write_links_rows, write_header, steps_header, floor_steps_header, dynamics_steps_header, reactions_header, &
+      & deflection_header, &
       & write_steps_row, write_nodes_header, write_nodes_row, write_reactions_rows, write_energy_row, &
       & write_deflection_rows
    use fekap_output_writer, only: writer_type
@@ -49,10 +50,12 @@ module fekap_output_table_writers
       procedure :: row => links_row
    end type links_writer_type
 
-   !> steps.csv: each step's iterations, residual and cuts (and a dynamics
-   !> run's floor).
+   !> steps.csv: each step's iterations, residual and cuts (and, but for a
+   !> spatial run, the steps at the round-off floor; a dynamics run's error estimate).
    type, extends(table_writer_type) :: steps_writer_type
-      logical :: dynamics = .false.
+      !> Whether the header has the `floor` column, and (dynamics) the
+      !> `error_estimate` column after it.
+      logical :: floor = .false., dynamics = .false.
    contains
       procedure :: header => steps_header_
       procedure :: row => steps_row
@@ -153,11 +156,16 @@ contains
       rows = rows + size(model%output%links)
    end subroutine links_row
 
-   !> The writer of steps.csv (with the `floor` column for `dynamics`).
-   type(steps_writer_type) function steps_writer(dynamics) result(writer)
+   !> The writer of steps.csv: with the `floor` column for a method whose
+   !> Newton reports the round-off floor (`floor`), and with `floor` and
+   !> `error_estimate` for `dynamics`. The rows have the columns their
+   !> results report (write_steps_row).
+   type(steps_writer_type) function steps_writer(dynamics, floor) result(writer)
       logical, intent(in) :: dynamics
+      logical, intent(in) :: floor
       writer%prefixed = .true.
       writer%dynamics = dynamics
+      writer%floor = floor
    end function steps_writer
 
    subroutine steps_header_(self, model)
@@ -165,6 +173,8 @@ contains
       type(model_type), intent(in) :: model
       if (self%dynamics) then
          call write_header(self%buffer, dynamics_steps_header)
+      else if (self%floor) then
+         call write_header(self%buffer, floor_steps_header)
       else
          call write_header(self%buffer, steps_header)
       end if

@@ -17,7 +17,7 @@ module fekap_classical_stepping
    use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
    use fekap_fem_branch, only: jump_ratio, jump_bound_ratio
    use fekap_stepping_newton, only: newton_system_type, newton_contract_type, newton_report_type, newton_solve, &
-      & always_refactor_type, stop_spent, stop_diverged, test_solved_from, test_relative_first
+      & always_refactor_type, stop_spent, stop_diverged, stop_at_floor, test_solved_from, test_relative_first
    implicit none
    private
 
@@ -61,6 +61,12 @@ module fekap_classical_stepping
       real(dp), allocatable :: rate_v(:), rate_a(:)
       !> Steps advanced so far.
       integer :: step = 0
+      !> Whether the last Newton solve (newton_positions) stopped at the
+      !> round-off floor with its residual above the tolerance, and the
+      !> configurations accepted so in the step being advanced (steps.csv's
+      !> `floor`; the run's are counted in counts%floor_steps).
+      logical :: last_at_floor = .false.
+      integer :: step_floor = 0
    contains
       procedure :: advance => classical_advance
       !> Make a converged configuration the accepted one (its rates unknown until set_rates).
@@ -174,6 +180,7 @@ contains
       contract%divergence = divergence_length*self%model_length
       call newton_solve(system, contract, full, report, error)
       iterations = report%iterations
+      self%last_at_floor = report%stopped == stop_at_floor
       if (.not. allocated(error)) return
       select case (report%stopped)
       case (stop_spent)
@@ -223,6 +230,7 @@ contains
       integer :: total
       self%step = self%step + 1
       self%counts%steps = self%counts%steps + 1
+      self%step_floor = 0
       call advance_by_cuts(self, classical_try, classical_between, self%history%t(self%history%newest), t, 0, cuts, &
          & total, error)
       if (allocated(error)) return
@@ -281,6 +289,7 @@ contains
       result%step = self%step
       result%t = t
       result%iterations = iterations
+      result%floor = self%step_floor
       result%note = ''
    end subroutine begin_result
 
@@ -298,6 +307,10 @@ contains
       real(dp), intent(in) :: q(:), t
       call self%history%push(q, t)
       self%has_rates = .false.
+      if (self%last_at_floor) then
+         self%step_floor = self%step_floor + 1
+         self%counts%floor_steps = self%counts%floor_steps + 1
+      end if
    end subroutine classical_accept
 
    pure subroutine classical_set_rates(self, qd, qdd)

@@ -65,10 +65,11 @@ module fekap_fem_change_point
       logical :: predictor_regular = .false.
       !> The regular states on either side of a change point stepped over: the
       !> state before it, and the one solved at the next output time, kept for
-      !> the next advance with its iterations, residual and cuts (has_ahead).
+      !> the next advance with its iterations, residual, cuts and
+      !> configurations accepted at the round-off floor (has_ahead).
       type(fem_state_type) :: before, ahead
       logical :: has_ahead = .false.
-      integer :: ahead_iterations = 0, ahead_cuts = 0
+      integer :: ahead_iterations = 0, ahead_cuts = 0, ahead_floor = 0
       real(dp) :: ahead_residual = 0
    contains
       !> An advance begins: it checks its predictor if `detect`; nothing found yet.
@@ -132,15 +133,16 @@ contains
       self%before = state
    end subroutine record_keep_before
 
-   subroutine record_keep_ahead(self, state, iterations, residual, cuts)
+   subroutine record_keep_ahead(self, state, iterations, residual, cuts, floor)
       class(change_record_type), intent(inout) :: self
       type(fem_state_type), intent(in) :: state
-      integer, intent(in) :: iterations, cuts
+      integer, intent(in) :: iterations, cuts, floor
       real(dp), intent(in) :: residual
       self%ahead = state
       self%ahead_iterations = iterations
       self%ahead_residual = residual
       self%ahead_cuts = cuts
+      self%ahead_floor = floor
       self%has_ahead = .true.
    end subroutine record_keep_ahead
 

@@ -31,7 +31,7 @@ module fekap_fem
    use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, factor_system, residual_norm, &
       & newton_correction
    use fekap_stepping_newton, only: newton_contract_type, newton_report_type, always_refactor_type, newton_solve, &
-      & stop_spent, stop_diverged, stop_singular
+      & stop_spent, stop_diverged, stop_singular, stop_at_floor
    use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
       & try_ended
    use fekap_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
@@ -57,6 +57,10 @@ module fekap_fem
    type, extends(fem_core_type) :: fem_stepper_type
       !> Residual of the last accepted try (see advance_to).
       real(dp) :: try_residual = 0
+      !> Configurations accepted at the round-off floor (Newton's
+      !> stop_at_floor) while solving the row of this start or advance:
+      !> steps.csv's `floor` (the run's are counted in counts%floor_steps).
+      integer :: advance_floor = 0
    contains
       procedure :: start => fem_start
       procedure :: advance => fem_advance
@@ -89,6 +93,7 @@ contains
       call self%factor%invalidate()
       self%state%has_jump_response = .false.
       call self%change%take_ahead(ahead)
+      self%advance_floor = 0
       result%iterations = 0
       call assemble_system_residual(self%system, self%mesh, self%state%q, self%state%t, self%seg, self%counts)
       result%residual = residual_norm(self%system, self%mesh)
@@ -101,6 +106,7 @@ contains
       end if
       if (.not. self%loaded) call start_response(self)
       call solve_rates(self)
+      result%floor = self%advance_floor
       call fill_result(self, result)
       self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
    end subroutine fem_start
@@ -121,6 +127,7 @@ contains
       ! summary scales them to the run (see phase_seconds).
       self%system%timing = phase_timed(self%advances)
       if (self%system%timing) clock = clock_seconds()
+      self%advance_floor = 0
       call self%change%take_ahead(ahead)
       if (ahead) then
          if (t == self%change%ahead%t) then
@@ -130,6 +137,7 @@ contains
             result%residual = self%change%ahead_residual
             self%last_cuts = self%change%ahead_cuts
             result%cuts = self%last_cuts
+            result%floor = self%change%ahead_floor
             call fill_result(self, result)
             if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
             return
@@ -153,6 +161,7 @@ contains
       end if
       self%last_cuts = cuts%cuts
       result%cuts = self%last_cuts
+      result%floor = self%advance_floor
       call solve_rates(self)
       ! The listing says why the step was cut (the first and the last rejection).
       call prepend_cuts_note(self%state%note, cuts)
@@ -186,7 +195,7 @@ contains
       type(step_cuts_type) :: over_cuts
       real(dp), allocatable :: q_fill(:)
       real(dp) :: rcond, rcond_fill, residual
-      integer :: its, order, info
+      integer :: its, order, info, floor_before
       logical :: singular
       filled = .false.
       rcond = self%change%predictor_rcond
@@ -195,6 +204,7 @@ contains
       call self%factor%invalidate()
       call refactor_at_accepted(self, info)
       call self%change%keep_before(self%state)
+      floor_before = self%advance_floor
       call advance_to(self, next_output_time(self, t), 0, its, residual, over_cuts, over_error)
       if (allocated(over_error) .or. self%change%found) then
          ! The double step failed: solve at t itself, as without the detection.
@@ -205,7 +215,9 @@ contains
       end if
       call solve_rates(self)
       call prepend_cuts_note(self%state%note, over_cuts)
-      call self%change%keep_ahead(self%state, its, residual, over_cuts%cuts)
+      ! The floor steps of the double step are the row ahead's.
+      call self%change%keep_ahead(self%state, its, residual, over_cuts%cuts, self%advance_floor - floor_before)
+      self%advance_floor = floor_before
       call interpolate_fill(self, t, q_fill, its, residual, order, rcond_fill, singular)
       if (.not. singular) then
          ! Near, not on, a change point (the tangent at the filled configuration
@@ -224,6 +236,7 @@ contains
       result%iterations = its
       result%residual = residual
       result%cuts = 0
+      result%floor = self%advance_floor
       self%last_cuts = 0
       call fill_result(self, result)
       filled = .true.
@@ -410,6 +423,11 @@ contains
             call self%factor%mark(info)
          end if
          call accept(self, t, qt)
+         if (report%stopped == stop_at_floor) then
+            ! The last resort of the contract (or the FEM's round-off stall), reported.
+            self%advance_floor = self%advance_floor + 1
+            self%counts%floor_steps = self%counts%floor_steps + 1
+         end if
          if (newton%stalled_correction > 0) then
             write (msg, '(a,es12.5,a,es9.2,a,es9.2,a)') 't = ', t, ': Newton stopped at the round-off floor of the '// &
                & 'residual (', residual, '); the last correction, ', newton%stalled_correction, &
