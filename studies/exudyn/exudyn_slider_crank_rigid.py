@@ -24,8 +24,10 @@ Timing: CPU time for both (FEKAP: the child process's user + system time; Exudyn
 time.process_time() around SolveDynamic) of runs over 0.2 s (TIMED: the crank turns 4.8
 times), the least of R runs (default 5, the two codes alternately), each less the least of
 R one-step runs (FEKAP: reading, set-up, start and output files; Exudyn: its solver's
-set-up and start accelerations); both store every 0.4 ms only (FEKAP its CSV files, Exudyn
-its three sensors). Exudyn runs with its default linear solver (dense LU) and with
+set-up and start accelerations); both store the three points A, M and B every 0.4 ms only
+(FEKAP points.csv alone, OUTPut `files points`, without its other CSV files and the listing;
+Exudyn its three sensors; the runs that measure the error also write FEKAP's listing, for
+its Newton iterations). Exudyn runs with its default linear solver (dense LU) and with
 EigenSparse, and the faster of the two counts (the dense one up to 8 rod elements, the
 sparse one from 16). And instructions (valgrind --tool=callgrind), which the shared
 machine's load does not move, of the chosen runs of both codes, each less a one-step run's
@@ -206,25 +208,28 @@ def run_exudyn(n: int, dt: float, t_end: float, write_period: float | None = Non
 
 # ----------------------------------------------------------------------------------- FEKAP
 
-def fekap_deck(start: str, every: int) -> str:
+def fekap_deck(start: str, every: int, files: str) -> str:
     text = DECK.read_text()
     if "  start consistent" not in text:
         raise SystemExit(f"{DECK}: its ANALysis block no longer says `start consistent`")
     text = text.replace("  start consistent", f"  start {start}")
+    extra = f"\n  files {files}"
     if every > 1:
-        text = text.replace("  track A M B", f"  track A M B\n  every {every}")
-    return text
+        extra += f"\n  every {every}"
+    return text.replace("  track A M B", "  track A M B" + extra)
 
 
 def run_fekap(n: int, dt: float, t_end: float, start: str = "unstrained", every: int = 1,
-              callgrind: bool = False) -> dict:
-    """FEKAP's run of the deck with n elements per half rod: times, deflections, CPU
-    seconds (the child process's), steps, the listing's summary and, with `callgrind`,
-    the instructions (valgrind --tool=callgrind, the whole process)."""
+              callgrind: bool = False, listing: bool = False) -> dict:
+    """FEKAP's run of the deck with n elements per half rod, writing points.csv alone
+    (`files points`: the three tracked points, as Exudyn's sensors) and with `listing` the
+    listing too: times, deflections, CPU seconds (the child process's), steps, the
+    listing's summary (empty without it) and, with `callgrind`, the instructions
+    (valgrind --tool=callgrind, the whole process)."""
     binary = fb.fekap_binary()
     with tempfile.TemporaryDirectory() as work:
         path = Path(work) / "rigid.deck"
-        path.write_text(fekap_deck(start, every))
+        path.write_text(fekap_deck(start, every, "points listing" if listing else "points"))
         command = [binary, "-q", "-o", str(Path(work) / "out"), "--set", f"n={n}", "--set", f"dt={dt!r}",
                    "--set", f"t_end={t_end!r}", str(path)]
         _, cpu, instructions = run_timed(command, Path(work) / "cg.out" if callgrind else None)
@@ -235,8 +240,8 @@ def run_fekap(n: int, dt: float, t_end: float, start: str = "unstrained", every:
                 step = int(row["step"])
                 points.setdefault(step, {})[row["point"]] = (float(row["x"]), float(row["y"]))
                 times[step] = float(row["t"])
-        listing = (Path(work) / "out" / "rigid.lis").read_text()
-    summary = listing_summary(listing)
+        text = (Path(work) / "out" / "rigid.lis").read_text() if listing else ""
+    summary = listing_summary(text)
     order = sorted(points)
     return {"times": [times[s] for s in order],
             "values": [deflection(points[s]["A"], points[s]["M"], points[s]["B"]) for s in order],
@@ -346,7 +351,7 @@ def benchmark(repeat: int, callgrind: bool, json_path: Path | None, check: bool)
             every = max(1, round(COMPARE / dt))
             # The error: one run of each code over T_END (Exudyn's two solvers agree to its
             # Newton tolerance).
-            f_run = run_fekap(n, dt, T_END, every=every)
+            f_run = run_fekap(n, dt, T_END, every=every, listing=True)
             if not on_grid(f_run["times"], COMPARE):
                 raise SystemExit(f"FEKAP at n {n}, dt {dt:g}: stored instants off the {COMPARE:g} s grid")
             details: dict = {}

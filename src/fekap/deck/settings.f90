@@ -306,7 +306,7 @@ contains
 
    end subroutine read_analysis
 
-   !> OUTPut: `track NODE ...`, `angles LINK ...`, `every K`, `files csv|listing|vtk ...`,
+   !> OUTPut: `track NODE ...`, `angles LINK ...`, `every K`, `files csv|points|listing|vtk ...`,
    !> `units length=NAME time=NAME`, `deflection on|off`, `mesh on|off`.
    !> Without track every node is tracked; without angles every link is reported.
    subroutine read_output(ctx, model, lines)
@@ -356,12 +356,13 @@ contains
             end if
             model%output%every = every
          else if (is_word_of(key, 'files', 4)) then
-            if (.not. ctx%require(iline, 'files csv|listing|vtk [...]', 'a files line')) cycle
+            if (.not. ctx%require(iline, 'files csv|points|listing|vtk [...]', 'a files line')) cycle
             model%output%csv = .false.
             model%output%listing = .false.
             model%output%vtk = .false.
+            model%output%points_csv = .false.
             do k = 2, ctx%nfields(iline)
-               which = word_index(ctx%field(iline, k), 'csv listing vtk')
+               which = word_index(ctx%field(iline, k), 'csv listing vtk points')
                select case (which)
                case (1)
                   model%output%csv = .true.
@@ -369,9 +370,11 @@ contains
                   model%output%listing = .true.
                case (3)
                   model%output%vtk = .true.
+               case (4)
+                  model%output%points_csv = .true.
                case default
                   call ctx%error(iline, k, "unknown output file kind '"//ctx%field(iline, k)//"'", &
-                     & label='allowed: csv listing vtk')
+                     & label='allowed: csv points listing vtk')
                end select
             end do
          else if (is_word_of(key, 'deflection', 4)) then

@@ -125,6 +125,12 @@ contains
          end if
          if (effects == effects_dynamics) call registry%table('energy.csv', energy_writer(energy_names))
          call registry%whole('mechanism.txt', write_mechanism_csv, model)
+      else if (model%output%points_csv) then
+         if (model%analysis%spatial) then
+            call registry%table('points.csv', spatial_points_writer(vel, acc))
+         else
+            call registry%table('points.csv', points_writer(vel, acc))
+         end if
       end if
       if (model%output%listing) call registry%table(stem//'.lis', listing_writer(version, step_count(model), plan_text))
       if (model%output%vtk) then

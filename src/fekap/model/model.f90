@@ -240,6 +240,9 @@ module fekap_model
       logical :: csv = .true.
       logical :: listing = .true.
       logical :: vtk = .false.
+      !> `files points`: of the CSV files points.csv alone (the tracked
+      !> points, what a benchmark against another code stores); csv includes it.
+      logical :: points_csv = .false.
       !> Kinetostatics: write the elastic deflection of the nodes (deflection.csv).
       logical :: deflection = .false.
       !> nodes.csv holds every point of the mesh: the named nodes, then the

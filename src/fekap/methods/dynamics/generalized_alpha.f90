@@ -46,13 +46,18 @@ contains
       self%c2 = (1 - self%am)/((1 - self%af)*self%beta*h**2)
    end function new_alpha_coefficients
 
-   !> The predictor of a step (qdd_n+1 = 0): q, qd, qdd and a at n+1 from n.
+   !> The predictor of a step: q, qd, qdd and a at n+1 from n, with the
+   !> acceleration kept, qdd_n+1 = qdd_n, and a_n+1 from CH's averaging
+   !> (the relation above). On a smooth motion its first Newton correction
+   !> is of order h^3 (the change of qdd over the step, times beta h^2),
+   !> where qdd_n+1 = 0 starts h^2 beta qdd away; either converges to the
+   !> same step (the predictor only starts Newton).
    pure subroutine alpha_predict(self, q0, v0, acc0, a0, q, v, acc, a)
       type(alpha_coefficients_type), intent(in) :: self
       real(dp), intent(in) :: q0(:), v0(:), acc0(:), a0(:)
       real(dp), intent(out) :: q(:), v(:), acc(:), a(:)
-      acc = 0
-      a = (self%af*acc0 - self%am*a0)/(1 - self%am)
+      acc = acc0
+      a = (acc0 - self%am*a0)/(1 - self%am)
       q = q0 + self%h*v0 + self%h**2*((0.5_dp - self%beta)*a0 + self%beta*a)
       v = v0 + self%h*((1 - self%gamma)*a0 + self%gamma*a)
    end subroutine alpha_predict

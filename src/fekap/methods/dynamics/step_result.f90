@@ -36,6 +36,8 @@ contains
          if (.not. result%written) return
          call fill_nodes_links(mesh, self%model, state%q, state%v, state%acc, result)
          if (self%model%output%vtk) call fill_fields(mesh, state%q, state%v, state%acc, result)
+         ! The reactions and the energies go to reactions.csv and energy.csv only.
+         if (.not. self%model%output%csv) return
          if (.not. allocated(result%reactions)) allocate (result%reactions(3, reaction_count(self%model)))
          call fill_reactions(self, result%reactions)
          result%has_reactions = all(abs(result%reactions) <= huge(1.0_dp))
