@@ -151,7 +151,8 @@ def test_sliders_on_links_are_refused_at_their_line(tmp_path, deck):
 
 
 # Decks for what the shipped decks do not have: a roller driven along x, a
-# prismatic ground guide, a ground link clamped at one end, a meshed coupler.
+# prismatic ground guide, a roller with a clamp, a ground link clamped at one
+# end, a meshed coupler.
 HEADER = "SECTions\n  bar E=1 G=1 A=100 I=1 k=5/6\nANALysis\n  time 0 1 0.02\n"
 ROLLER = HEADER + """NODEs
   O 0 0
@@ -184,6 +185,8 @@ DRIVes
   rotation OA rate 2*pi
 END
 """
+ROLLER_CLAMP = PRISMATIC_GUIDE.replace("SLIDelines\n  guide B guide -5 0 5 0 prismatic BE\n", "").replace(
+    "  O pin\n", "  O pin\n  B y rot BE\n")
 CLAMPED_MESHED = HEADER + """NODEs
   A 0 0
   B 2 0
@@ -204,6 +207,7 @@ END
 
 
 @pytest.mark.parametrize("name,text", [("roller", ROLLER), ("prismatic-guide", PRISMATIC_GUIDE),
+                                       ("roller-clamp", ROLLER_CLAMP),
                                        ("clamped-meshed", CLAMPED_MESHED)])
 def test_joints_of_other_decks_match_planar(tmp_path, name, text):
     deck = tmp_path / f"{name}.deck"

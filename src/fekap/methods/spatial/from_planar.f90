@@ -1,6 +1,6 @@
-!> `fekap --spatial PLANAR.deck`: a planar kinematics model turned into the
-!> spatial model of the same mechanism in the plane z = 0 (the model a
-!> spatial deck would give, run by fekap_spatial_build and the spatial
+!> A planar kinematics model turned into the spatial model of the same
+!> mechanism in the plane z = 0, for `fekap --spatial PLANAR.deck` (the model
+!> a spatial deck would give, run by fekap_spatial_build and the spatial
 !> stepper; docs/deck-format.md, "Planar decks in 3D"):
 !>
 !>   node           a node at z = 0; where links meet, one node per rigid
