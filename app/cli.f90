@@ -23,6 +23,8 @@ module fekap_app_cli
       logical :: print_outdir = .false.
       !> Replace files of FEKAP's names in the output directory that no earlier run recorded.
       logical :: force = .false.
+      !> Run the planar deck as a spatial model (z = 0, hinges revolute joints about +z).
+      logical :: spatial = .false.
       character(:), allocatable :: method, dt, tol, predictor, compute
       !> `--set name=value` values of deck parameters, in the order given.
       type(override_type), allocatable :: sets(:)
@@ -48,6 +50,9 @@ contains
          & '  --predictor NAME    previous | extrapolate | taylor (overrides the deck)'//nl// &
          & '  --compute LIST      positions[,velocities[,accelerations]] (overrides the deck)'//nl// &
          & '  --set NAME=VALUE    value of the deck parameter NAME (PARAmeters block); repeatable'//nl// &
+         & '  --spatial           run a planar kinematics deck as a spatial mechanism: z = 0,'//nl// &
+         & '                      every hinge and pin a revolute joint about +z, SE(3) beams'//nl// &
+         & '                      (see docs/deck-format.md, "Planar decks in 3D")'//nl// &
          & '  --force             replace files of the names FEKAP writes that no earlier run'//nl// &
          & '                      recorded in the output directory''s .fekap-manifest'//nl// &
          & '  --print-outdir      print the output directory and exit'//nl// &
@@ -87,6 +92,8 @@ contains
             cli%print_outdir = .true.
          case ('--force')
             cli%force = .true.
+         case ('--spatial')
+            cli%spatial = .true.
          case ('--set')
             if (i == n) then
                call input_error(error, 'fekap: option --set needs a value NAME=VALUE (see fekap --help)')

@@ -5,7 +5,7 @@ program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use fekap, only: error_type, error_output, model_type, read_deck, stepper_type, settle_model, make_stepper, &
       & writer_list_type, open_outputs, run_analysis, step_count, plan_text, catch_interrupts, interrupt_reads, &
-      & os_ignore_sigpipe
+      & os_ignore_sigpipe, spatial_from_planar
    use fekap_app_cli, only: cli_type, parse_command_line, apply_overrides, usage_text, fekap_version
    use fekap_app_report, only: say, finish, stop_if_interrupted, c_exit
    implicit none
@@ -38,6 +38,10 @@ program fekap_main
    if (allocated(cli%note) .and. .not. cli%quiet) call say(cli%note)
    call settle_model(model, error)
    if (allocated(error)) call finish(error)
+   if (cli%spatial) then
+      call spatial_from_planar(model, error)
+      if (allocated(error)) call finish(error)
+   end if
 
    call make_stepper(model, stepper, error)
    if (allocated(error)) call finish(error)

@@ -1,5 +1,5 @@
 !> What the program needs of FEKAP, in one module: read a deck, settle the
-!> model, make its stepper, open the output files and run the time loop;
+!> model (or turn a planar one into its spatial model), make its stepper, open the output files and run the time loop;
 !> errors as values, and the signals and pipes of the process.
 module fekap
    use fekap_error, only: error_type, fatal_error, error_other, error_input, error_analysis, error_output
@@ -11,6 +11,7 @@ module fekap
    use fekap_output_writer, only: writer_list_type
    use fekap_output_listing, only: plan_text
    use fekap_driver_factory, only: settle_model, make_stepper
+   use fekap_spatial_from_planar, only: spatial_from_planar
    use fekap_driver_outputs, only: open_outputs
    use fekap_driver_run, only: run_analysis, step_count
    implicit none
@@ -18,7 +19,7 @@ module fekap
 
    public :: error_type, fatal_error, error_other, error_input, error_analysis, error_output
    public :: model_type, read_deck
-   public :: stepper_type, settle_model, make_stepper
+   public :: stepper_type, settle_model, make_stepper, spatial_from_planar
    public :: writer_list_type, open_outputs, run_analysis, step_count, plan_text
    public :: catch_interrupts, interrupt_signal, interrupt_reads, os_ignore_sigpipe
 
