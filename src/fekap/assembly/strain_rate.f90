@@ -379,7 +379,9 @@ contains
    !> operations in the same order (row interchanges and L's multipliers,
    !> then back substitution with U as dtbsv), in loops: dgbtrs makes a BLAS
    !> call per column, whose overhead exceeds the arithmetic of a band this
-   !> narrow (kl + ku = 12 for the scissor lift).
+   !> narrow (kl + ku = 12 for the scissor lift). Its inner loops, and the
+   !> transposed solve's, run a few times each: unrolled or vectorised, their
+   !> set-up would cost more than it saves (the directives below).
    pure subroutine band_lu_solve_loops(ab, kl, ku, ipiv, b)
       real(dp), contiguous, intent(in) :: ab(:, :)
       integer, intent(in) :: kl, ku
@@ -396,6 +398,8 @@ contains
             b(l) = b(j)
             b(j) = temp
          end if
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = 1, min(kl, n - j)
             b(j + i) = b(j + i) - temp*ab(kv + 1 + i, j)
          end do
@@ -403,6 +407,8 @@ contains
       do j = n, 1, -1
          b(j) = b(j)/ab(kv + 1, j)
          temp = b(j)
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = j - 1, max(1, j - kv), -1
             b(i) = b(i) - temp*ab(kv + 1 + i - j, j)
          end do
@@ -425,6 +431,8 @@ contains
       do j = 1, n
          temp = b(j)
          l = kv + 1 - j
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = max(1, j - kv), j - 1
             temp = temp - ab(l + i, j)*b(i)
          end do
@@ -434,6 +442,8 @@ contains
          lm = min(kl, n - j)
          if (lm > 0) then
             temp = 0
+            !GCC$ unroll 1
+            !GCC$ novector
             do i = 1, lm
                temp = temp + b(j + i)*ab(kv + 1 + i, j)
             end do

@@ -174,7 +174,9 @@ contains
    !> dscal's product with the pivot's reciprocal, dger's update a + x (-y)
    !> column by column, skipping a zero y), so the same factor and pivots to
    !> the last bit; without the BLAS call per column, whose set-up costs more
-   !> than the arithmetic of a band a few entries wide. ab as band_lu_factor's.
+   !> than the arithmetic of a band a few entries wide (whose loops run a few
+   !> times each, so they are neither unrolled nor vectorised: the set-up
+   !> would cost more than it saves). ab as band_lu_factor's.
    pure subroutine band_lu_factor_loops(ab, kl, ku, ipiv, info)
       real(dp), contiguous, intent(inout) :: ab(:, :)
       integer, intent(in) :: kl, ku
@@ -200,6 +202,8 @@ contains
          km = min(kl, n - j)
          jp = 1
          largest = abs(ab(kv + 1, j))
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = 2, km + 1
             if (abs(ab(kv + i, j)) > largest) then
                jp = i
@@ -211,6 +215,8 @@ contains
             ju = max(ju, min(j + ku + jp - 1, n))
             if (jp /= 1) then
                ! Row j + jp - 1 and row j over columns j to ju.
+               !GCC$ unroll 1
+               !GCC$ novector
                do jj = 0, ju - j
                   temp = ab(kv + jp - jj, j + jj)
                   ab(kv + jp - jj, j + jj) = ab(kv + 1 - jj, j + jj)
@@ -219,6 +225,8 @@ contains
             end if
             if (km > 0) then
                recip = 1/ab(kv + 1, j)
+               !GCC$ unroll 1
+               !GCC$ novector
                do i = kv + 2, kv + 1 + km
                   ab(i, j) = recip*ab(i, j)
                end do
@@ -227,6 +235,8 @@ contains
                do jj = 1, ju - j
                   if (ab(kv + 1 - jj, j + jj) /= 0) then
                      temp = -ab(kv + 1 - jj, j + jj)
+                     !GCC$ unroll 1
+                     !GCC$ novector
                      do i = 1, km
                         ab(kv + 1 + i - jj, j + jj) = ab(kv + 1 + i - jj, j + jj) + ab(kv + 1 + i, j)*temp
                      end do
