@@ -11,7 +11,8 @@
 !> square (docs/theory.md, "Rates at scale"). The rows are put in band
 !> order (sorted by their least equation in the mesh's equation order), so
 !> that B_f is a band matrix with kl sub- and ku superdiagonals; LAPACK's
-!> dgbtrf factors it; its solves are dgbtrs's, in loops.
+!> dgbtrf factors it (its unblocked code dgbtf2 in loops for narrow bands);
+!> its solves are dgbtrs's, in loops.
 !>
 !> Two forms of B: at the strains of an iterate (the exact Jacobian of the
 !> strains, for Newton), and stress-free (the strains set to zero: it then
@@ -27,12 +28,12 @@ module fekap_assembly_strain_rate
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
    use fekap_assembly_assemble, only: gather
-   use fekap_linalg_lapack, only: band_lu_factor, band_lu_blocked, dlacn2
+   use fekap_linalg_lapack, only: band_lu_factor, band_lu_factor_loops, band_lu_blocked, norm_estimate_step
    implicit none
    private
 
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
-   public :: strain_rates, strain_accelerations, strain_rate_rcond
+   public :: strain_rates, strain_accelerations, strain_rate_rcond, rate_geometry_at
 
    !> B_f of a mesh, in band storage, and its factor.
    type :: strain_rate_type
@@ -187,7 +188,7 @@ contains
       real(dp), contiguous, intent(out), optional :: strain(:)
       real(dp), intent(out), optional :: largest
       integer, intent(out), optional :: element
-      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, row(6, 2), xs(2), x1(2), x2(2), s1, t(2), nrm(2), alpha
+      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, row(6, 2), xs(2), x1(2)
       real(dp) :: worst
       integer :: e, i, k, r
       self%ab = 0
@@ -236,19 +237,55 @@ contains
          end associate
       end do
       do i = 1, size(mesh%slides)
-         call slide_position(mesh, mesh%slides(i), seg(i), q, xs, x1, x2, self%slide_dofs(:, i))
-         s1 = norm2(x2 - x1)
-         t = (x2 - x1)/s1
-         nrm = [-t(2), t(1)]
-         alpha = dot_product(xs - x1, t)/s1
-         ! The gap's gradient N_s (61) and T_s (63) on (xs, ys, x1, y1, x2, y2).
-         self%slide_ns(:, i) = [nrm, -(1 - alpha)*nrm, -alpha*nrm]
-         self%slide_ts(:, i) = [t, -(1 - alpha)*t, -alpha*t]
-         self%slide_nm(:, i) = [nrm, s1]
-         if (present(strain)) strain(self%slide_row(i)) = dot_product(xs - x1, nrm)
+         call slide_geometry(self, mesh, i, seg(i), q, xs, x1)
+         if (present(strain)) strain(self%slide_row(i)) = dot_product(xs - x1, self%slide_nm(1:2, i))
          call scatter_row(self, mesh, self%slide_row(i), self%slide_dofs(:, i), self%slide_ns(:, i))
       end do
    end subroutine assemble_strain_rate
+
+   !> The geometry of the stress-free B at q that strain_rates and
+   !> strain_accelerations read (the section angles, the gaps' gradients),
+   !> as assemble_strain_rate leaves it, without assembling B or touching
+   !> its factor: their residuals at q with a factor made at a configuration
+   !> round-off away (a Newton iterate that converged at its first correction).
+   subroutine rate_geometry_at(self, mesh, q, seg)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      real(dp) :: phi, xs(2), x1(2)
+      integer :: e, i
+      do e = 1, size(mesh%elements)
+         associate (dofs => mesh%edof(:, e))
+            phi = mesh%elements(e)%angle + (q(dofs(3)) + q(dofs(6)))/2
+            self%section(:, e) = [cos(phi), sin(phi)]
+         end associate
+      end do
+      do i = 1, size(mesh%slides)
+         call slide_geometry(self, mesh, i, seg(i), q, xs, x1)
+      end do
+   end subroutine rate_geometry_at
+
+   !> Slideline i's gap geometry at q on its segment iseg: its dofs, its
+   !> gradient N_s (61), T_s (63) and the master's unit normal and length, and
+   !> the slave's and the segment's first point.
+   pure subroutine slide_geometry(self, mesh, i, iseg, q, xs, x1)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: i, iseg
+      real(dp), contiguous, intent(in) :: q(:)
+      real(dp), intent(out) :: xs(2), x1(2)
+      real(dp) :: x2(2), s1, t(2), nrm(2), alpha
+      call slide_position(mesh, mesh%slides(i), iseg, q, xs, x1, x2, self%slide_dofs(:, i))
+      s1 = norm2(x2 - x1)
+      t = (x2 - x1)/s1
+      nrm = [-t(2), t(1)]
+      alpha = dot_product(xs - x1, t)/s1
+      ! The gap's gradient N_s (61) and T_s (63) on (xs, ys, x1, y1, x2, y2).
+      self%slide_ns(:, i) = [nrm, -(1 - alpha)*nrm, -alpha*nrm]
+      self%slide_ts(:, i) = [t, -(1 - alpha)*t, -alpha*t]
+      self%slide_nm(:, i) = [nrm, s1]
+   end subroutine slide_geometry
 
    !> Row `row` of B on the dofs `dofs` (0: none): free columns into the
    !> band, driven ones into B_d.
@@ -282,7 +319,11 @@ contains
          self%column_max(j) = maxval(abs(self%ab(:, j)))
          self%norm1 = max(self%norm1, sum(abs(self%ab(:, j))))
       end do
-      call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info, self%lu_blocked)
+      if (self%lu_blocked) then
+         call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
+      else
+         call band_lu_factor_loops(self%ab, self%kl, self%ku, self%ipiv, info)
+      end if
       self%factored = info == 0
       self%pivot_ratio = 0
       if (.not. self%factored) return
@@ -297,7 +338,7 @@ contains
    end subroutine factor_strain_rate
 
    !> The condition estimate of the factor of B_f (1-norm, Higham's estimator
-   !> LAPACK dlacn2 with the factor's solves), squared to be on the tangent's
+   !> LAPACK dlacn2, in loops (norm_estimate_step), with the factor's solves), squared to be on the tangent's
    !> scale like pivot_ratio (K = B^T W B); 0 without a factor. Change points
    !> compare it with the run's best. Not dgbcon: its careful triangular
    !> solves (dlatbs) rescan the whole vector per column when B_f is
@@ -313,9 +354,9 @@ contains
       if (.not. allocated(self%rcond_work)) allocate (self%rcond_work(2*self%n), self%rcond_iwork(self%n))
       est = 0
       kase = 0
-      associate (x => self%rcond_work(1:self%n), v => self%rcond_work(self%n + 1:))
+      associate (x => self%rcond_work(1:self%n))
          do
-            call dlacn2(self%n, v, x, self%rcond_iwork, est, kase, isave)
+            call norm_estimate_step(self%n, x, self%rcond_iwork, est, kase, isave)
             if (kase == 0) exit
             if (kase == 1) then
                call band_lu_solve_loops(self%ab, self%kl, self%ku, self%ipiv, x)
@@ -338,11 +379,14 @@ contains
    !> operations in the same order (row interchanges and L's multipliers,
    !> then back substitution with U as dtbsv), in loops: dgbtrs makes a BLAS
    !> call per column, whose overhead exceeds the arithmetic of a band this
-   !> narrow (kl + ku = 12 for the scissor lift).
+   !> narrow (kl + ku = 12 for the scissor lift). Its inner loops, and the
+   !> transposed solve's, run a few times each: unrolled or vectorised, their
+   !> set-up would cost more than it saves (the directives below).
    pure subroutine band_lu_solve_loops(ab, kl, ku, ipiv, b)
-      real(dp), intent(in) :: ab(:, :)
-      integer, intent(in) :: kl, ku, ipiv(:)
-      real(dp), intent(inout) :: b(:)
+      real(dp), contiguous, intent(in) :: ab(:, :)
+      integer, intent(in) :: kl, ku
+      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp), contiguous, intent(inout) :: b(:)
       real(dp) :: temp
       integer :: n, kv, j, l, i
       n = size(b)
@@ -354,6 +398,8 @@ contains
             b(l) = b(j)
             b(j) = temp
          end if
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = 1, min(kl, n - j)
             b(j + i) = b(j + i) - temp*ab(kv + 1 + i, j)
          end do
@@ -361,6 +407,8 @@ contains
       do j = n, 1, -1
          b(j) = b(j)/ab(kv + 1, j)
          temp = b(j)
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = j - 1, max(1, j - kv), -1
             b(i) = b(i) - temp*ab(kv + 1 + i - j, j)
          end do
@@ -372,9 +420,10 @@ contains
    !> dtbsv, then L's multipliers as dgemv's dot products, each followed by
    !> its row interchange), in loops, as band_lu_solve_loops.
    pure subroutine band_lu_solve_transposed_loops(ab, kl, ku, ipiv, b)
-      real(dp), intent(in) :: ab(:, :)
-      integer, intent(in) :: kl, ku, ipiv(:)
-      real(dp), intent(inout) :: b(:)
+      real(dp), contiguous, intent(in) :: ab(:, :)
+      integer, intent(in) :: kl, ku
+      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp), contiguous, intent(inout) :: b(:)
       real(dp) :: temp
       integer :: n, kv, j, l, i, lm
       n = size(b)
@@ -382,6 +431,8 @@ contains
       do j = 1, n
          temp = b(j)
          l = kv + 1 - j
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = max(1, j - kv), j - 1
             temp = temp - ab(l + i, j)*b(i)
          end do
@@ -391,6 +442,8 @@ contains
          lm = min(kl, n - j)
          if (lm > 0) then
             temp = 0
+            !GCC$ unroll 1
+            !GCC$ novector
             do i = 1, lm
                temp = temp + b(j + i)*ab(kv + 1 + i, j)
             end do

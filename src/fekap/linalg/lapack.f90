@@ -6,9 +6,9 @@ module fekap_linalg_lapack
    implicit none
    private
 
-   public :: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dgeqp3, dlacn2
+   public :: dpbtrf, dpbtrs, dgbtrf, dgbtf2, dgbtrs, dgetrf, dgetrs, dgeqp3, dlacn2
    public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
-   public :: band_lu_factor, band_lu_solve, band_lu_blocked
+   public :: band_lu_factor, band_lu_solve, band_lu_blocked, band_lu_factor_loops, norm_estimate_step
 
    interface
       !> Cholesky factorisation of a symmetric positive definite band matrix.
@@ -167,6 +167,216 @@ contains
       end if
       call dgbtrf(size(ab, 2), size(ab, 2), kl, ku, ab, size(ab, 1), ipiv, info)
    end subroutine band_lu_factor
+
+   !> dgbtf2 (dgbtrf's unblocked code, which it takes for narrow bands) in
+   !> loops: the same operations in the same order (the fill cleared, idamax's
+   !> first largest magnitude as pivot, dswap's interchange along the rows,
+   !> dscal's product with the pivot's reciprocal, dger's update a + x (-y)
+   !> column by column, skipping a zero y), so the same factor and pivots to
+   !> the last bit; without the BLAS call per column, whose set-up costs more
+   !> than the arithmetic of a band a few entries wide (whose loops run a few
+   !> times each, so they are neither unrolled nor vectorised: the set-up
+   !> would cost more than it saves). ab as band_lu_factor's.
+   pure subroutine band_lu_factor_loops(ab, kl, ku, ipiv, info)
+      real(dp), contiguous, intent(inout) :: ab(:, :)
+      integer, intent(in) :: kl, ku
+      integer, contiguous, intent(out) :: ipiv(:)
+      integer, intent(out) :: info
+      real(dp) :: temp, largest, recip
+      integer :: n, kv, i, j, jj, jp, ju, km
+      n = size(ab, 2)
+      kv = ku + kl
+      info = 0
+      do j = ku + 2, min(kv, n)
+         do i = kv - j + 2, kl
+            ab(i, j) = 0
+         end do
+      end do
+      ju = 1
+      do j = 1, n
+         if (j + kv <= n) then
+            do i = 1, kl
+               ab(i, j + kv) = 0
+            end do
+         end if
+         km = min(kl, n - j)
+         jp = 1
+         largest = abs(ab(kv + 1, j))
+         !GCC$ unroll 1
+         !GCC$ novector
+         do i = 2, km + 1
+            if (abs(ab(kv + i, j)) > largest) then
+               jp = i
+               largest = abs(ab(kv + i, j))
+            end if
+         end do
+         ipiv(j) = jp + j - 1
+         if (ab(kv + jp, j) /= 0) then
+            ju = max(ju, min(j + ku + jp - 1, n))
+            if (jp /= 1) then
+               ! Row j + jp - 1 and row j over columns j to ju.
+               !GCC$ unroll 1
+               !GCC$ novector
+               do jj = 0, ju - j
+                  temp = ab(kv + jp - jj, j + jj)
+                  ab(kv + jp - jj, j + jj) = ab(kv + 1 - jj, j + jj)
+                  ab(kv + 1 - jj, j + jj) = temp
+               end do
+            end if
+            if (km > 0) then
+               recip = 1/ab(kv + 1, j)
+               !GCC$ unroll 1
+               !GCC$ novector
+               do i = kv + 2, kv + 1 + km
+                  ab(i, j) = recip*ab(i, j)
+               end do
+               ! Rows j + 1 to j + km of columns j + 1 to ju, less the
+               ! multipliers times row j (U(j, j + jj) at ab(kv + 1 - jj, j + jj)).
+               do jj = 1, ju - j
+                  if (ab(kv + 1 - jj, j + jj) /= 0) then
+                     temp = -ab(kv + 1 - jj, j + jj)
+                     !GCC$ unroll 1
+                     !GCC$ novector
+                     do i = 1, km
+                        ab(kv + 1 + i - jj, j + jj) = ab(kv + 1 + i - jj, j + jj) + ab(kv + 1 + i, j)*temp
+                     end do
+                  end if
+               end do
+            end if
+         else if (info == 0) then
+            info = j
+         end if
+      end do
+   end subroutine band_lu_factor_loops
+
+   !> dlacn2 (the 1-norm estimator of dgbcon, Hager and Higham) in loops, by
+   !> the same reverse communication: call with kase = 0, then, while kase /=
+   !> 0, overwrite x by A^-1 x (kase = 1) or A^-T x (kase = 2) and call again;
+   !> est is the estimate of ||A^-1||_1. The same vectors, sums (dasum's, in
+   !> order), maxima (idamax's first largest) and stops in the same order as
+   !> dlacn2, so the same estimate to the last bit, without its BLAS calls.
+   !> isave(1) is the point to resume at, isave(2) the index of the last
+   !> unit vector, isave(3) the iteration, as dlacn2's.
+   subroutine norm_estimate_step(n, x, isgn, est, kase, isave)
+      integer, intent(in) :: n
+      real(dp), intent(inout) :: x(:)
+      integer, intent(inout) :: isgn(:)
+      real(dp), intent(inout) :: est
+      integer, intent(inout) :: kase
+      integer, intent(inout) :: isave(3)
+      !> dlacn2's limit on its main iterations.
+      integer, parameter :: itmax = 5
+      real(dp) :: estold, altsgn
+      integer :: i, jlast
+      if (kase == 0) then
+         x(1:n) = 1/real(n, dp)
+         kase = 1
+         isave(1) = 1
+         return
+      end if
+      select case (isave(1))
+      case (1)
+         if (n == 1) then
+            est = abs(x(1))
+            kase = 0
+            return
+         end if
+         est = asum(x)
+         call signs()
+         kase = 2
+         isave(1) = 2
+         return
+      case (2)
+         isave(2) = first_largest(x)
+         isave(3) = 2
+         call unit_vector()
+         return
+      case (3)
+         estold = est
+         est = asum(x)
+         do i = 1, n
+            if (merge(1, -1, x(i) >= 0) /= isgn(i)) then
+               ! A new sign vector: go on unless the estimate did not grow.
+               if (est <= estold) exit
+               call signs()
+               kase = 2
+               isave(1) = 4
+               return
+            end if
+         end do
+         ! A repeated sign vector (converged), or no growth (cycling).
+         call alternating()
+         return
+      case (4)
+         jlast = isave(2)
+         isave(2) = first_largest(x)
+         if (x(jlast) /= abs(x(isave(2))) .and. isave(3) < itmax) then
+            isave(3) = isave(3) + 1
+            call unit_vector()
+            return
+         end if
+         call alternating()
+         return
+      case default
+         ! The alternating vector: a lower bound that catches what the iteration can miss.
+         est = max(est, 2*(asum(x)/real(3*n, dp)))
+         kase = 0
+      end select
+   contains
+      !> dasum: the magnitudes summed in order.
+      pure real(dp) function asum(b) result(total)
+         real(dp), intent(in) :: b(:)
+         integer :: k
+         total = 0
+         do k = 1, n
+            total = total + abs(b(k))
+         end do
+      end function asum
+      !> idamax: the first index of the largest magnitude.
+      pure integer function first_largest(b) result(at)
+         real(dp), intent(in) :: b(:)
+         real(dp) :: largest
+         integer :: k
+         at = 1
+         largest = abs(b(1))
+         do k = 2, n
+            if (abs(b(k)) > largest) then
+               at = k
+               largest = abs(b(k))
+            end if
+         end do
+      end function first_largest
+      !> x = sign(x) (+1 at zero) and the signs as integers.
+      subroutine signs()
+         integer :: k
+         do k = 1, n
+            if (x(k) >= 0) then
+               x(k) = 1
+            else
+               x(k) = -1
+            end if
+            isgn(k) = nint(x(k))
+         end do
+      end subroutine signs
+      !> x = e_j, j = isave(2), for A^-1.
+      subroutine unit_vector()
+         x(1:n) = 0
+         x(isave(2)) = 1
+         kase = 1
+         isave(1) = 3
+      end subroutine unit_vector
+      !> x = (1, -(1 + 1/(n - 1)), ...), for A^-1.
+      subroutine alternating()
+         integer :: k
+         altsgn = 1
+         do k = 1, n
+            x(k) = altsgn*(1 + real(k - 1, dp)/real(n - 1, dp))
+            altsgn = -altsgn
+         end do
+         kase = 1
+         isave(1) = 5
+      end subroutine alternating
+   end subroutine norm_estimate_step
 
    !> Whether dgbtrf factors an n x n band matrix of kl sub- and ku
    !> superdiagonals with its blocked code: its own test, the block size

@@ -43,6 +43,7 @@ module fekap_fem
    use fekap_fem_newton, only: fem_newton_type, fem_contract
    use fekap_fem_branch, only: branch_accept, branch_verify, branch_unverifiable
    use fekap_fem_determinacy, only: check_free_motion
+   use fekap_assembly_strain_rate, only: rate_geometry_at
    implicit none
    private
 
@@ -379,7 +380,20 @@ contains
                if (.not. moved) exit relocations
             end do relocations
             residual = newton%residual
-            if (self%loaded .or. newton%at_predictor) exit verification
+            if (self%loaded) exit verification
+            if (newton%at_predictor) then
+               ! The factor at the predictor serves (fem_correct). The square-root
+               ! form took its correction, of round-off size: K (its free-driven
+               ! block is the next step's residual scale) and the residual are
+               ! assembled at the corrected configuration, as below, and the
+               ! rates' residuals are taken there (rate_geometry_at).
+               if (self%root_form) then
+                  call assemble_system(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
+                  residual = residual_norm(system, mesh)
+                  call rate_geometry_at(self%root, mesh, qt, self%seg)
+               end if
+               exit verification
+            end if
             ! The material tangent at the new configuration: the branch-jump
             ! check's response (and from it the predictor's velocity) and, once
             ! accepted, the rates' tangent. The last Newton factor, one correction

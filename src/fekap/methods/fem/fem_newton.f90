@@ -26,10 +26,10 @@ module fekap_fem_newton
       & stop_at_floor, test_solved_from, test_relative_first
    use fekap_stepping_predictor, only: predictor_margin
    use fekap_fem_convergence, only: is_converged, converged_by_estimate, divergence_length
-   use fekap_fem_linear_system, only: assemble_system, factor_system, system_pivot, residual_norm, newton_correction
+   use fekap_fem_linear_system, only: assemble_system, factor_system, residual_norm, newton_correction
    use fekap_fem_rates, only: near_singular_drop
    use fekap_fem_state, only: fem_core_type
-   use fekap_fem_factor, only: newton_assembly, root_correction, take_correction
+   use fekap_fem_factor, only: newton_assembly, root_correction, take_correction, accepted_pivot
    use fekap_fem_predict, only: guard_extrapolation
    use fekap_fem_fill, only: check_predictor
    implicit none
@@ -233,20 +233,35 @@ contains
          ! leaves it as it is, and the tangent just factored, material only
          ! (every Gauss point strained less than kg_above), is the tangent at
          ! the accepted configuration: the branch-jump check and the rates need
-         ! no assembly and factorisation of their own. Not near a stationary
+         ! no assembly and factorisation of their own. In the square-root form
+         ! that is B_f's factor at the predictor with the strains of the
+         ! iterate, round-off away from the stress-free B_f at the corrected
+         ! configuration (the rates' refinement, whose residual is the
+         ! stress-free strain rates there, takes the difference up; see
+         ! solve_step). Not near a stationary
          ! configuration: the residual there hardly sees an error along the
          ! near-singular direction (a predictor kept past collinear is then
          ! rejected by the branch-jump check). The contract's test, the same
          ! as is_converged's, then stops the pass.
-         if (first .and. .not. fem%loaded .and. fem%conv%mode /= convergence_paper .and. .not. self%root_solved) then
+         if (first .and. .not. fem%loaded .and. fem%conv%mode /= convergence_paper) then
             self%at_predictor = self%correction <= predictor_margin*fem%prediction%length .and. &
                & fem%system%assembled_strain < self%kg_above .and. &
                & is_converged(fem%conv, self%residual, self%r0, self%increment_residual, self%correction)
             if (self%at_predictor) then
-               call system_pivot(fem%system, pivot)
+               ! K's factor, or in the square-root form B_f's (0 if K took its correction).
+               if (fem%root_form .and. .not. self%root_solved) then
+                  pivot = 0
+               else
+                  pivot = accepted_pivot(fem)
+               end if
                self%at_predictor = pivot >= near_singular_drop*fem%state%reference_pivot
             end if
-            if (self%at_predictor) return
+            if (self%at_predictor) then
+               ! The square-root form takes its correction all the same (the
+               ! positions are Newton's, as if the factor were made again).
+               if (self%root_solved) call take_correction(fem, fem%qt, self%iterations)
+               return
+            end if
          end if
          call take_correction(fem, fem%qt, self%iterations)
       end associate
