@@ -11,8 +11,10 @@ A FEKAP run writes into its output directory (README.md, "What a run writes"):
   ``deflection.csv``: ``step,t,node,ux,uy``;
 - ``mesh.csv``: ``link,node1,node2``, the end points of each link by point name;
 - a spatial run's (docs/deck-format.md, "Spatial decks"): ``points.csv`` and ``nodes.csv`` with
-  z columns (``step,t,A.x,A.y,A.z,...``), ``joints.csv`` (``step,t,joint,angle[,rate[,acceleration]]``)
-  and ``mechanism.txt`` with ``node,NAME,x,y,z`` and ``joint`` records.
+  z columns (``step,t,A.x,A.y,A.z,...``), ``joints.csv`` (``step,t,joint,angle[,rate[,acceleration]]``),
+  ``links.csv`` (``step,t,link,q0,q1,q2,q3[,omega_x,...[,alpha_x,...]]``: a unit quaternion kept
+  continuous and the global angular velocity and acceleration) and ``mechanism.txt`` with
+  ``node,NAME,x,y,z`` and ``joint`` records.
 
 Any of them: :func:`rows` (dictionaries, as text or numbers) and :func:`columns` (numpy
 arrays, rows selected by a name); every node's coordinates of nodes.csv: :func:`node_positions`;

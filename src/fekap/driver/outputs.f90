@@ -11,7 +11,8 @@ module fekap_driver_outputs
    use fekap_model_effects, only: planned_effects
    use fekap_dynamics_dynamic_stepper, only: energy_names
    use fekap_output_writer, only: writer_type, writer_list_type, move_writers
-   use fekap_output_spatial_writers, only: spatial_points_writer, joints_writer, spatial_nodes_writer
+   use fekap_output_spatial_writers, only: spatial_points_writer, joints_writer, spatial_nodes_writer, &
+      & spatial_links_writer
    use fekap_output_table_writers, only: table_writer_type, points_writer, links_writer, steps_writer, nodes_writer, &
       & reactions_writer, energy_writer, deflection_writer
    use fekap_output_listing_writer, only: listing_writer
@@ -107,8 +108,9 @@ contains
       acc = vel .and. model%analysis%accelerations
       if (model%output%csv) then
          if (model%analysis%spatial) then
-            ! A spatial run reports its joints' motion, not planar link angles.
+            ! A spatial run reports its links' rotations and its joints' motion.
             call registry%table('points.csv', spatial_points_writer(vel, acc))
+            call registry%table('links.csv', spatial_links_writer(vel, acc))
             call registry%table('joints.csv', joints_writer(vel, acc))
          else
             call registry%table('points.csv', points_writer(vel, acc))

@@ -73,6 +73,10 @@ module fekap_model_results
       !> (3, joints): angle (stroke), rate and second rate (fekap_spatial_build).
       real(dp), allocatable :: pos_z(:), vel_z(:), acc_z(:)
       real(dp), allocatable :: joint_motion(:, :)
+      !> Spatial runs only: each link's rotation, a unit quaternion (4, links)
+      !> with its sign kept continuous, and its angular velocity and
+      !> acceleration in global axes (3, links) (fekap_spatial_link_motion).
+      real(dp), allocatable :: link_rotation(:, :), link_omega(:, :), link_alpha(:, :)
    end type step_result_type
 
 contains

@@ -149,7 +149,7 @@ contains
       call append_text(text, n, name)
       call append_values(text, n, q)
       if (velocities .and. .not. has_velocity) then
-         do i = 1, size(q)*merge(2, 1, accelerations)
+         do i = 1, size(dq) + merge(size(ddq), 0, accelerations)
             call append_char(text, n, ',')
          end do
       else if (velocities) then

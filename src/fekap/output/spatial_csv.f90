@@ -20,6 +20,7 @@ module fekap_output_spatial_csv
 
    public :: write_spatial_points_header, write_spatial_points_rows, write_joints_header, write_joints_rows
    public :: write_spatial_nodes_header, write_spatial_nodes_row, write_spatial_mechanism
+   public :: write_spatial_links_header, write_spatial_links_rows
 
 contains
 
@@ -73,6 +74,34 @@ contains
          end associate
       end do
    end subroutine write_joints_rows
+
+   !> The header of links.csv of a spatial run:
+   !> `step,t,link,q0,q1,q2,q3[,omega_x,omega_y,omega_z[,alpha_x,alpha_y,alpha_z]]`.
+   subroutine write_spatial_links_header(out, velocities, accelerations)
+      type(text_buffer_type), intent(inout) :: out
+      logical, intent(in) :: velocities, accelerations
+      call write_rates_header(out, 'step,t,link,q0,q1,q2,q3', ',omega_x,omega_y,omega_z', &
+         & ',alpha_x,alpha_y,alpha_z', velocities, accelerations)
+   end subroutine write_spatial_links_header
+
+   !> One row per reported link (OUTPut `angles`): its rotation quaternion,
+   !> angular velocity and acceleration (fekap_spatial_link_motion).
+   subroutine write_spatial_links_rows(out, model, result, prefix, velocities, accelerations)
+      type(text_buffer_type), intent(inout) :: out
+      type(model_type), intent(in) :: model
+      type(step_result_type), intent(in) :: result
+      character(*), intent(in) :: prefix
+      logical, intent(in) :: velocities, accelerations
+      integer :: i, link
+      do i = 1, size(model%output%links)
+         link = model%output%links(i)
+         associate (name => model%links(link)%name)
+            call reserve_text(out, row_length(len(name), 10))
+            call append_rates_row(out%text, out%n, prefix, name, result%link_rotation(:, link), &
+               & result%link_omega(:, link), result%link_alpha(:, link), result%has_velocity, velocities, accelerations)
+         end associate
+      end do
+   end subroutine write_spatial_links_rows
 
    !> `step,t,A.x,A.y,A.z,B.x,...`: the header of nodes.csv of a spatial
    !> run, three columns per node of the model in the deck's order (a spatial
