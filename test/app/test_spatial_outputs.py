@@ -290,3 +290,50 @@ def test_truss_rotation_turns_by_the_swept_solid_angle(tmp_path):
         errors.append(abs(angle - omega))
     check(errors[0] < 1e-3 and 3.5 < errors[0] / errors[1] < 4.5,
           f"twist after a turn against the solid angle {omega:.6f}: errors {errors[0]:.3e}, {errors[1]:.3e}")
+
+
+# ----------------------------------------------------------------------- VTK
+
+def test_vtk_files_of_a_spatial_run(tmp_path):
+    """`files csv listing vtk` in a spatial deck: one .vtu a written step and
+    the .pvd with their times; VTK and meshio read the same 3D points, the
+    reference points are the deck's nodes (mechanism.txt), reference plus
+    displacement is nodes.csv's positions at each step, velocity and
+    acceleration are points.csv's, the cells are mesh.csv's links, and the
+    node names are the model's."""
+    import meshio
+    from test_vtk import Mesh, read_pvd
+
+    text = (DECKS / "slider-crank.deck").read_text()
+    check("  track B S\n" in text, "the slider-crank deck's track line changed")
+    deck = tmp_path / "crank.deck"
+    deck.write_text(text.replace("  track B S\n", "  every 10\n  files csv listing vtk\n"))
+    out = run_deck(deck, tmp_path / "out")
+    collection = read_pvd(out / "crank.pvd")
+    steps, t, nodes = read.node_positions(out / "nodes.csv")
+    check([c[0] for c in collection] == t.tolist() and len(t) == 11, f"the .pvd's times {collection}")
+    check(sorted(p.name for p in (out / "vtk").iterdir()) == [f"crank_{s:06d}.vtu" for s in steps],
+          "one .vtu a written step")
+    mech = read.read_spatial_mechanism(out / "mechanism.txt")
+    names = list(mech.nodes)
+    reference = np.array([mech.nodes[n] for n in names])
+    links = read.rows(out / "mesh.csv")
+    for k, (time, file) in enumerate(collection):
+        mesh = Mesh(out / file)
+        check(np.array_equal(mesh.reference, reference), f"{file}: the points are not the deck's nodes")
+        where = np.stack([nodes[n][k] for n in names])
+        err = np.max(np.abs(mesh.points - where))
+        check(err < 1e-15, f"{file}: points + displacement differ from nodes.csv by {err:.3e}")
+        for name, keys in (("velocity", ("vx", "vy", "vz")), ("acceleration", ("ax", "ay", "az"))):
+            for node in ("B", "S"):
+                row = read.rows(out / "points.csv", numbers=True, point=node)[k]
+                got = mesh.point_data[name][names.index(node)]
+                check(np.array_equal(got, [row[q] for q in keys]), f"{file}: {name} of {node} is not points.csv's")
+        want = [[names.index(r["node1"]), names.index(r["node2"])] for r in links]
+        check(np.array_equal(mesh.cells[0].data, want), f"{file}: cells {mesh.cells[0].data}, not mesh.csv's links")
+        got = meshio.read(out / file)
+        check(np.array_equal(got.points, mesh.reference) and np.array_equal(
+            got.point_data["displacement"], mesh.point_data["displacement"]), f"{file}: meshio reads other points")
+        node_names = [n.decode() for n in bytes(got.field_data["node_names"].astype(np.uint8)).split(b"\0")[:-1]]
+        check(node_names == names, f"{file}: node_names {node_names}")
+        check(float(mesh.field_data["TimeValue"][0]) == time, f"{file}: TimeValue differs from the .pvd")

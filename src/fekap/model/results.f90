@@ -46,7 +46,8 @@ module fekap_model_results
       !> element method when the run writes them (output%mesh_nodes).
       real(dp), allocatable :: interior(:, :)
       !> Field output (filled only when the deck asks for VTK files): the
-      !> analysis mesh's points (2, npoint) with their velocities and
+      !> analysis mesh's points (2, npoint; the VTK writer of a spatial run,
+      !> whose stepper fills none, makes them (3, npoint)) with their velocities and
       !> accelerations, its line cells (2, ncell) as point indices, the link of
       !> each cell, and each cell's stress resultants (N, V, M) (3, ncell).
       !> The finite element method gives its elements; the classical methods
