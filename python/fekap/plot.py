@@ -200,9 +200,10 @@ class Run:
     def links(self) -> dict[str, fs.Reduced]:
         if self._links is None:
             file = self.path / "links.csv"
+            # A spatial run's links.csv holds rotations (q0, ...), not planar angles: none drawn.
+            planar = file.is_file() and "angle" in fs.first_line(file).strip().split(",")
             try:
-                self._links = (fs.read_long(file, "link", fc.LINK_QUANTITIES, ("angle",))
-                               if file.is_file() else {})
+                self._links = fs.read_long(file, "link", fc.LINK_QUANTITIES, ("angle",)) if planar else {}
             except fc.UsageError as exc:
                 if "only its header" not in str(exc):
                     raise

@@ -423,9 +423,11 @@ def read_nodes(path: Path, targets: list[int] | None = None, count: int = 0,
     """nodes.csv: decimated paths of every node and the positions at ``count`` evenly spread
     steps (or at the given target steps)."""
     header = _header(path)
-    if header[:2] != ["step", "t"] or len(header) % 2:
+    # A spatial run's nodes.csv has a z column after each y (A.x,A.y,A.z): drawn in x, y here.
+    width = 3 if len(header) > 4 and header[4].endswith(".z") else 2
+    if header[:2] != ["step", "t"] or (len(header) - 2) % width:
         raise UsageError(f"{path}: expected the header step,t,A.x,A.y,...")
-    names = [c[:-2] for c in header[2::2]]
+    names = [c[:-2] for c in header[2::width]]
     first, last = step_range(path)
     if targets is None:
         targets = even_steps(first, last, count)
@@ -436,11 +438,11 @@ def read_nodes(path: Path, targets: list[int] | None = None, count: int = 0,
         if not len(numbers):
             continue
         for index, name in enumerate(names):
-            reducers[name].feed(numbers[:, [0, 1, 2 + 2 * index, 3 + 2 * index]])
+            reducers[name].feed(numbers[:, [0, 1, 2 + width * index, 3 + width * index]])
         steps = numbers[:, 0]
         while pending and pending[0] <= steps[-1]:
             row = numbers[int(np.searchsorted(steps, pending[0]))]
-            frames[int(row[0])] = (float(row[1]), {n: (float(row[2 + 2 * i]), float(row[3 + 2 * i]))
+            frames[int(row[0])] = (float(row[1]), {n: (float(row[2 + width * i]), float(row[3 + width * i]))
                                                    for i, n in enumerate(names)})
             pending.pop(0)
     paths = {}

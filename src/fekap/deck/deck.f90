@@ -11,7 +11,6 @@ module fekap_deck
    use fekap_deck_spatial, only: read_spatial_sections, read_spatial_nodes, read_spatial_links, read_joints, &
       & read_spatial_drives
    use fekap_deck_context, only: context_type
-   use fekap_strings, only: lower
    use fekap_deck_diagnostic, only: mark_type
    use fekap_deck_source, only: load_file, load_string
    use fekap_deck_geometry, only: read_sections, read_nodes, read_links, read_welds, read_supports
@@ -207,13 +206,6 @@ contains
                & 'a spatial deck has SECTions, NODEs, LINKs, JOINts, DRIVes, ANALysis, OUTPut: ground nodes by '// &
                & 'joints to ground, weld links by weld joints')
          end do
-         if (model%output%vtk) then
-            do k = 1, ctx%source%nlines
-               if (block(k) == card_output .and. index(lower(ctx%source%lines(k)%code), 'vtk') > 0) then
-                  call ctx%error(k, 1, 'a spatial run writes no VTK files yet', label='leave vtk out of files')
-               end if
-            end do
-         end if
       end subroutine read_spatial_deck
 
       !> Every line of the card's blocks is an error: message, label.

@@ -11,12 +11,14 @@ module fekap_driver_outputs
    use fekap_model_effects, only: planned_effects
    use fekap_dynamics_dynamic_stepper, only: energy_names
    use fekap_output_writer, only: writer_type, writer_list_type, move_writers
-   use fekap_output_spatial_writers, only: spatial_points_writer, joints_writer
+   use fekap_output_spatial_writers, only: spatial_points_writer, joints_writer, spatial_nodes_writer, &
+      & spatial_links_writer
    use fekap_output_table_writers, only: table_writer_type, points_writer, links_writer, steps_writer, nodes_writer, &
       & reactions_writer, energy_writer, deflection_writer
    use fekap_output_listing_writer, only: listing_writer
    use fekap_output_vtk_writer, only: vtk_writer
    use fekap_output_csv, only: write_mesh_csv, write_mechanism_csv
+   use fekap_output_spatial_csv, only: write_spatial_mechanism
    use fekap_output_directory, only: prepare_output_directory, make_directory, output_plan_type, add_run_file, &
       & temporary_suffix
    use fekap_output_checked_file, only: open_replace, close_checked
@@ -106,8 +108,9 @@ contains
       acc = vel .and. model%analysis%accelerations
       if (model%output%csv) then
          if (model%analysis%spatial) then
-            ! A spatial run reports its joints' motion, not planar link angles.
+            ! A spatial run reports its links' rotations and its joints' motion.
             call registry%table('points.csv', spatial_points_writer(vel, acc))
+            call registry%table('links.csv', spatial_links_writer(vel, acc))
             call registry%table('joints.csv', joints_writer(vel, acc))
          else
             call registry%table('points.csv', points_writer(vel, acc))
@@ -117,14 +120,22 @@ contains
          ! `floor`); the spatial kinematics' has no floor.
          call registry%table('steps.csv', steps_writer(dynamics=effects == effects_dynamics, &
             & floor=.not. model%analysis%spatial))
-         call registry%table('nodes.csv', nodes_writer())
+         if (model%analysis%spatial) then
+            call registry%table('nodes.csv', spatial_nodes_writer())
+         else
+            call registry%table('nodes.csv', nodes_writer())
+         end if
          call registry%whole('mesh.csv', write_mesh_csv, model)
          if (effects /= effects_kinematics) call registry%table('reactions.csv', reactions_writer())
          if (effects == effects_kinetostatics .and. model%output%deflection) then
             call registry%table('deflection.csv', deflection_writer())
          end if
          if (effects == effects_dynamics) call registry%table('energy.csv', energy_writer(energy_names))
-         call registry%whole('mechanism.txt', write_mechanism_csv, model)
+         if (model%analysis%spatial) then
+            call registry%whole('mechanism.txt', write_spatial_mechanism, model)
+         else
+            call registry%whole('mechanism.txt', write_mechanism_csv, model)
+         end if
       else if (model%output%points_csv) then
          if (model%analysis%spatial) then
             call registry%table('points.csv', spatial_points_writer(vel, acc))

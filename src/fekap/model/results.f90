@@ -47,7 +47,8 @@ module fekap_model_results
       !> element method when the run writes them (output%mesh_nodes).
       real(dp), allocatable :: interior(:, :)
       !> Field output (filled only when the deck asks for VTK files): the
-      !> analysis mesh's points (2, npoint) with their velocities and
+      !> analysis mesh's points (2, npoint; the VTK writer of a spatial run,
+      !> whose stepper fills none, makes them (3, npoint)) with their velocities and
       !> accelerations, its line cells (2, ncell) as point indices, the link of
       !> each cell, and each cell's stress resultants (N, V, M) (3, ncell).
       !> The finite element method gives its elements; the classical methods
@@ -74,6 +75,10 @@ module fekap_model_results
       !> (3, joints): angle (stroke), rate and second rate (fekap_spatial_build).
       real(dp), allocatable :: pos_z(:), vel_z(:), acc_z(:)
       real(dp), allocatable :: joint_motion(:, :)
+      !> Spatial runs only: each link's rotation, a unit quaternion (4, links)
+      !> with its sign kept continuous, and its angular velocity and
+      !> acceleration in global axes (3, links) (fekap_spatial_link_motion).
+      real(dp), allocatable :: link_rotation(:, :), link_omega(:, :), link_alpha(:, :)
    end type step_result_type
 
 contains

@@ -5,7 +5,7 @@
 !>
 !> A .vtu file holds the analysis mesh at one step in ParaView's convention
 !> for displacements: its points at their reference (first-step) positions
-!> (z = 0), its line cells (VTK_LINE, type 3), the point data `displacement`
+!> (z = 0 in a planar run), its line cells (VTK_LINE, type 3), the point data `displacement`
 !> (current position minus reference position: Warp By Vector with scale 1
 !> shows the mechanism where it is), `velocity` and `acceleration` (when
 !> computed at that step), the cell data `link` (1-based link index) and
@@ -36,7 +36,7 @@ contains
       type(model_type), intent(in) :: model
       !> The step, with its field output (mesh_pos, cells, ...) filled.
       type(step_result_type), intent(in) :: result
-      !> (2, npoint): the positions of the points at the first step, for the displacement.
+      !> (2 or 3, npoint): the positions of the points at the first step, for the displacement.
       real(dp), intent(in) :: initial_pos(:, :)
       integer :: npoint, ncell, c
       logical :: vel, acc
@@ -122,8 +122,9 @@ contains
       write (unit, '(a)') '</VTKFile>'
    end subroutine write_pvd
 
-   !> A Float64 array of 3-component vectors from (2, n) values (z = 0);
-   !> without a name (the Points array) the Name attribute is left out.
+   !> A Float64 array of 3-component vectors from (2, n) values (z = 0: a
+   !> planar run) or (3, n) values (a spatial run); without a name (the
+   !> Points array) the Name attribute is left out.
    subroutine write_vectors(unit, name, values)
       integer, intent(in) :: unit
       character(*), intent(in) :: name
@@ -135,9 +136,15 @@ contains
       else
          write (unit, '(a)') '        <DataArray type="Float64" NumberOfComponents="3" format="ascii">'
       end if
-      do i = 1, size(values, 2)
-         write (unit, '(10x,a)') real_text(values(1, i))//' '//real_text(values(2, i))//' 0'
-      end do
+      if (size(values, 1) == 3) then
+         do i = 1, size(values, 2)
+            write (unit, '(10x,a)') real_text(values(1, i))//' '//real_text(values(2, i))//' '//real_text(values(3, i))
+         end do
+      else
+         do i = 1, size(values, 2)
+            write (unit, '(10x,a)') real_text(values(1, i))//' '//real_text(values(2, i))//' 0'
+         end do
+      end if
       call close_array(unit)
    end subroutine write_vectors
 

@@ -29,7 +29,7 @@ module fekap_output_vtk_writer
       integer, allocatable :: links_nodes(:, :)
       !> A written step with the fields made from its nodes (from_nodes).
       type(step_result_type) :: filled
-      !> (2, npoint): point positions at the first step.
+      !> (2, npoint), or (3, npoint) in a spatial run: point positions at the first step.
       real(dp), allocatable :: initial_pos(:, :)
       !> The collection of the files written so far.
       type(pvd_type) :: pvd
@@ -78,6 +78,12 @@ contains
       if (self%from_nodes) then
          self%filled = result
          call fill_fields_from_nodes(self%filled, self%links_nodes)
+         if (allocated(result%pos_z)) then
+            ! A spatial run: its nodes in 3D.
+            self%filled%mesh_pos = with_z(result%pos, result%pos_z)
+            self%filled%mesh_vel = with_z(result%vel, result%vel_z)
+            self%filled%mesh_acc = with_z(result%acc, result%acc_z)
+         end if
          if (result%step == 0) self%initial_pos = self%filled%mesh_pos
       else if (result%step == 0) then
          self%initial_pos = result%mesh_pos
@@ -95,6 +101,14 @@ contains
       if (allocated(error)) return
       call add_pvd_entry(self%pvd, result%t, vtu_name(self%stem, result%step))
    end subroutine vtk_row
+
+   !> (3, n) points from their (2, n) x, y and their z.
+   pure function with_z(xy, z) result(xyz)
+      real(dp), intent(in) :: xy(:, :), z(:)
+      real(dp) :: xyz(3, size(z))
+      xyz(1:2, :) = xy
+      xyz(3, :) = z
+   end function with_z
 
    !> Each .vtu file is checked as it is closed: nothing is held.
    subroutine vtk_flush(self, error)

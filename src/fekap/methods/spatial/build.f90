@@ -29,8 +29,8 @@ module fekap_spatial_build
 
    !> Where the model's entities are in the mechanism.
    type :: spatial_map_type
-      !> The mechanism's point of each model node.
-      integer, allocatable :: node_point(:)
+      !> The mechanism's point and frame (0: none) of each model node.
+      integer, allocatable :: node_point(:), node_frame(:)
       !> Reported joints (revolute: angle; prismatic: stroke): model joint,
       !> mechanism dof and the sign of the joint's motion in it.
       integer, allocatable :: report_joint(:), report_dof(:)
@@ -222,6 +222,7 @@ contains
          do i = 1, nn
             call add_node(m, map%node_point(i), class_frame(find_root(frame_set, i)), mech_node(i))
          end do
+         map%node_frame = m%nodes(mech_node)%frame
          do k = 1, size(model%links)
             associate (link => model%links(k), sec => model%spatial%sections(model%links(k)%section))
                if (model%spatial%truss(k)) then

@@ -25,6 +25,7 @@ module fekap_spatial_stepper
    use fekap_spatial_kinematics, only: spatial_state_type, new_spatial_state, spatial_configuration_type, &
       & configure, assemble_spatial, set_drives, update_state, free_dofs, spatial_rates_factored, point_rate
    use fekap_spatial_build, only: spatial_map_type, build_spatial_mechanism
+   use fekap_spatial_link_motion, only: link_motion_type, new_link_motion, fill_link_motion
    implicit none
    private
 
@@ -62,6 +63,8 @@ module fekap_spatial_stepper
       integer, allocatable :: fdof(:)
       !> The norm of the free dofs' residual at the last converged configuration.
       real(dp) :: residual = 0
+      !> The links' rotations of the last step (links.csv).
+      type(link_motion_type) :: links
    contains
       procedure :: start => spatial_start
       procedure :: advance => spatial_advance
@@ -83,6 +86,7 @@ contains
       self%max_iter = model%analysis%max_iter
       self%fdof = free_dofs(self%m)
       self%difference_step = model%analysis%dt/4
+      call new_link_motion(self%links, model, self%m, self%map%node_frame, self%map%node_point)
       allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%jerk(self%m%ndof), self%snap(self%m%ndof), &
          & self%jerk1(self%m%ndof), self%jerk2(self%m%ndof), source=0.0_dp)
    end subroutine new_spatial_stepper
@@ -317,9 +321,11 @@ contains
       why = trim(text)
    end subroutine solve
 
-   !> The accepted state's node positions, rates and joint motions into result.
+   !> The accepted state's node positions, rates, joint motions and link
+   !> rotations into result (every step, written or not: the links'
+   !> quaternions keep their sign from step to step).
    subroutine fill_result(self, result)
-      type(spatial_stepper_type), intent(in) :: self
+      type(spatial_stepper_type), intent(inout) :: self
       type(step_result_type), intent(inout) :: result
       type(spatial_configuration_type) :: c
       real(dp) :: x(3)
@@ -328,6 +334,10 @@ contains
       n = size(self%map%node_point)
       if (.not. allocated(result%pos_z)) allocate (result%pos_z(n), result%vel_z(n), result%acc_z(n))
       if (.not. allocated(result%joint_motion)) allocate (result%joint_motion(3, size(self%map%report_dof)))
+      if (.not. allocated(result%link_rotation)) then
+         allocate (result%link_rotation(4, size(self%links%frame)), result%link_omega(3, size(self%links%frame)), &
+            & result%link_alpha(3, size(self%links%frame)))
+      end if
       do i = 1, n
          p = self%map%node_point(i)
          x = c%x(:, p)
@@ -346,6 +356,8 @@ contains
             result%joint_motion(:, i) = sign*[self%s%q(dof), self%v(dof), self%a(dof)]
          end associate
       end do
+      call fill_link_motion(self%links, self%m, self%s, c, self%v, self%a, result%link_rotation, result%link_omega, &
+         & result%link_alpha)
       result%has_velocity = .true.
       result%has_acceleration = .true.
       result%residual = self%residual
