@@ -14,7 +14,11 @@ Files (see README.md, "What a run writes"):
 - ``points.csv``: ``step,t,point,x,y[,vx,vy[,ax,ay]]``; ``links.csv``: ``step,t,link,angle[,...]``;
 - ``steps.csv``: ``step,t,iterations,residual,cuts``;
 - ``mesh.csv``: ``link,node1,node2``; ``mechanism.txt``: title, units, supports, guides, drives,
-  loads, masses, the analysis, the nodes' initial coordinates;
+  loads, masses, the analysis, the nodes' initial coordinates; a spatial run's
+  (``analysis,kinematics,spatial``) has ``node,NAME,x,y,z`` and its joints,
+  ``joint,NAME,KIND,FIRST,SECOND,ax,ay,az[,bx,by,bz]``, and its nodes.csv
+  ``step,t,A.x,A.y,A.z,B.x,...`` (read_nodes with ``dim=3``);
+- ``joints.csv``: ``step,t,joint,angle,rate,acceleration`` (spatial runs);
 - ``reactions.csv``: ``step,t,kind,link,node,fx,fy,m`` (kinetostatics, statics, dynamics).
 
 Text is read with a tolerant decoding (UTF-8, else Latin-1: a title FEKAP accepted is never an
@@ -75,6 +79,8 @@ class Mechanism:
     units_given: bool = False
     #: kinematics, kinetostatics, statics or dynamics ("" for a run of an older FEKAP).
     analysis: str = ""
+    #: A spatial run (``analysis,kinematics,spatial``): drawn in three dimensions (fekap.plot3d).
+    spatial: bool = False
     #: Dynamics: the integrator's name and rho_inf.
     integrator: str = ""
     rho_inf: float = float("nan")
@@ -94,6 +100,11 @@ class Mechanism:
     masses: dict[str, float] = field(default_factory=dict)
     #: node -> initial (x, y), the undeformed geometry.
     initial: dict[str, tuple[float, float]] = field(default_factory=dict)
+    #: node -> initial (x, y, z), of the nodes whose record gives z (a spatial run's).
+    initial3: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    #: A spatial run's joints: (name, kind, first node, second node, axes), the nodes ``ground``
+    #: or a node's name, the axes the record's numbers (none, one or two vectors of three).
+    joints: list[tuple[str, str, str, str, tuple[float, ...]]] = field(default_factory=list)
     tracked: list[str] = field(default_factory=list)
 
     @property
@@ -116,8 +127,9 @@ class Mechanism:
             if quantity in time_units:
                 return time_units[quantity]
         force = "N" if self.si else "force"
-        return {"x": length, "y": length, "vx": f"{length}/{time}", "vy": f"{length}/{time}",
-                "ax": f"{length}/{time}²", "ay": f"{length}/{time}²", "angle": "rad",
+        return {"x": length, "y": length, "z": length, "vx": f"{length}/{time}", "vy": f"{length}/{time}",
+                "vz": f"{length}/{time}", "ax": f"{length}/{time}²", "ay": f"{length}/{time}²",
+                "az": f"{length}/{time}²", "angle": "rad",
                 "omega": f"rad/{time}", "alpha": f"rad/{time}²", "t": time,
                 "force": force, "moment": "N m" if self.si else f"{force} {length}",
                 "energy": "J" if self.si else f"{force} {length}",
@@ -153,12 +165,18 @@ def read_mechanism(directory: Path) -> Mechanism:
                         mech.time_unit = rest[1]
                 elif kind == "analysis" and rest:
                     mech.analysis = rest[0]
-                    if len(rest) >= 3:
+                    mech.spatial = "spatial" in rest[1:]
+                    if len(rest) >= 3 and not mech.spatial:
                         mech.integrator, mech.rho_inf = rest[1], parse_number(rest[2])
                 elif kind == "mass" and len(rest) >= 2:
                     mech.masses[rest[0]] = mech.masses.get(rest[0], 0.0) + parse_number(rest[1])
                 elif kind == "node" and len(rest) >= 3:
                     mech.initial[rest[0]] = (parse_number(rest[1]), parse_number(rest[2]))
+                    if len(rest) >= 4:
+                        mech.initial3[rest[0]] = (*mech.initial[rest[0]], parse_number(rest[3]))
+                elif kind == "joint" and len(rest) >= 4:
+                    mech.joints.append((rest[0], rest[1], rest[2], rest[3],
+                                        tuple(parse_number(v) for v in rest[4:])))
                 elif kind == "support" and len(rest) >= 2:
                     mech.supports[rest[0]] = rest[1]
                 elif kind == "guide" and len(rest) >= 6:
@@ -417,36 +435,44 @@ class Nodes:
     last: int
 
 
+#: The coordinates of nodes.csv: a planar run's x, y; a spatial run's x, y, z.
+COORDINATES = ("x", "y", "z")
+
+
 @_twice
 def read_nodes(path: Path, targets: list[int] | None = None, count: int = 0,
-               buckets: int = MAX_BUCKETS, slow: bool = False) -> Nodes:
+               buckets: int = MAX_BUCKETS, slow: bool = False, dim: int = 2) -> Nodes:
     """nodes.csv: decimated paths of every node and the positions at ``count`` evenly spread
-    steps (or at the given target steps)."""
+    steps (or at the given target steps); ``dim`` coordinates a node (3: a spatial run's
+    ``step,t,A.x,A.y,A.z,...``)."""
     header = _header(path)
-    if header[:2] != ["step", "t"] or len(header) % 2:
-        raise UsageError(f"{path}: expected the header step,t,A.x,A.y,...")
-    names = [c[:-2] for c in header[2::2]]
+    axes = COORDINATES[:dim]
+    if (header[:2] != ["step", "t"] or (len(header) - 2) % dim
+            or any(not c.endswith(f".{axes[k % dim]}") for k, c in enumerate(header[2:]))):
+        raise UsageError(f"{path}: expected the header step,t,"
+                         + ",".join(f"A.{a}" for a in axes) + ",...")
+    names = [c[:-2] for c in header[2::dim]]
     first, last = step_range(path)
     if targets is None:
         targets = even_steps(first, last, count)
     pending = sorted(set(targets))
     frames: dict[int, tuple[float, dict[str, tuple[float, float]]]] = {}
-    reducers = {n: Reducer(first, last, 2, buckets) for n in names}
+    reducers = {n: Reducer(first, last, dim, buckets) for n in names}
     for _, numbers, _ in _blocks(path, None, slow):
         if not len(numbers):
             continue
         for index, name in enumerate(names):
-            reducers[name].feed(numbers[:, [0, 1, 2 + 2 * index, 3 + 2 * index]])
+            reducers[name].feed(numbers[:, [0, 1, *range(2 + dim * index, 2 + dim * (index + 1))]])
         steps = numbers[:, 0]
         while pending and pending[0] <= steps[-1]:
             row = numbers[int(np.searchsorted(steps, pending[0]))]
-            frames[int(row[0])] = (float(row[1]), {n: (float(row[2 + 2 * i]), float(row[3 + 2 * i]))
-                                                   for i, n in enumerate(names)})
+            frames[int(row[0])] = (float(row[1]), {
+                n: tuple(float(v) for v in row[2 + dim * i:2 + dim * (i + 1)]) for i, n in enumerate(names)})
             pending.pop(0)
     paths = {}
     for name, reducer in reducers.items():
         rows, masks = reducer.finish()
-        paths[name] = Reduced(name, ("x", "y"), rows, masks)
+        paths[name] = Reduced(name, axes, rows, masks)
     return Nodes(names, paths, dict(sorted(frames.items())), first, last)
 
 
