@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 import shutil
 import subprocess
 import sys
@@ -363,3 +364,25 @@ def test_kinds_that_do_not_fit_the_run_are_refused(tmp_path, rssr_run):
         done = subprocess.run([sys.executable, str(PLOT), str(planar), "--only", kind], capture_output=True,
                               text=True, timeout=120, cwd=ROOT)
         assert done.returncode == 2 and "spatial runs only" in done.stderr, done.stderr
+
+
+def test_every_figure_has_units_and_the_title(tmp_path):
+    """Every axis of views.png, joints.png and the histories labelled with its unit (the deck's
+    m and s), the colour bar too, and the title in every figure."""
+    out = write_spatial_run(tmp_path / "sc", SLIDER_CRANK, 12)
+    run = plot3d.SpatialRun(out, 3, 0)
+    figures = [plot3d.plot_views(run), plot3d.plot_joints(run),
+               plot3d.plot_history(run, run.points["S"], plot3d.history_groups(run, None))]
+    with_unit = re.compile(r"^.+ \((m|s|rad|m/s|m/s²|rad/s|rad/s²)\)$")
+    for fig in figures:
+        assert fig._suptitle.get_text().startswith(SLIDER_CRANK["title"])
+        for ax in fig.axes:
+            labels = [ax.get_ylabel()] if ax.get_label() == "<colorbar>" else [ax.get_xlabel(), ax.get_ylabel()]
+            if hasattr(ax, "get_zlabel"):
+                labels.append(ax.get_zlabel())
+            if ax.get_label() != "<colorbar>" and not ax.get_xlabel():
+                # Stacked histories share the bottom row's time axis.
+                labels = labels[1:]
+            for label in labels:
+                assert with_unit.match(label), (fig._suptitle.get_text(), label)
+        plot.fc.pyplot().close(fig)
