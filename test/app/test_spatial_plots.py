@@ -26,7 +26,7 @@ import pytest
 
 from fekap import plot, plot3d
 
-from apptest import ROOT
+from apptest import ROOT, fekap_binary
 
 PLOT = ROOT / "scripts" / "plot.py"
 
@@ -386,3 +386,38 @@ def test_every_figure_has_units_and_the_title(tmp_path):
             for label in labels:
                 assert with_unit.match(label), (fig._suptitle.get_text(), label)
         plot.fc.pyplot().close(fig)
+
+
+@pytest.mark.parametrize("deck", ["rssr", "slider-crank"])
+def test_a_real_spatial_run_is_drawn_in_3d(tmp_path, deck):
+    """fekap's own run of a spatial deck: views.png holds every link between its nodes of
+    nodes.csv at each instant and the tracked paths of points.csv, joints.png joints.csv.
+    Needs the 3D nodes.csv and mechanism.txt (branch spout); until then a spatial run's
+    mechanism.txt has no spatial record and plot.py draws it as a planar one."""
+    out = tmp_path / deck
+    done = subprocess.run([fekap_binary(), "-q", "-o", str(out), str(ROOT / "decks" / "spatial" / f"{deck}.deck")],
+                          capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    if "analysis,kinematics,spatial" not in (out / "mechanism.txt").read_text().splitlines():
+        pytest.skip("this fekap writes a spatial run's nodes.csv and mechanism.txt in 2D")
+    run = plot3d.SpatialRun(out, 3, 0)
+    fig = plot3d.plot_views(run)
+    front, top, side, iso = fig.axes[:4]
+    positions = node_positions(out)
+    links = [tuple(row.values()) for row in table(out / "mesh.csv")]
+    for step in sorted({run.frame(target)[0] for target in run.instant_targets}):
+        for _, a, b in links:
+            segment = np.array([positions[step][a], positions[step][b]])
+            for ax, (i, j) in ((front, (0, 1)), (top, (0, 2)), (side, (1, 2))):
+                assert has_line(flat_lines(ax), segment[:, [i, j]]), (step, a, b, ax.get_title())
+            assert has_line(iso_lines(iso), segment), (step, a, b)
+    for name in run.mech.tracked:
+        p = point_columns(out, name)
+        assert has_line(iso_lines(iso), np.column_stack([p["x"], p["y"], p["z"]])), name
+    joints = plot3d.plot_joints(run)
+    rows = table(out / "joints.csv")
+    for ax in joints.axes:
+        for line in ax.get_lines():
+            mine = [row for row in rows if row["joint"] == line.get_label()]
+            assert mine, line.get_label()
+            assert np.array_equal(line.get_xdata(), [float(row["t"]) for row in mine])
