@@ -9,11 +9,15 @@ A FEKAP run writes into its output directory (README.md, "What a run writes"):
 - ``nodes.csv``: ``step,t,A.x,A.y,...``, every node (and meshed links' interior points) per step;
 - ``reactions.csv``: ``step,t,kind,link,node,fx,fy,m``; ``energy.csv``: ``step,t,kinetic,...``;
   ``deflection.csv``: ``step,t,node,ux,uy``;
-- ``mesh.csv``: ``link,node1,node2``, the end points of each link by point name.
+- ``mesh.csv``: ``link,node1,node2``, the end points of each link by point name;
+- a spatial run's (docs/deck-format.md, "Spatial decks"): ``points.csv`` and ``nodes.csv`` with
+  z columns (``step,t,A.x,A.y,A.z,...``), ``joints.csv`` (``step,t,joint,angle[,rate[,acceleration]]``)
+  and ``mechanism.txt`` with ``node,NAME,x,y,z`` and ``joint`` records.
 
 Any of them: :func:`rows` (dictionaries, as text or numbers) and :func:`columns` (numpy
-arrays, rows selected by a name); the plots' forms: :func:`load_run` (points, links, steps
-and mesh as one :class:`Series` per point and link).
+arrays, rows selected by a name); every node's coordinates of nodes.csv: :func:`node_positions`;
+a spatial run's mechanism.txt: :func:`read_spatial_mechanism`; the plots' forms: :func:`load_run`
+(points, links, steps and mesh as one :class:`Series` per point and link).
 
 Everything here raises :class:`UsageError` with a one-line message for anything a user can
 get wrong (missing files, bad numbers, missing columns), so that the scripts can print it and
@@ -24,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import re
 import sys
 from dataclasses import dataclass
@@ -147,7 +152,7 @@ def read_table(path: Path, names: tuple[str, ...], required: tuple[str, ...]
 
 #: The text columns of FEKAP's CSV files (names of points, links and nodes, the kind of a
 #: reaction); every other column is a number.
-TEXT_COLUMNS = ("point", "link", "node", "kind", "node1", "node2")
+TEXT_COLUMNS = ("point", "link", "node", "kind", "node1", "node2", "joint")
 #: The columns of whole numbers.
 INTEGER_COLUMNS = ("step", "iterations", "cuts", "floor")
 
@@ -187,6 +192,107 @@ def columns(path: Path, **where: str) -> dict[str, np.ndarray]:
             raise UsageError(f"{path}: no column {name} in header '{','.join(header)}'")
         keep &= table[name] == value
     return {name: values[keep] for name, values in table.items()}
+
+
+def node_positions(path: Path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """nodes.csv whole: the steps, the times, and each node's coordinates by step, an array of
+    shape (steps, 2) for a planar run (``A.x,A.y``) or (steps, 3) for a spatial one
+    (``A.x,A.y,A.z``); a planar run's meshed links' interior points (``LINK#k``) are nodes here too.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise UsageError(f"{path}: no such file")
+    header, table = read_table(path, (), ("step", "t"))
+    names = header[2:]
+    dims = 3 if any(name.endswith(".z") for name in names) else 2
+    axes = ("x", "y", "z")[:dims]
+    if header[:2] != ["step", "t"] or len(names) % dims or any(
+            name != f"{names[k - k % dims][:-2]}.{axes[k % dims]}" for k, name in enumerate(names)):
+        raise UsageError(f"{path}: expected the header step,t,A.x,A.y{',A.z' if dims == 3 else ''},...")
+    nodes = {names[k][:-2]: np.stack([table[names[k + j]] for j in range(dims)], axis=1)
+             for k in range(0, len(names), dims)}
+    return table["step"], table["t"], nodes
+
+
+@dataclass(frozen=True)
+class SpatialJoint:
+    """A joint of a spatial run's mechanism.txt: its nodes (``ground`` for the ground) and its
+    unit axes in global coordinates at the deck's configuration (none, one or two)."""
+
+    name: str
+    kind: str
+    first: str
+    second: str
+    axes: tuple[tuple[float, float, float], ...]
+
+
+@dataclass
+class SpatialMechanism:
+    """A spatial run's mechanism.txt (README.md, "What a run writes")."""
+
+    title: str = ""
+    length_unit: str = "length"
+    time_unit: str = "time"
+    units_given: bool = False
+    #: The analysis record's fields after ``analysis`` (``("kinematics", "spatial")``).
+    analysis: tuple[str, ...] = ()
+    #: node -> initial (x, y, z).
+    nodes: dict[str, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
+    joints: list[SpatialJoint] = dataclasses.field(default_factory=list)
+    #: ("rotation" | "stroke", joint).
+    drives: list[tuple[str, str]] = dataclasses.field(default_factory=list)
+    tracked: list[str] = dataclasses.field(default_factory=list)
+
+
+#: How many axes each kind of joint has in a joint record.
+JOINT_AXES = {"spherical": 0, "weld": 0, "revolute": 1, "prismatic": 1, "cylindrical": 1, "universal": 2}
+
+
+def read_spatial_mechanism(path: Path) -> SpatialMechanism:
+    """A spatial run's mechanism.txt (``record,fields``, ``title``, ``units``, ``node,NAME,x,y,z``,
+    ``analysis,kinematics,spatial``, ``joint,NAME,KIND,FIRST,SECOND[,axes]``,
+    ``drive,rotation|stroke,JOINT``, ``track,NODE...``); a record of another kind is skipped, a
+    known record with the wrong fields is a UsageError naming its line."""
+    path = Path(path)
+    if not path.is_file():
+        raise UsageError(f"{path}: no such file")
+    mech = SpatialMechanism()
+    with open(path, newline="", encoding="utf-8", errors="replace") as handle:
+        for line, row in enumerate(csv.reader(handle), start=1):
+            if not row:
+                continue
+            kind, rest = row[0], row[1:]
+            bad = UsageError(f"{path}:{line}: bad {kind} record: {','.join(row)}")
+            try:
+                if kind == "title" and rest:
+                    mech.title = rest[0]
+                elif kind == "units" and len(rest) == 2 and rest[0] in ("length", "time"):
+                    mech.units_given = True
+                    setattr(mech, f"{rest[0]}_unit", rest[1])
+                elif kind == "node":
+                    if len(rest) != 4:
+                        raise bad
+                    mech.nodes[rest[0]] = tuple(parse_number(v) for v in rest[1:])
+                elif kind == "analysis":
+                    mech.analysis = tuple(rest)
+                elif kind == "joint":
+                    if len(rest) < 4 or rest[1] not in JOINT_AXES or len(rest) != 4 + 3 * JOINT_AXES[rest[1]]:
+                        raise bad
+                    values = [parse_number(v) for v in rest[4:]]
+                    mech.joints.append(SpatialJoint(rest[0], rest[1], rest[2], rest[3], tuple(
+                        tuple(values[k:k + 3]) for k in range(0, len(values), 3))))
+                elif kind == "drive":
+                    if len(rest) != 2 or rest[0] not in ("rotation", "stroke"):
+                        raise bad
+                    mech.drives.append((rest[0], rest[1]))
+                elif kind == "track":
+                    mech.tracked = list(rest)
+            except ValueError:
+                raise bad from None
+    if mech.analysis[-1:] != ("spatial",):
+        raise UsageError(f"{path}: not the mechanism.txt of a spatial run (its analysis record is "
+                         f"'{','.join(mech.analysis)}')")
+    return mech
 
 
 @dataclass(frozen=True)

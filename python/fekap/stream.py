@@ -443,36 +443,40 @@ COORDINATES = ("x", "y", "z")
 def read_nodes(path: Path, targets: list[int] | None = None, count: int = 0,
                buckets: int = MAX_BUCKETS, slow: bool = False, dim: int = 2) -> Nodes:
     """nodes.csv: decimated paths of every node and the positions at ``count`` evenly spread
-    steps (or at the given target steps); ``dim`` coordinates a node (3: a spatial run's
+    steps (or at the given target steps), in ``dim`` coordinates: 2, x and y (of a spatial
+    run's nodes.csv too: a planar drawing of it), or 3, x, y and z (a spatial run's
     ``step,t,A.x,A.y,A.z,...``)."""
     header = _header(path)
-    axes = COORDINATES[:dim]
-    if (header[:2] != ["step", "t"] or (len(header) - 2) % dim
-            or any(not c.endswith(f".{axes[k % dim]}") for k, c in enumerate(header[2:]))):
-        raise UsageError(f"{path}: expected the header step,t,"
-                         + ",".join(f"A.{a}" for a in axes) + ",...")
-    names = [c[:-2] for c in header[2::dim]]
+    # A spatial run's nodes.csv has a z column after each y (A.x,A.y,A.z).
+    width = 3 if len(header) > 4 and header[4].endswith(".z") else 2
+    axes = COORDINATES[:width]
+    if (header[:2] != ["step", "t"] or (len(header) - 2) % width
+            or any(not c.endswith(f".{axes[k % width]}") for k, c in enumerate(header[2:]))):
+        raise UsageError(f"{path}: expected the header step,t,A.x,A.y,... (A.x,A.y,A.z,... of a spatial run)")
+    if dim > width:
+        raise UsageError(f"{path}: no z columns (a spatial run's nodes.csv is step,t,A.x,A.y,A.z,...)")
+    names = [c[:-2] for c in header[2::width]]
     first, last = step_range(path)
     if targets is None:
         targets = even_steps(first, last, count)
     pending = sorted(set(targets))
-    frames: dict[int, tuple[float, dict[str, tuple[float, float]]]] = {}
+    frames: dict[int, tuple[float, dict[str, tuple[float, ...]]]] = {}
     reducers = {n: Reducer(first, last, dim, buckets) for n in names}
     for _, numbers, _ in _blocks(path, None, slow):
         if not len(numbers):
             continue
         for index, name in enumerate(names):
-            reducers[name].feed(numbers[:, [0, 1, *range(2 + dim * index, 2 + dim * (index + 1))]])
+            reducers[name].feed(numbers[:, [0, 1, *range(2 + width * index, 2 + width * index + dim)]])
         steps = numbers[:, 0]
         while pending and pending[0] <= steps[-1]:
             row = numbers[int(np.searchsorted(steps, pending[0]))]
             frames[int(row[0])] = (float(row[1]), {
-                n: tuple(float(v) for v in row[2 + dim * i:2 + dim * (i + 1)]) for i, n in enumerate(names)})
+                n: tuple(float(v) for v in row[2 + width * i:2 + width * i + dim]) for i, n in enumerate(names)})
             pending.pop(0)
     paths = {}
     for name, reducer in reducers.items():
         rows, masks = reducer.finish()
-        paths[name] = Reduced(name, axes, rows, masks)
+        paths[name] = Reduced(name, COORDINATES[:dim], rows, masks)
     return Nodes(names, paths, dict(sorted(frames.items())), first, last)
 
 

@@ -11,12 +11,13 @@ module fekap_driver_outputs
    use fekap_model_effects, only: planned_effects
    use fekap_dynamics_dynamic_stepper, only: energy_names
    use fekap_output_writer, only: writer_type, writer_list_type, move_writers
-   use fekap_output_spatial_writers, only: spatial_points_writer, joints_writer
+   use fekap_output_spatial_writers, only: spatial_points_writer, joints_writer, spatial_nodes_writer
    use fekap_output_table_writers, only: table_writer_type, points_writer, links_writer, steps_writer, nodes_writer, &
       & reactions_writer, energy_writer, deflection_writer
    use fekap_output_listing_writer, only: listing_writer
    use fekap_output_vtk_writer, only: vtk_writer
    use fekap_output_csv, only: write_mesh_csv, write_mechanism_csv
+   use fekap_output_spatial_csv, only: write_spatial_mechanism
    use fekap_output_directory, only: prepare_output_directory, make_directory, output_plan_type, add_run_file, &
       & temporary_suffix
    use fekap_output_checked_file, only: open_replace, close_checked
@@ -114,14 +115,22 @@ contains
             call registry%table('links.csv', links_writer(vel, acc))
          end if
          call registry%table('steps.csv', steps_writer(dynamics=effects == effects_dynamics))
-         call registry%table('nodes.csv', nodes_writer())
+         if (model%analysis%spatial) then
+            call registry%table('nodes.csv', spatial_nodes_writer())
+         else
+            call registry%table('nodes.csv', nodes_writer())
+         end if
          call registry%whole('mesh.csv', write_mesh_csv, model)
          if (effects /= effects_kinematics) call registry%table('reactions.csv', reactions_writer())
          if (effects == effects_kinetostatics .and. model%output%deflection) then
             call registry%table('deflection.csv', deflection_writer())
          end if
          if (effects == effects_dynamics) call registry%table('energy.csv', energy_writer(energy_names))
-         call registry%whole('mechanism.txt', write_mechanism_csv, model)
+         if (model%analysis%spatial) then
+            call registry%whole('mechanism.txt', write_spatial_mechanism, model)
+         else
+            call registry%whole('mechanism.txt', write_mechanism_csv, model)
+         end if
       end if
       if (model%output%listing) call registry%table(stem//'.lis', listing_writer(version, step_count(model), plan_text))
       if (model%output%vtk) then

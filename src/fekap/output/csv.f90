@@ -24,6 +24,9 @@ module fekap_output_csv
    !> For the tables of other modules (spatial runs): a header with rate columns, a row's
    !> longest text, a row of a name's values and rates.
    public :: write_rates_header, row_length, append_rates_row
+   !> For mechanism.txt of a spatial run: one line to a unit, a CSV field
+   !> quoted, a word of a list of names.
+   public :: emit, quoted, word_at
 
    !> The fixed headers (write_header) of steps.csv, reactions.csv and
    !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.

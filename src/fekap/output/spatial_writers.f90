@@ -1,19 +1,20 @@
-!> The writers of a spatial run's tables: points.csv with z columns and
-!> joints.csv, the relative motion of every revolute and prismatic joint
-!> (their rows from fekap_output_spatial_csv). Registered by the driver in
-!> place of the planar points.csv and links.csv writers.
+!> The writers of a spatial run's tables: points.csv with z columns,
+!> joints.csv, the relative motion of every revolute and prismatic joint,
+!> and nodes.csv with z columns (their rows from fekap_output_spatial_csv).
+!> Registered by the driver in place of the planar points.csv, links.csv and
+!> nodes.csv writers.
 module fekap_output_spatial_writers
    use fekap_error, only: error_type
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type
    use fekap_output_csv, only: row_prefix_type
    use fekap_output_spatial_csv, only: write_spatial_points_header, write_spatial_points_rows, &
-      & write_joints_header, write_joints_rows
+      & write_joints_header, write_joints_rows, write_spatial_nodes_header, write_spatial_nodes_row
    use fekap_output_table_writers, only: table_writer_type
    implicit none
    private
 
-   public :: spatial_points_writer, joints_writer
+   public :: spatial_points_writer, joints_writer, spatial_nodes_writer
 
    !> points.csv of a spatial run: x, y, z (and rates).
    type, extends(table_writer_type) :: spatial_points_writer_type
@@ -30,6 +31,13 @@ module fekap_output_spatial_writers
       procedure :: header => joints_header
       procedure :: row => joints_row
    end type joints_writer_type
+
+   !> nodes.csv of a spatial run: every node's x, y, z.
+   type, extends(table_writer_type) :: spatial_nodes_writer_type
+   contains
+      procedure :: header => spatial_nodes_header
+      procedure :: row => spatial_nodes_row
+   end type spatial_nodes_writer_type
 
 contains
 
@@ -83,5 +91,27 @@ contains
       call write_joints_rows(self%buffer, model, result, prefix%text(1:prefix%n), self%velocities, self%accelerations)
       rows = rows + size(result%joint_motion, 2)
    end subroutine joints_row
+
+   !> The writer of nodes.csv of a spatial run.
+   type(spatial_nodes_writer_type) function spatial_nodes_writer() result(writer)
+      writer%prefixed = .true.
+   end function spatial_nodes_writer
+
+   subroutine spatial_nodes_header(self, model)
+      class(spatial_nodes_writer_type), intent(inout) :: self
+      type(model_type), intent(in) :: model
+      call write_spatial_nodes_header(self%buffer, model)
+   end subroutine spatial_nodes_header
+
+   !> A row of every node: not counted among the table rows (as the planar nodes.csv's).
+   subroutine spatial_nodes_row(self, model, result, prefix, rows, error)
+      class(spatial_nodes_writer_type), intent(inout) :: self
+      type(model_type), intent(in) :: model
+      type(step_result_type), intent(in) :: result
+      type(row_prefix_type), intent(in) :: prefix
+      integer, intent(inout) :: rows
+      type(error_type), allocatable, intent(out) :: error
+      call write_spatial_nodes_row(self%buffer, result, prefix%text(1:prefix%n))
+   end subroutine spatial_nodes_row
 
 end module fekap_output_spatial_writers
