@@ -81,7 +81,10 @@ class SpatialRun:
         if not nodes_file.is_file():
             raise fc.UsageError(f"{path}: no nodes.csv: a spatial run's mechanism is drawn from it")
         self.path = path
+        #: Title, units and links (mesh.csv) as for a planar run; the joints, their axes and the
+        #: drives from the spatial records (fekap.read.read_spatial_mechanism).
         self.mech = fs.read_mechanism(path)
+        self.layout = fc.read_spatial_mechanism(path / "mechanism.txt")
         self.title = self.mech.title or path.name
         first, last = fs.step_range(nodes_file)
         self.instant_targets = fs.even_steps(first, last, instants, endpoint=False) if instants else []
@@ -135,23 +138,22 @@ class SpatialRun:
         return f"{self.mech.name(quantity)} ({self.mech.unit(quantity)})"
 
     def joint_kind(self, name: str) -> str:
-        return next((j[1] for j in self.mech.joints if j[0] == name), "")
+        return next((j.kind for j in self.layout.joints if j.name == name), "")
 
     def ground_axes(self) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
         """Each ground joint's axes: (joint, kind, the joint's place at the start, unit axis);
         a universal joint's first axis is the ground's."""
         start = self.frame(self.nodes.first)[2] if self.nodes.frames else {}
         found = []
-        for name, kind, first, second, numbers in self.mech.joints:
-            grounded = [n for n in (first, second) if n == "ground"]
-            node = second if first == "ground" else first
-            if not grounded or node not in start or len(numbers) < 3:
+        for joint in self.layout.joints:
+            node = joint.second if joint.first == "ground" else joint.first
+            if "ground" not in (joint.first, joint.second) or node not in start or not joint.axes:
                 continue
-            axis = np.array(numbers[:3], dtype=float)
+            axis = np.array(joint.axes[0], dtype=float)
             norm = float(np.linalg.norm(axis))
-            if kind in ("spherical", "weld") or not (norm > 0 and math.isfinite(norm)):
+            if not (norm > 0 and math.isfinite(norm)):
                 continue
-            found.append((name, kind, np.array(start[node], dtype=float), axis / norm))
+            found.append((joint.name, joint.kind, np.array(start[node], dtype=float), axis / norm))
         return found
 
 
@@ -189,10 +191,10 @@ def joint_places(run: SpatialRun, where: dict[str, tuple[float, float, float]]
                  ) -> dict[str, list[tuple[float, float, float]]]:
     """Where each kind of joint is at one instant: at its first node that is not the ground."""
     places: dict[str, list[tuple[float, float, float]]] = {}
-    for _, kind, first, second, _ in run.mech.joints:
-        node = second if first == "ground" else first
+    for joint in run.layout.joints:
+        node = joint.second if joint.first == "ground" else joint.first
         if node in where:
-            places.setdefault(kind, []).append(where[node])
+            places.setdefault(joint.kind, []).append(where[node])
     return places
 
 
@@ -279,7 +281,7 @@ def legend_handles(run: SpatialRun) -> list:
     """Legend entries of the joint kinds and the ground axes (drawn nowhere)."""
     from matplotlib.lines import Line2D
 
-    kinds = sorted({j[1] for j in run.mech.joints})
+    kinds = sorted({j.kind for j in run.layout.joints})
     handles = [Line2D([], [], marker=JOINT_MARKERS.get(kind, "*"), color="0.2", mfc="white",
                       linestyle="none", label=f"{kind} joint") for kind in kinds]
     if run.ground_axes():
@@ -414,9 +416,9 @@ def plot_joints(run: SpatialRun) -> Figure:
 def drive_values(run: SpatialRun, steps: list[int]) -> tuple[str, np.ndarray] | None:
     """The first drive's joint value at the given steps: a revolute joint's angle in degrees
     (continuous over turns) or a prismatic joint's stroke; None when joints.csv lacks it."""
-    if not run.mech.drives or len(run.mech.drives[0]) < 2:
+    if not run.layout.drives:
         return None
-    kind, joint = run.mech.drives[0][:2]
+    kind, joint = run.layout.drives[0]
     if joint not in run.joints:
         return None
     step, _, angle = run.joints[joint].curve("angle")
@@ -454,7 +456,7 @@ class Movie:
                       for _, a, b in run.links]
         self.joints = {kind: panels.plot(np.empty((0, 3)), JOINT_MARKERS.get(kind, "*"), color="0.2", ms=6,
                                          mfc="white", linestyle="none", zorder=4.1)
-                       for kind in sorted({j[1] for j in run.mech.joints})}
+                       for kind in sorted({j.kind for j in run.layout.joints})}
         self.drive = drive_values(run, [step for step, _, _ in self.frames])
         self.clock = fig.text(0.8, 0.92, "", va="top", ha="left", family="monospace", fontsize=10,
                               bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="0.7"))

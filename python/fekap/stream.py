@@ -14,10 +14,9 @@ Files (see README.md, "What a run writes"):
 - ``points.csv``: ``step,t,point,x,y[,vx,vy[,ax,ay]]``; ``links.csv``: ``step,t,link,angle[,...]``;
 - ``steps.csv``: ``step,t,iterations,residual,cuts``;
 - ``mesh.csv``: ``link,node1,node2``; ``mechanism.txt``: title, units, supports, guides, drives,
-  loads, masses, the analysis, the nodes' initial coordinates; a spatial run's
-  (``analysis,kinematics,spatial``) has ``node,NAME,x,y,z`` and its joints,
-  ``joint,NAME,KIND,FIRST,SECOND,ax,ay,az[,bx,by,bz]``, and its nodes.csv
-  ``step,t,A.x,A.y,A.z,B.x,...`` (read_nodes with ``dim=3``);
+  loads, masses, the analysis, the nodes' initial coordinates; whether the run is spatial
+  (``analysis,kinematics,spatial``: its nodes.csv is ``step,t,A.x,A.y,A.z,B.x,...``, read
+  whole with ``read_nodes(..., dim=3)``);
 - ``joints.csv``: ``step,t,joint,angle,rate,acceleration`` (spatial runs);
 - ``reactions.csv``: ``step,t,kind,link,node,fx,fy,m`` (kinetostatics, statics, dynamics).
 
@@ -79,7 +78,8 @@ class Mechanism:
     units_given: bool = False
     #: kinematics, kinetostatics, statics or dynamics ("" for a run of an older FEKAP).
     analysis: str = ""
-    #: A spatial run (``analysis,kinematics,spatial``): drawn in three dimensions (fekap.plot3d).
+    #: A spatial run (``analysis,kinematics,spatial``): drawn in three dimensions (fekap.plot3d,
+    #: which reads its joints with fekap.read.read_spatial_mechanism).
     spatial: bool = False
     #: Dynamics: the integrator's name and rho_inf.
     integrator: str = ""
@@ -100,11 +100,6 @@ class Mechanism:
     masses: dict[str, float] = field(default_factory=dict)
     #: node -> initial (x, y), the undeformed geometry.
     initial: dict[str, tuple[float, float]] = field(default_factory=dict)
-    #: node -> initial (x, y, z), of the nodes whose record gives z (a spatial run's).
-    initial3: dict[str, tuple[float, float, float]] = field(default_factory=dict)
-    #: A spatial run's joints: (name, kind, first node, second node, axes), the nodes ``ground``
-    #: or a node's name, the axes the record's numbers (none, one or two vectors of three).
-    joints: list[tuple[str, str, str, str, tuple[float, ...]]] = field(default_factory=list)
     tracked: list[str] = field(default_factory=list)
 
     @property
@@ -172,11 +167,6 @@ def read_mechanism(directory: Path) -> Mechanism:
                     mech.masses[rest[0]] = mech.masses.get(rest[0], 0.0) + parse_number(rest[1])
                 elif kind == "node" and len(rest) >= 3:
                     mech.initial[rest[0]] = (parse_number(rest[1]), parse_number(rest[2]))
-                    if len(rest) >= 4:
-                        mech.initial3[rest[0]] = (*mech.initial[rest[0]], parse_number(rest[3]))
-                elif kind == "joint" and len(rest) >= 4:
-                    mech.joints.append((rest[0], rest[1], rest[2], rest[3],
-                                        tuple(parse_number(v) for v in rest[4:])))
                 elif kind == "support" and len(rest) >= 2:
                     mech.supports[rest[0]] = rest[1]
                 elif kind == "guide" and len(rest) >= 6:
