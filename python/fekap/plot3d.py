@@ -141,8 +141,8 @@ class SpatialRun:
         return next((j.kind for j in self.layout.joints if j.name == name), "")
 
     def ground_axes(self) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
-        """Each ground joint's axes: (joint, kind, the joint's place at the start, unit axis);
-        a universal joint's first axis is the ground's."""
+        """Each ground joint's axis: (joint, kind, the joint's place at the start, unit axis),
+        of a universal joint its first axis as mechanism.txt gives it."""
         start = self.frame(self.nodes.first)[2] if self.nodes.frames else {}
         found = []
         for joint in self.layout.joints:
