@@ -36,8 +36,12 @@ as plain text (no mathtext: a $ is a dollar). Runs of any length are read in str
 a few thousand points keeping every extremum (fekap.stream). A quantity constant to
 round-off is drawn as a flat line and labelled so, instead of autoscaled noise.
 
+A spatial run (mechanism.txt's ``analysis,kinematics,spatial`` record) is drawn by fekap.plot3d
+instead: views.png (three orthographic views and an axonometric one), joints.png (joints.csv),
+history_<P>.png with x, y and z, iterations.png and the animation of the four views.
+
 Kinds for --only: paths, history, velocity, acceleration, angles, iterations, energy, reactions,
-deflection. ``velocity`` and
+deflection, and of spatial runs views (the same as paths there) and joints. ``velocity`` and
 ``acceleration`` draw the history figures with only those panels. Bad arguments give a one-line
 message on stderr and exit status 2.
 """
@@ -61,7 +65,9 @@ if TYPE_CHECKING:
 
 PROG = "plot.py"
 KINDS = ("paths", "history", "velocity", "acceleration", "angles", "iterations", "energy", "reactions",
-         "deflection")
+         "deflection", "views", "joints")
+#: Kinds drawn for spatial runs only (fekap.plot3d).
+SPATIAL_KINDS = ("views", "joints")
 #: How to ask the deck for the missing quantities (the hint in the error message).
 MISSING_HINT = {
     "velocity": "this run computed no velocities; ask for them in the deck's ANALysis block "
@@ -1188,7 +1194,16 @@ def save(fig: Figure, target: Path, written: list[Path]) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Draw the requested figures of one FEKAP output directory."""
     args = parse_args(argv)
+    directory = Path(args.outdir)
+    if directory.is_dir() and fs.read_mechanism(directory).spatial:
+        from fekap import plot3d
+
+        return plot3d.main(args)
     kinds = set(args.only) if args.only else None
+    for kind in SPATIAL_KINDS:
+        if kinds is not None and kind in kinds:
+            raise fc.UsageError(f"--only {kind}: drawn for spatial runs only ({directory / 'mechanism.txt'} "
+                                "has no analysis,kinematics,spatial record)")
     run = Run(args.outdir, args.instants, MAX_FRAMES if args.animate else 0, args.magnify)
 
     def wanted(kind: str) -> bool:

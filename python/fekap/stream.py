@@ -14,7 +14,10 @@ Files (see README.md, "What a run writes"):
 - ``points.csv``: ``step,t,point,x,y[,vx,vy[,ax,ay]]``; ``links.csv``: ``step,t,link,angle[,...]``;
 - ``steps.csv``: ``step,t,iterations,residual,cuts[,floor[,error_estimate]]``;
 - ``mesh.csv``: ``link,node1,node2``; ``mechanism.txt``: title, units, supports, guides, drives,
-  loads, masses, the analysis, the nodes' initial coordinates;
+  loads, masses, the analysis, the nodes' initial coordinates; whether the run is spatial
+  (``analysis,kinematics,spatial``: its nodes.csv is ``step,t,A.x,A.y,A.z,B.x,...``, read
+  whole with ``read_nodes(..., dim=3)``);
+- ``joints.csv``: ``step,t,joint,angle,rate,acceleration`` (spatial runs);
 - ``reactions.csv``: ``step,t,kind,link,node,fx,fy,m`` (kinetostatics, statics, dynamics).
 
 Text is read with a tolerant decoding (UTF-8, else Latin-1: a title FEKAP accepted is never an
@@ -75,6 +78,9 @@ class Mechanism:
     units_given: bool = False
     #: kinematics, kinetostatics, statics or dynamics ("" for a run of an older FEKAP).
     analysis: str = ""
+    #: A spatial run (``analysis,kinematics,spatial``): drawn in three dimensions (fekap.plot3d,
+    #: which reads its joints with fekap.read.read_spatial_mechanism).
+    spatial: bool = False
     #: Dynamics: the integrator's name and rho_inf.
     integrator: str = ""
     rho_inf: float = float("nan")
@@ -116,8 +122,9 @@ class Mechanism:
             if quantity in time_units:
                 return time_units[quantity]
         force = "N" if self.si else "force"
-        return {"x": length, "y": length, "vx": f"{length}/{time}", "vy": f"{length}/{time}",
-                "ax": f"{length}/{time}²", "ay": f"{length}/{time}²", "angle": "rad",
+        return {"x": length, "y": length, "z": length, "vx": f"{length}/{time}", "vy": f"{length}/{time}",
+                "vz": f"{length}/{time}", "ax": f"{length}/{time}²", "ay": f"{length}/{time}²",
+                "az": f"{length}/{time}²", "angle": "rad",
                 "omega": f"rad/{time}", "alpha": f"rad/{time}²", "t": time,
                 "force": force, "moment": "N m" if self.si else f"{force} {length}",
                 "energy": "J" if self.si else f"{force} {length}",
@@ -153,7 +160,8 @@ def read_mechanism(directory: Path) -> Mechanism:
                         mech.time_unit = rest[1]
                 elif kind == "analysis" and rest:
                     mech.analysis = rest[0]
-                    if len(rest) >= 3:
+                    mech.spatial = "spatial" in rest[1:]
+                    if len(rest) >= 3 and not mech.spatial:
                         mech.integrator, mech.rho_inf = rest[1], parse_number(rest[2])
                 elif kind == "mass" and len(rest) >= 2:
                     mech.masses[rest[0]] = mech.masses.get(rest[0], 0.0) + parse_number(rest[1])
@@ -417,38 +425,48 @@ class Nodes:
     last: int
 
 
+#: The coordinates of nodes.csv: a planar run's x, y; a spatial run's x, y, z.
+COORDINATES = ("x", "y", "z")
+
+
 @_twice
 def read_nodes(path: Path, targets: list[int] | None = None, count: int = 0,
-               buckets: int = MAX_BUCKETS, slow: bool = False) -> Nodes:
+               buckets: int = MAX_BUCKETS, slow: bool = False, dim: int = 2) -> Nodes:
     """nodes.csv: decimated paths of every node and the positions at ``count`` evenly spread
-    steps (or at the given target steps)."""
+    steps (or at the given target steps), in ``dim`` coordinates: 2, x and y (of a spatial
+    run's nodes.csv too: a planar drawing of it), or 3, x, y and z (a spatial run's
+    ``step,t,A.x,A.y,A.z,...``)."""
     header = _header(path)
-    # A spatial run's nodes.csv has a z column after each y (A.x,A.y,A.z): drawn in x, y here.
+    # A spatial run's nodes.csv has a z column after each y (A.x,A.y,A.z).
     width = 3 if len(header) > 4 and header[4].endswith(".z") else 2
-    if header[:2] != ["step", "t"] or (len(header) - 2) % width:
-        raise UsageError(f"{path}: expected the header step,t,A.x,A.y,...")
+    axes = COORDINATES[:width]
+    if (header[:2] != ["step", "t"] or (len(header) - 2) % width
+            or any(not c.endswith(f".{axes[k % width]}") for k, c in enumerate(header[2:]))):
+        raise UsageError(f"{path}: expected the header step,t,A.x,A.y,... (A.x,A.y,A.z,... of a spatial run)")
+    if dim > width:
+        raise UsageError(f"{path}: no z columns (a spatial run's nodes.csv is step,t,A.x,A.y,A.z,...)")
     names = [c[:-2] for c in header[2::width]]
     first, last = step_range(path)
     if targets is None:
         targets = even_steps(first, last, count)
     pending = sorted(set(targets))
-    frames: dict[int, tuple[float, dict[str, tuple[float, float]]]] = {}
-    reducers = {n: Reducer(first, last, 2, buckets) for n in names}
+    frames: dict[int, tuple[float, dict[str, tuple[float, ...]]]] = {}
+    reducers = {n: Reducer(first, last, dim, buckets) for n in names}
     for _, numbers, _ in _blocks(path, None, slow):
         if not len(numbers):
             continue
         for index, name in enumerate(names):
-            reducers[name].feed(numbers[:, [0, 1, 2 + width * index, 3 + width * index]])
+            reducers[name].feed(numbers[:, [0, 1, *range(2 + width * index, 2 + width * index + dim)]])
         steps = numbers[:, 0]
         while pending and pending[0] <= steps[-1]:
             row = numbers[int(np.searchsorted(steps, pending[0]))]
-            frames[int(row[0])] = (float(row[1]), {n: (float(row[2 + width * i]), float(row[3 + width * i]))
-                                                   for i, n in enumerate(names)})
+            frames[int(row[0])] = (float(row[1]), {
+                n: tuple(float(v) for v in row[2 + width * i:2 + width * i + dim]) for i, n in enumerate(names)})
             pending.pop(0)
     paths = {}
     for name, reducer in reducers.items():
         rows, masks = reducer.finish()
-        paths[name] = Reduced(name, ("x", "y"), rows, masks)
+        paths[name] = Reduced(name, COORDINATES[:dim], rows, masks)
     return Nodes(names, paths, dict(sorted(frames.items())), first, last)
 
 

@@ -127,3 +127,28 @@ def test_plots_are_recorded_and_removed_by_the_next_run(tmp_path):
     done = fekap("-q", "-o", out, FOURBAR)
     assert done.returncode == 0, done.stderr
     assert not (out / "paths.png").exists()
+
+
+def test_the_spatial_pictures_are_fekap_names(tmp_path):
+    """views.png and joints.png (a spatial run's pictures, fekap.plot3d) are names of FEKAP's:
+    recorded in the manifest they go with the next run; not recorded they stop it (exit 2)
+    unless --force."""
+    rssr = ROOT / "decks/spatial/rssr.deck"
+    out = tmp_path / "o"
+    assert fekap("-q", "-o", out, rssr).returncode == 0
+    with open(out / ".fekap-manifest", "a") as handle:
+        handle.write("views.png\njoints.png\n")
+    for name in ("views.png", "joints.png"):
+        (out / name).write_text("drawn by plot.py\n")
+    done = fekap("-q", "-o", out, rssr)
+    assert done.returncode == 0, done.stderr
+    assert not (out / "views.png").exists() and not (out / "joints.png").exists()
+    for name in ("views.png", "joints.png"):
+        (out / name).write_text("their picture\n")
+    done = fekap("-q", "-o", out, rssr)
+    assert done.returncode == 2, done.stderr
+    assert "views.png" in done.stderr and "joints.png" in done.stderr and "--force" in done.stderr
+    assert (out / "views.png").read_text() == "their picture\n"
+    done = fekap("-q", "-o", out, "--force", rssr)
+    assert done.returncode == 0, done.stderr
+    assert not (out / "views.png").exists() and not (out / "joints.png").exists()

@@ -122,8 +122,8 @@ def test_read_spatial_mechanism_refuses_bad_records(tmp_path):
 
 
 def test_plots_draw_a_spatial_run(tmp_path):
-    """scripts/plot.py reads a spatial run's nodes.csv (its z columns are
-    left out of the planar drawings) and draws its plots."""
+    """scripts/plot.py reads a spatial run's nodes.csv and draws its 3D
+    pictures (fekap.plot3d, test_spatial_plots.py), not the planar paths.png."""
     import subprocess
     import sys
 
@@ -131,7 +131,7 @@ def test_plots_draw_a_spatial_run(tmp_path):
     done = subprocess.run([sys.executable, str(ROOT / "scripts" / "plot.py"), str(out)], capture_output=True,
                           text=True, timeout=300)
     check(done.returncode == 0, f"plot.py exit {done.returncode}: {done.stderr}")
-    check((out / "paths.png").is_file(), "no paths.png")
+    check((out / "views.png").is_file() and not (out / "paths.png").exists(), "no views.png, or a paths.png")
 
 
 # ----------------------------------------------------------------- links.csv

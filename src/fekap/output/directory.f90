@@ -42,7 +42,7 @@ module fekap_output_directory
       & 'joints.csv', &
       & '*.fekap-tmp', 'paths.png', &
       & 'angles.png', 'iterations.png', 'history_*.png', 'shapes.png', 'energy.png', 'reactions.png', &
-      & 'deflection.png', 'motion.gif', 'motion.mp4', 'motion-frame.png']
+      & 'deflection.png', 'motion.gif', 'motion.mp4', 'motion-frame.png', 'views.png', 'joints.png']
 
    !> The files of a run of one deck whatever it computes (its CSV files,
    !> mechanism.txt, the plots of scripts/plot.py) besides `<stem>.lis`,
@@ -51,7 +51,7 @@ module fekap_output_directory
    character(*), parameter :: run_files(*) = [character(len=17) :: 'points.csv', 'links.csv', 'steps.csv', &
       & 'mesh.csv', 'nodes.csv', 'reactions.csv', 'energy.csv', 'deflection.csv', 'mechanism.txt', 'paths.png', 'joints.csv', &
       & 'angles.png', 'iterations.png', 'history_*.png', 'shapes.png', 'energy.png', 'reactions.png', &
-      & 'deflection.png', 'motion.gif', 'motion.mp4', 'motion-frame.png']
+      & 'deflection.png', 'motion.gif', 'motion.mp4', 'motion-frame.png', 'views.png', 'joints.png']
 
    !> Most foreign files named in the error.
    integer, parameter :: max_named = 8
