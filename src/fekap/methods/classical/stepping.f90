@@ -6,18 +6,18 @@
 module fekap_classical_stepping
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error, error_analysis, at_time
-   use fekap_model, only: analysis_type, predictor_previous, predictor_taylor, convergence_paper
+   use fekap_model, only: analysis_type, predictor_previous, predictor_taylor
    use fekap_model_drive_law, only: law_type
    use fekap_strings, only: int_text, short_real_text
    use fekap_model_results, only: step_result_type, new_step_result
    use fekap_stepping_stepper, only: stepper_type
-   use fekap_fem_convergence, only: convergence_type, divergence_length
+   use fekap_fem_convergence, only: convergence_type, newton_contract
    use fekap_stepping_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, extrapolate, &
       & taylor_predict, prediction_none
    use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
    use fekap_fem_branch, only: jump_ratio, jump_bound_ratio
    use fekap_stepping_newton, only: newton_system_type, newton_contract_type, newton_report_type, newton_solve, &
-      & always_refactor_type, stop_spent, stop_diverged, stop_at_floor, test_solved_from, test_relative_first
+      & always_refactor_type, stop_spent, stop_diverged, stop_at_floor
    implicit none
    private
 
@@ -171,13 +171,7 @@ contains
       type(newton_report_type) :: report
       system%s => self
       system%t = t
-      contract%test = merge(test_relative_first, test_solved_from, self%conv%mode == convergence_paper)
-      contract%tolerance = self%conv%tol
-      contract%force_scale = increment_residual
-      contract%length = self%conv%length
-      contract%floor = self%conv%residual_floor
-      contract%max_iterations = self%analysis%max_iter
-      contract%divergence = divergence_length*self%model_length
+      contract = newton_contract(self%conv, increment_residual, self%analysis%max_iter, self%model_length)
       call newton_solve(system, contract, full, report, error)
       iterations = report%iterations
       self%last_at_floor = report%stopped == stop_at_floor

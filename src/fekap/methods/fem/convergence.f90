@@ -5,10 +5,11 @@ module fekap_fem_convergence
    use fekap_kinds, only: dp
    use fekap_model, only: convergence_paper, convergence_default
    use fekap_assembly_mesh, only: mesh_type
+   use fekap_stepping_newton, only: newton_contract_type, test_relative_first, test_solved_from
    implicit none
    private
 
-   public :: convergence_type, is_converged, converged_by_estimate, residual_floor
+   public :: convergence_type, is_converged, converged_by_estimate, residual_floor, newton_contract
 
    !> A Newton correction longer than this many model sizes is divergence (every method).
    real(dp), parameter, public :: divergence_length = 1.0e3_dp
@@ -35,6 +36,26 @@ module fekap_fem_convergence
    end type convergence_type
 
 contains
+
+   !> The contract of stepping/newton.f90's driver under these settings, as
+   !> the kinematic methods (the FEM's and the classical ones) hold it: the
+   !> test against the increment's residual force_scale (`default`) or the
+   !> first residual (`paper`), the tolerance, the length tolerance, the
+   !> round-off floor, the deck's iterations and divergence beyond
+   !> divergence_length model sizes.
+   pure function newton_contract(conv, force_scale, max_iterations, model_length) result(contract)
+      type(convergence_type), intent(in) :: conv
+      real(dp), intent(in) :: force_scale, model_length
+      integer, intent(in) :: max_iterations
+      type(newton_contract_type) :: contract
+      contract%test = merge(test_relative_first, test_solved_from, conv%mode == convergence_paper)
+      contract%tolerance = conv%tol
+      contract%force_scale = force_scale
+      contract%length = conv%length
+      contract%floor = conv%residual_floor
+      contract%max_iterations = max_iterations
+      contract%divergence = divergence_length*model_length
+   end function newton_contract
 
    !> The least residual norm Newton can be asked for on a mesh (model size
    !> model_length): a strain of 1e-13 in the stiffest element, or the

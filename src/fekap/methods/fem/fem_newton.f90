@@ -23,9 +23,9 @@ module fekap_fem_newton
    use fekap_error, only: error_type
    use fekap_model, only: convergence_paper, predictor_previous
    use fekap_stepping_newton, only: newton_system_type, newton_contract_type, newton_report_type, stop_converged, &
-      & stop_at_floor, test_solved_from, test_relative_first
+      & stop_at_floor
    use fekap_stepping_predictor, only: predictor_margin
-   use fekap_fem_convergence, only: is_converged, converged_by_estimate, divergence_length
+   use fekap_fem_convergence, only: is_converged, converged_by_estimate, newton_contract
    use fekap_fem_linear_system, only: assemble_system, factor_system, residual_norm, newton_correction
    use fekap_fem_rates, only: near_singular_drop
    use fekap_fem_state, only: fem_core_type
@@ -99,15 +99,9 @@ contains
       class(fem_core_type), intent(in) :: fem
       real(dp), intent(in) :: increment_residual
       type(newton_contract_type) :: contract
-      contract%test = merge(test_relative_first, test_solved_from, fem%conv%mode == convergence_paper)
-      contract%tolerance = fem%conv%tol
-      contract%force_scale = increment_residual
+      contract = newton_contract(fem%conv, increment_residual, fem%model%analysis%max_iter, fem%model_length)
       contract%scale_by_first = fem%model%analysis%predictor == predictor_previous
       contract%accept_start_at_floor = .false.
-      contract%length = fem%conv%length
-      contract%floor = fem%conv%residual_floor
-      contract%max_iterations = fem%model%analysis%max_iter
-      contract%divergence = divergence_length*fem%model_length
    end function fem_contract
 
    !> A step of `fem` at time t from its predictor (in fem%qt); `guard`:
