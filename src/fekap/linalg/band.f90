@@ -30,7 +30,7 @@
 !> reference for the cost of the band solver, not a production path.
 module fekap_linalg_band
    use fekap_kinds, only: dp
-   use fekap_linalg_lapack, only: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dlacn2
+   use fekap_linalg_lapack, only: dpbtrf, dpbtrs, dgbtrf, dgbtrs, dgetrf, dgetrs, dlacn2, norm_estimate_step
    implicit none
    private
 
@@ -460,19 +460,17 @@ contains
    end subroutine band_rcond
 
    !> band_rcond of an in-house U^T D U factor (band_ldlt): the same norm and
-   !> the same estimate, Higham's iteration as LAPACK's dlacn2 makes it, step
-   !> by step (the same vectors, sums, maxima and stops in the same order, so
-   !> the same number), with the solves, sums and maxima as loops rather than
-   !> calls to LAPACK and BLAS, whose overheads cost more than the arithmetic
-   !> of a small model's estimate, which every step of a run makes.
+   !> the same estimate, Higham's iteration as LAPACK's dlacn2 makes it
+   !> (fekap_linalg_lapack's norm_estimate_step: the same vectors, sums,
+   !> maxima and stops in the same order, so the same number), with the
+   !> solves, sums and maxima as loops rather than calls to LAPACK and BLAS,
+   !> whose overheads cost more than the arithmetic of a small model's
+   !> estimate, which every step of a run makes.
    subroutine ldlt_rcond(self, rcond)
       type(band_matrix_type), intent(inout) :: self
       real(dp), intent(out) :: rcond
-      !> dlacn2's limit on its main iterations.
-      integer, parameter :: itmax = 5
-      real(dp) :: anorm, column, est, estold, altsgn
-      integer :: i, j, n, kd, iter, jlast
-      logical :: repeated
+      real(dp) :: anorm, column, est
+      integer :: i, j, n, kd, kase, isave(3)
       rcond = 0
       n = self%n
       kd = self%kd
@@ -494,47 +492,15 @@ contains
          do j = 1, n
             if (.not. self%f(kd + 1, j) > 0) return
          end do
-         x(1:n) = 1/real(n, dp)
-         call solve(x)
-         if (n == 1) then
-            est = abs(x(1))
-         else
-            est = asum(x)
-            call signs(x, isgn)
+         ! dlacn2's iteration (Hager and Higham), the solves with this factor
+         ! serving for A^-1 and A^-T alike (A is symmetric).
+         est = 0
+         kase = 0
+         do
+            call norm_estimate_step(n, x, isgn, est, kase, isave)
+            if (kase == 0) exit
             call solve(x)
-            j = first_largest(x)
-            iter = 2
-            do
-               x(1:n) = 0
-               x(j) = 1
-               call solve(x)
-               estold = est
-               est = asum(x)
-               repeated = .true.
-               do i = 1, n
-                  if (merge(1, -1, x(i) >= 0) /= isgn(i)) then
-                     repeated = .false.
-                     exit
-                  end if
-               end do
-               ! A repeated sign vector (converged), or no growth (cycling).
-               if (repeated .or. est <= estold) exit
-               call signs(x, isgn)
-               call solve(x)
-               jlast = j
-               j = first_largest(x)
-               if (x(jlast) == abs(x(j)) .or. iter >= itmax) exit
-               iter = iter + 1
-            end do
-            ! The alternating vector: a lower bound that catches what the iteration can miss.
-            altsgn = 1
-            do i = 1, n
-               x(i) = altsgn*(1 + real(i - 1, dp)/real(n - 1, dp))
-               altsgn = -altsgn
-            end do
-            call solve(x)
-            est = max(est, 2*(asum(x)/real(3*n, dp)))
-         end if
+         end do
          if (est > 0) rcond = (1/anorm)/est
       end associate
    contains
@@ -542,38 +508,6 @@ contains
          real(dp), intent(inout) :: b(:)
          call ldlt_solve_vector(self%f, size(self%f, 1), self%recip, self%top, n, kd, b(1:n))
       end subroutine solve
-      !> dasum: the magnitudes summed in order.
-      pure real(dp) function asum(b) result(total)
-         real(dp), intent(in) :: b(:)
-         integer :: k
-         total = 0
-         do k = 1, n
-            total = total + abs(b(k))
-         end do
-      end function asum
-      !> idamax: the first index of the largest magnitude.
-      pure integer function first_largest(b) result(at)
-         real(dp), intent(in) :: b(:)
-         integer :: k
-         at = 1
-         do k = 2, n
-            if (abs(b(k)) > abs(b(at))) at = k
-         end do
-      end function first_largest
-      !> b = sign(b) (+1 at zero) and the signs as integers.
-      pure subroutine signs(b, sgn)
-         real(dp), intent(inout) :: b(:)
-         integer, intent(out) :: sgn(:)
-         integer :: k
-         do k = 1, n
-            if (b(k) >= 0) then
-               b(k) = 1
-            else
-               b(k) = -1
-            end if
-            sgn(k) = nint(b(k))
-         end do
-      end subroutine signs
    end subroutine ldlt_rcond
 
 end module fekap_linalg_band
