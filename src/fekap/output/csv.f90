@@ -26,7 +26,7 @@ module fekap_output_csv
    public :: write_rates_header, row_length, append_rates_row
    !> For mechanism.txt of a spatial run: one line to a unit, a CSV field
    !> quoted, a word of a list of names.
-   public :: emit, quoted, word_at
+   public :: emit, quoted, word_at, write_mechanism_head
 
    !> The fixed headers (write_header) of steps.csv, reactions.csv and
    !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.
@@ -283,6 +283,19 @@ contains
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_nodes_row
 
+   !> mechanism.txt's first records, planar and spatial alike: the header
+   !> `record,fields`, the title, and the units when the deck has a units line.
+   subroutine write_mechanism_head(unit, model)
+      integer, intent(in) :: unit
+      type(model_type), intent(in) :: model
+      call emit(unit, 'record,fields')
+      if (allocated(model%title)) call emit(unit, 'title,'//quoted(model%title))
+      if (model%output%units_given) then
+         call emit(unit, 'units,length,'//trim(model%output%length_unit))
+         call emit(unit, 'units,time,'//trim(model%output%time_unit))
+      end if
+   end subroutine write_mechanism_head
+
    !> mechanism.txt: what the plots need to draw the mechanism and label it,
    !> one record per line, the kind first: `title,TEXT`; `units,length,NAME`
    !> and `units,time,NAME`; `support,NODE,FIXED` (FIXED: the fixed
@@ -300,12 +313,7 @@ contains
       type(model_type), intent(in) :: model
       character(:), allocatable :: line
       integer :: i, j, effects
-      call emit(unit, 'record,fields')
-      if (allocated(model%title)) call emit(unit, 'title,'//quoted(model%title))
-      if (model%output%units_given) then
-         call emit(unit, 'units,length,'//trim(model%output%length_unit))
-         call emit(unit, 'units,time,'//trim(model%output%time_unit))
-      end if
+      call write_mechanism_head(unit, model)
       do i = 1, size(model%nodes)
          call emit(unit, 'node,'//model%nodes(i)%name//','//real_text(model%nodes(i)%x(1))//','// &
             & real_text(model%nodes(i)%x(2)))

@@ -13,7 +13,8 @@ module fekap_output_spatial_csv
    use fekap_model_spatial, only: reported_joints, joint_names, joint_revolute, joint_universal, joint_prismatic, &
       & joint_cylindrical
    use fekap_output_buffer, only: text_buffer_type, reserve_text
-   use fekap_output_csv, only: write_rates_header, row_length, append_rates_row, emit, quoted, word_at
+   use fekap_output_csv, only: write_rates_header, row_length, append_rates_row, emit, word_at, &
+      & write_mechanism_head
    use fekap_output_format, only: append_real, append_text, real_text
    implicit none
    private
@@ -159,12 +160,7 @@ contains
       type(model_type), intent(in) :: model
       character(:), allocatable :: line, first, second
       integer :: i
-      call emit(unit, 'record,fields')
-      if (allocated(model%title)) call emit(unit, 'title,'//quoted(model%title))
-      if (model%output%units_given) then
-         call emit(unit, 'units,length,'//trim(model%output%length_unit))
-         call emit(unit, 'units,time,'//trim(model%output%time_unit))
-      end if
+      call write_mechanism_head(unit, model)
       do i = 1, size(model%nodes)
          call emit(unit, 'node,'//model%nodes(i)%name//','//real_text(model%nodes(i)%x(1))//','// &
             & real_text(model%nodes(i)%x(2))//','//real_text(model%spatial%z(i)))
