@@ -1148,10 +1148,16 @@ class Movie:
 def animate(run: Run, directory: Path, wanted: str) -> Path:
     """The mechanism moving: every link, supports, guides, the tracked points' trails, the time
     and the drive's value; at most MAX_FRAMES frames, about MOVIE_SECONDS long."""
+    return save_movie(Movie(run), directory, wanted)
+
+
+def save_movie(movie, directory: Path, wanted: str) -> Path:
+    """Write `movie` (a figure `fig`, its `frames` and `update(k)`, which draws frame k) as
+    motion.mp4 or motion.gif (movie_format) in directory, about MOVIE_SECONDS long, and one
+    frame as motion-frame.png; both names go in the manifest first."""
     plt = pyplot()
     from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
 
-    movie = Movie(run)
     fmt = movie_format(wanted)
     fps = int(min(30, max(8, round(len(movie.frames) / MOVIE_SECONDS))))
     target = directory / f"motion.{fmt}"

@@ -493,27 +493,7 @@ def set_points(panels: Panels, lines: list, points: np.ndarray) -> None:
 
 def animate(run: SpatialRun, directory: Path, wanted: str) -> Path:
     """motion.mp4 (or .gif) of the four views, and motion-frame.png."""
-    plt = fp.pyplot()
-    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
-
-    movie = Movie(run)
-    fmt = fp.movie_format(wanted)
-    fps = int(min(30, max(8, round(len(movie.frames) / fp.MOVIE_SECONDS))))
-    target = directory / f"motion.{fmt}"
-    animation = FuncAnimation(movie.fig, movie.update, frames=len(movie.frames), blit=False)
-    fp.record(target)
-    fp.record(directory / "motion-frame.png")
-    with plt.rc_context({"savefig.bbox": None}):
-        if fmt == "mp4":
-            writer = FFMpegWriter(fps=fps, codec="libx264", bitrate=-1,
-                                  extra_args=["-pix_fmt", "yuv420p", "-preset", "veryfast", "-crf", "23"])
-            animation.save(target, writer=writer, dpi=100)
-        else:
-            animation.save(target, writer=PillowWriter(fps=fps), dpi=80)
-        movie.update(len(movie.frames) // 3)
-        movie.fig.savefig(directory / "motion-frame.png", dpi=100)
-    plt.close(movie.fig)
-    return target
+    return fp.save_movie(Movie(run), directory, wanted)
 
 
 # --------------------------------------------------------------------------- main
