@@ -248,3 +248,30 @@ def test_drives_without_a_joint_are_refused(tmp_path, drive, line, message):
 def test_help_names_the_option():
     done = run_fekap("--help")
     check(done.returncode == 0 and "--spatial" in done.stdout, done.stdout)
+
+
+def test_vtk_files_of_a_spatial_run_of_a_planar_deck(tmp_path):
+    """Example 1 with `files csv listing vtk` under --spatial: one .vtu a
+    written step whose points plus displacement are, in x and y, the planar
+    run's nodes.csv positions of the same step (z zero), read back by VTK."""
+    from fekap import read
+    from test_vtk import Mesh, read_pvd
+
+    text = (ROOT / "decks" / "fourbar.deck").read_text()
+    check("  track B C\n" in text, "the fourbar deck's track line changed")
+    deck = tmp_path / "fourbar.deck"
+    deck.write_text(text.replace("  track B C\n", "  track B C\n  files csv listing vtk\n"))
+    planar, spatial = tmp_path / "planar", tmp_path / "spatial"
+    for out, extra in ((planar, ()), (spatial, ("--spatial",))):
+        done = run_fekap("-q", *extra, "-o", str(out), str(deck))
+        check(done.returncode == 0, f"{extra}: exit {done.returncode}: {done.stderr}")
+    _, t, nodes = read.node_positions(planar / "nodes.csv")
+    collection = read_pvd(spatial / "fourbar.pvd")
+    check([c[0] for c in collection] == t.tolist(), "the spatial .pvd's times are not the planar run's")
+    names = list(read.read_spatial_mechanism(spatial / "mechanism.txt").nodes)
+    for k, (_, file) in enumerate(collection):
+        mesh = Mesh(spatial / file)
+        for name in ("A", "B", "C", "D"):
+            got = mesh.points[names.index(name)]
+            err = max(np.max(np.abs(got[:2] - nodes[name][k])), abs(got[2]))
+            check(err < 1e-12, f"{file}: node {name} at {got}, planar {nodes[name][k]} ({err:.2e})")

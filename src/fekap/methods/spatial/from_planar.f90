@@ -86,10 +86,6 @@ contains
             & 'are not there yet; run it without --spatial')
          return
       end if
-      if (model%output%vtk) then
-         call input_error(error, model%file//': --spatial writes no VTK files yet: leave vtk out of OUTPut files')
-         return
-      end if
 
       nn = size(model%nodes)
       nl = size(model%links)
