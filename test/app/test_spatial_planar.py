@@ -40,8 +40,15 @@ KNOWN_FAILURES = {
     "scissor-10": {"rates": "the spatial rate solve squares the condition number (K = B^T k B, no square-root "
                             "form): velocities 1.2e-10 and accelerations 1.6e-10 of the largest off the closed "
                             "form, where the planar run is within 2e-14"},
-    "peaucellier-flat": {"rates": "at t = 0.5, 0.013 degrees from the flat bifurcation, the accelerations of "
+    "peaucellier-flat": {"run": "the spatial stepper has no change-point handling, and its predictor (the motion's "
+                                "third and fourth rates) carries the step at t = 0.5, 0.013 degrees from the flat "
+                                "bifurcation, where Newton fails even with 8 step cuts (exit 3)",
+                         "rates": "at t = 0.5, 0.013 degrees from the flat bifurcation, the accelerations of "
                                   "both runs are off: P's ax, exactly 0, is -3.2e-7 planar and 8.6e-7 spatial"},
+    "fourbar-half-turn": {"run": "the spatial stepper has no branch-jump check: with its predictor from the "
+                                 "motion's third and fourth rates, the second half-turn step (dt 0.5) lands on the "
+                                 "other assembly branch (C at y = -3.87 instead of 3.87); the planar FEM's check "
+                                 "cuts that step"},
 }
 # The dense LU of the spatial stepper takes minutes on its 2,000 dofs (no band solver yet).
 TOO_SLOW = {"scissor-100"}
