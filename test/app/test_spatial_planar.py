@@ -261,8 +261,9 @@ def test_vtk_files_of_a_spatial_run_of_a_planar_deck(tmp_path):
     """Example 1 with `files csv listing vtk` under --spatial: one .vtu a
     written step whose points plus displacement are, in x and y, the planar
     run's nodes.csv positions of the same step (z zero), read back by VTK."""
-    from fekap import read
     from test_vtk import Mesh, read_pvd
+
+    from fekap import read
 
     text = (ROOT / "decks" / "fourbar.deck").read_text()
     check("  track B C\n" in text, "the fourbar deck's track line changed")
