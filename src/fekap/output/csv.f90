@@ -26,7 +26,7 @@ module fekap_output_csv
    public :: write_rates_header, row_length, append_rates_row
    !> For mechanism.txt of a spatial run: one line to a unit, a CSV field
    !> quoted, a word of a list of names.
-   public :: emit, quoted, word_at, write_mechanism_head
+   public :: emit, quoted, word_at, write_mechanism_head, write_track_record
 
    !> The fixed headers (write_header) of steps.csv, reactions.csv and
    !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.
@@ -296,6 +296,19 @@ contains
       end if
    end subroutine write_mechanism_head
 
+   !> mechanism.txt's last record, planar and spatial alike: `track,NODE...`.
+   subroutine write_track_record(unit, model)
+      integer, intent(in) :: unit
+      type(model_type), intent(in) :: model
+      character(:), allocatable :: line
+      integer :: i
+      line = 'track'
+      do i = 1, size(model%output%points)
+         line = line//','//model%nodes(model%output%points(i))%name
+      end do
+      call emit(unit, line)
+   end subroutine write_track_record
+
    !> mechanism.txt: what the plots need to draw the mechanism and label it,
    !> one record per line, the kind first: `title,TEXT`; `units,length,NAME`
    !> and `units,time,NAME`; `support,NODE,FIXED` (FIXED: the fixed
@@ -377,11 +390,7 @@ contains
             call emit(unit, 'mass,'//model%nodes(model%masses(i)%node)%name//','//real_text(model%masses(i)%mass))
          end do
       end if
-      line = 'track'
-      do i = 1, size(model%output%points)
-         line = line//','//model%nodes(model%output%points(i))%name
-      end do
-      call emit(unit, line)
+      call write_track_record(unit, model)
    end subroutine write_mechanism_csv
 
    !> The k-th blank-separated word of a list of names (integrator_names, ...).

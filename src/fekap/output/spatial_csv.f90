@@ -14,7 +14,7 @@ module fekap_output_spatial_csv
       & joint_cylindrical
    use fekap_output_buffer, only: text_buffer_type, reserve_text
    use fekap_output_csv, only: write_rates_header, row_length, append_rates_row, emit, word_at, &
-      & write_mechanism_head
+      & write_mechanism_head, write_track_record
    use fekap_output_format, only: append_real, append_text, real_text
    implicit none
    private
@@ -194,11 +194,7 @@ contains
             end associate
          end do
       end if
-      line = 'track'
-      do i = 1, size(model%output%points)
-         line = line//','//model%nodes(model%output%points(i))%name
-      end do
-      call emit(unit, line)
+      call write_track_record(unit, model)
    end subroutine write_spatial_mechanism
 
    !> `,x,y,z` of the unit vector along axis (not zero: the deck checks).
