@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fekap.exact.pendulums import double_pendulum_rate
+from fekap.exact.pendulums import double_pendulum_rate, rk4_states
 
 from apptest import ROOT, check, read_rows, run_fekap
 
@@ -84,17 +84,10 @@ END
 
 
 def rk4(rate, s: np.ndarray, h: float, n: int, every: int = 0) -> np.ndarray:
-    """n RK4 steps of h from s; the states every `every` steps (with the first) or the last."""
-    out = [s]
-    for i in range(n):
-        k1 = rate(s)
-        k2 = rate(s + 0.5 * h * k1)
-        k3 = rate(s + 0.5 * h * k2)
-        k4 = rate(s + h * k3)
-        s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        if every and (i + 1) % every == 0:
-            out.append(s)
-    return np.array(out) if every else s
+    """n RK4 steps of h from s (fekap.exact.pendulums.rk4_states); the states every `every`
+    steps (with the first) or the last."""
+    states = rk4_states(rate, s, h, n)
+    return states[::every] if every else states[-1]
 
 
 def pendulum_rate(s):
