@@ -687,11 +687,11 @@ def time_axis(ax) -> None:
     ax.xaxis.set_major_locator(MaxNLocator(nbins=7, steps=[1, 2, 2.5, 5, 10]))
 
 
-def history_groups(run: Run, kinds: set[str] | None) -> list[str]:
-    """The quantity groups (position, velocity, acceleration) the history figures show."""
+def history_groups(run: Run, kinds: set[str] | None, quantities: dict[str, tuple[str, ...]] = GROUPS) -> list[str]:
+    """The quantity groups (position, velocity, acceleration) the history figures show;
+    `quantities` names each group's components (x, y here; x, y, z for a spatial run)."""
     first = next(iter(run.points.values()))
-    present = set(first.quantities)
-    available = [g for g, names in GROUPS.items() if set(names) <= present]
+    available = [g for g, names in quantities.items() if all(first.has(q) for q in names)]
     if kinds is None or "history" in kinds:
         return available
     wanted = [g for g in ("velocity", "acceleration") if g in kinds]
@@ -701,17 +701,20 @@ def history_groups(run: Run, kinds: set[str] | None) -> list[str]:
     return wanted
 
 
-def plot_history(run: Run, series: fs.Reduced, groups: list[str]) -> Figure:
-    """Stacked time histories of one point: a row per group, x and y components side by side."""
+def plot_history(run: Run, series: fs.Reduced, groups: list[str],
+                 quantities: dict[str, tuple[str, ...]] = GROUPS) -> Figure:
+    """Stacked time histories of one point: a row per group, its components
+    (`quantities`: x and y here, x, y and z for a spatial run) side by side."""
     plt = pyplot()
-    fig, axes = plt.subplots(len(groups), 2, figsize=(10, 1.4 + 2.4 * len(groups)),
+    columns = len(quantities["position"])
+    fig, axes = plt.subplots(len(groups), columns, figsize=(3 * columns + 4, 1.4 + 2.4 * len(groups)),
                              sharex=True, squeeze=False)
     marker = "o" if len(series.rows) <= 200 else None
     for row, group in enumerate(groups):
-        curves = [series.curve(q) for q in GROUPS[group]]
+        curves = [series.curve(q) for q in quantities[group]]
         scale = max((float(np.nanmax(np.abs(c[2]))) for c in curves if np.isfinite(c[2]).any()),
                     default=0.0)
-        for col, (quantity, (_, t, values)) in enumerate(zip(GROUPS[group], curves)):
+        for col, (quantity, (_, t, values)) in enumerate(zip(quantities[group], curves)):
             ax = axes[row, col]
             ax.plot(t, values, "-", marker=marker, color=f"C{row}", ms=3)
             ax.set_ylabel(run.label(quantity))

@@ -328,42 +328,6 @@ def plot_views(run: SpatialRun) -> Figure:
 
 # --------------------------------------------------------------------------- time histories
 
-def history_groups(run: SpatialRun, kinds: set[str] | None) -> list[str]:
-    """The groups (position, velocity, acceleration) the history figures show."""
-    first = next(iter(run.points.values()))
-    available = [g for g, names in GROUPS.items() if all(first.has(q) for q in names)]
-    if kinds is None or "history" in kinds:
-        return available
-    wanted = [g for g in ("velocity", "acceleration") if g in kinds]
-    for group in wanted:
-        if group not in available:
-            raise fc.UsageError(fp.MISSING_HINT[group])
-    return wanted
-
-
-def plot_history(run: SpatialRun, series: fs.Reduced, groups: list[str]) -> Figure:
-    """Stacked time histories of one point: a row per group, x, y and z side by side."""
-    plt = fp.pyplot()
-    fig, axes = plt.subplots(len(groups), 3, figsize=(13, 1.4 + 2.4 * len(groups)), sharex=True,
-                             squeeze=False)
-    marker = "o" if len(series.rows) <= 200 else None
-    for row, group in enumerate(groups):
-        curves = [series.curve(q) for q in GROUPS[group]]
-        scale = max((float(np.nanmax(np.abs(c[2]))) for c in curves if np.isfinite(c[2]).any()),
-                    default=0.0)
-        for col, (quantity, (_, t, values)) in enumerate(zip(GROUPS[group], curves)):
-            ax = axes[row, col]
-            ax.plot(t, values, "-", marker=marker, color=f"C{row}", ms=3)
-            ax.set_ylabel(run.label(quantity))
-            fp.round_off_floor(ax, values, scale)
-            fp.time_axis(ax)
-    for ax in axes[-1]:
-        ax.set_xlabel(run.label("t"))
-    fig.suptitle(f"{run.title}\npoint {fp.short(series.name)}: time histories")
-    fig.tight_layout()
-    return fig
-
-
 # --------------------------------------------------------------------------- joints
 
 def joint_units(run: SpatialRun, prismatic: bool) -> dict[str, tuple[str, str]]:
@@ -514,13 +478,13 @@ def main(args) -> int:
     steps = fs.read_steps(run.path / "steps.csv") if wanted("iterations") else None
     if kinds and "iterations" in kinds and (steps is None or not len(steps.rows)):
         raise fc.UsageError(f"{run.path}: no steps.csv (or it is empty): no iterations to plot")
-    groups = history_groups(run, kinds) if wanted("history", "velocity", "acceleration") else []
+    groups = fp.history_groups(run, kinds, GROUPS) if wanted("history", "velocity", "acceleration") else []
 
     written: list[Path] = []
     if wanted("paths", "views"):
         fp.save(plot_views(run), run.path / "views.png", written)
     for series in run.points.values() if groups else ():
-        fp.save(plot_history(run, series, groups), run.path / f"history_{fp.safe_name(series.name)}.png",
+        fp.save(fp.plot_history(run, series, groups, GROUPS), run.path / f"history_{fp.safe_name(series.name)}.png",
                 written)
     if wanted("joints") and run.joints:
         fp.save(plot_joints(run), run.path / "joints.png", written)

@@ -80,8 +80,9 @@ import numpy as np
 from fekap import dynamics as dc  # the benchmarks' answers from a run's CSV files
 from fekap import read
 from fekap import run as fb
-from fekap.exact.fourbar import fourbar_exact
-from fekap.exact.pendulums import double_pendulum_rate, double_pendulum_tip, rk4_states  # hyper-dual closed form of Example 1
+from fekap.exact.fourbar import fourbar_exact  # hyper-dual closed form of Example 1
+from fekap.exact.pendulums import double_pendulum_rate, double_pendulum_tip, rk4_states
+from fekap.models import pendulums
 
 
 def slider_exact(t: float) -> tuple[float, float]:
@@ -420,30 +421,11 @@ def plot(rows: list[dict], path: Path) -> None:
 
 G = 9.81
 
-DOUBLE_PENDULUM = """TITLe double pendulum of point masses on stiff massless links
-SECTions
-  rod  E=1e13  G=4e12  A=1e-3  I=1e-5
-NODEs
-  A 0 0
-  B 1 0
-  C 2 0
-LINKs
-  AB A B rod 1
-  BC B C rod 1
-SUPPorts
-  A pin
-MASSes
-  B 1
-  C 1
-GRAVity 0 -9.81
-ANALysis
-  type dynamics
-  time 0 0.5 0.001
-OUTPut
-  units length=m time=s
-  track C
-END
-"""
+#: The double pendulum of point masses on stiff massless links (EA = 1e10),
+#: released horizontal (fekap.models.pendulums).
+DOUBLE_PENDULUM = pendulums.deck("double pendulum of point masses on stiff massless links", 1e10,
+                                 pendulums.double_pendulum(), "  time 0 0.5 0.001\n",
+                                 "  units length=m time=s\n  track C\n")
 
 
 def pendulum_reference(t_end: float, h: float = 1e-5):

@@ -42,6 +42,7 @@ import numpy as np
 import pytest
 
 from fekap.exact.pendulums import double_pendulum_rate, rk4_states
+from fekap.models import pendulums
 
 from apptest import ROOT, check, read_rows, run_fekap
 
@@ -57,30 +58,12 @@ SUBSTEPS = 32
 INTEGRATORS = ["generalized-alpha 0.8", "generalized-alpha 1", "energy-momentum"]
 
 
-def section(ea: float, rho: str = "") -> str:
-    e = ea * 1e3
-    return f"  rod  E={e:g}  G={e / 2.5:g}  A=1e-3  I=1e-5  {rho}"
+def analysis(integrator: str, time: str) -> str:
+    return f"  start consistent\n  integrator {integrator}\n  time {time}\n"
 
 
-def deck(title: str, ea: float, rho: str, nodes: str, links: str, masses: str, velocities: str,
-         integrator: str, time: str, track: str) -> str:
-    return f"""TITLe {title}
-SECTions
-{section(ea, rho)}
-NODEs
-{nodes}LINKs
-{links}SUPPorts
-  A pin
-{masses}GRAVity 0 -9.81
-{velocities}ANALysis
-  type dynamics
-  start consistent
-  integrator {integrator}
-  time {time}
-OUTPut
-  track {track}
-END
-"""
+def model_deck(title: str, ea: float, geometry: pendulums.Geometry, integrator: str, time: str, track: str) -> str:
+    return pendulums.deck(title, ea, geometry, analysis(integrator, time), f"  track {track}\n")
 
 
 def rk4(rate, s: np.ndarray, h: float, n: int, every: int = 0) -> np.ndarray:
@@ -116,26 +99,15 @@ def double_point(s):
 
 
 def pendulum_deck(s, ea, integrator, time):
-    s = [float(x) for x in s]
-    p = pendulum_point(s)
-    return deck("A01 pendulum", ea, "", f"  A 0 0\n  B {p[0]!r} {p[1]!r}\n", "  AB A B rod 1\n", "MASSes\n  B 1\n",
-                f"VELOcities\n  AB 0 0 {-s[1]!r}\n" if s[1] else "", integrator, time, "B")
+    return model_deck("A01 pendulum", ea, pendulums.point_mass_pendulum(s), integrator, time, "B")
 
 
 def rod_deck(s, ea, integrator, time):
-    s = [float(x) for x in s]
-    p = rod_point(s)
-    return deck("rod pendulum", ea, "rhoA=1  rhoI=1e-6", f"  A 0 0\n  B {p[0]!r} {p[1]!r}\n", "  AB A B rod 4\n", "",
-                f"VELOcities\n  AB 0 0 {s[1]!r}\n" if s[1] else "", integrator, time, "B")
+    return model_deck("rod pendulum", ea, pendulums.rod_pendulum(s), integrator, time, "B")
 
 
 def double_deck(s, ea, integrator, time):
-    a, b, wa, wb = (float(x) for x in s)
-    p, c = [math.sin(a), -math.cos(a)], double_point(s)
-    vb = (math.cos(a) * wa, math.sin(a) * wa)
-    velocities = f"VELOcities\n  AB 0 0 {wa!r}\n  BC {vb[0]!r} {vb[1]!r} {wb!r}\n" if wa or wb else ""
-    return deck("double pendulum", ea, "", f"  A 0 0\n  B {p[0]!r} {p[1]!r}\n  C {c[0]!r} {c[1]!r}\n",
-                "  AB A B rod 1\n  BC B C rod 1\n", "MASSes\n  B 1\n  C 1\n", velocities, integrator, time, "C")
+    return model_deck("double pendulum", ea, pendulums.double_pendulum(s), integrator, time, "C")
 
 
 def rods_rate(s):
@@ -151,12 +123,7 @@ def rods_rate(s):
 
 
 def rods_deck(s, ea, integrator, time):
-    a, b, wa, wb = (float(x) for x in s)
-    p, c = [math.sin(a), -math.cos(a)], double_point(s)
-    vb = (math.cos(a) * wa, math.sin(a) * wa)
-    velocities = f"VELOcities\n  AB 0 0 {wa!r}\n  BC {vb[0]!r} {vb[1]!r} {wb!r}\n" if wa or wb else ""
-    return deck("double pendulum of rods", ea, "rhoA=1  rhoI=0", f"  A 0 0\n  B {p[0]!r} {p[1]!r}\n  C {c[0]!r} {c[1]!r}\n",
-                "  AB A B rod 4\n  BC B C rod 4\n", "", velocities, integrator, time, "C")
+    return model_deck("double pendulum of rods", ea, pendulums.double_pendulum(s, rods=True), integrator, time, "C")
 
 
 def slider_rate(s):
@@ -171,40 +138,7 @@ def slider_point(s):
 
 
 def slider_deck(s, ea, integrator, time):
-    """Crank OA 1 m, rod AB 2 m (1 kg/m), a 2 kg slider at B on a guide along x, a
-    0.05 kg m^2 flywheel on the crank; the crank at angle s[0] turning at s[1]."""
-    th, w1 = (float(x) for x in s)
-    a = (math.cos(th), math.sin(th))
-    bx = a[0] + math.sqrt(4 - a[1] ** 2)
-    va, w2 = (-w1 * a[1], w1 * a[0]), -w1 * a[0] / (bx - a[0])
-    velocities = f"VELOcities\n  OA 0 0 {w1!r}\n  AB {va[0]!r} {va[1]!r} {w2!r}\n" if w1 else ""
-    return f"""TITLe free slider-crank with a flywheel
-SECTions
-{section(ea, "rhoA=1  rhoI=0")}
-NODEs
-  O 0 0
-  A {a[0]!r} {a[1]!r}
-  B {bx!r} 0
-LINKs
-  OA O A rod 2
-  AB A B rod 4
-SUPPorts
-  O pin
-SLIDelines
-  slider B guide -5 0 5 0 pin
-MASSes
-  B 2
-  O 0 0.05 OA
-GRAVity 0 -9.81
-{velocities}ANALysis
-  type dynamics
-  start consistent
-  integrator {integrator}
-  time {time}
-OUTPut
-  track A
-END
-"""
+    return model_deck("free slider-crank with a flywheel", ea, pendulums.slider_crank(s), integrator, time, "A")
 
 
 #: name: (deck, rate, tracked point of a state, its name, a state in mid-motion, the release, run's end)

@@ -283,7 +283,7 @@ def test_the_histories_have_x_y_and_z(tmp_path):
     out = write_spatial_run(tmp_path / "sc", SLIDER_CRANK, 30)
     run = plot3d.SpatialRun(out, 4, 0)
     series = run.points["B"]
-    fig = plot3d.plot_history(run, series, plot3d.history_groups(run, None))
+    fig = plot.plot_history(run, series, plot.history_groups(run, None, plot3d.GROUPS), plot3d.GROUPS)
     axes = np.array(fig.axes).reshape(3, 3)
     p = point_columns(out, "B")
     for ax, quantity in zip(axes.flat, plot3d.POINT_QUANTITIES):
@@ -372,7 +372,7 @@ def test_every_figure_has_units_and_the_title(tmp_path):
     out = write_spatial_run(tmp_path / "sc", SLIDER_CRANK, 12)
     run = plot3d.SpatialRun(out, 3, 0)
     figures = [plot3d.plot_views(run), plot3d.plot_joints(run),
-               plot3d.plot_history(run, run.points["S"], plot3d.history_groups(run, None))]
+               plot.plot_history(run, run.points["S"], plot.history_groups(run, None, plot3d.GROUPS), plot3d.GROUPS)]
     with_unit = re.compile(r"^.+ \((m|s|rad|m/s|m/s²|rad/s|rad/s²)\)$")
     for fig in figures:
         assert fig._suptitle.get_text().startswith(SLIDER_CRANK["title"])

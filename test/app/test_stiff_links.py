@@ -44,6 +44,7 @@ import pytest
 from fekap import dynamics as dc  # the bottom pass of a run's points.csv
 from fekap.exact.pendulums import double_pendulum_rate, rk4_states
 from fekap.exact.pendulums import double_pendulum_tip as tip_at
+from fekap.models import pendulums
 
 from apptest import ROOT, check, read_rows, run_fekap
 
@@ -61,12 +62,6 @@ RIGID_EA = 1e11
 OUT: Path = None
 
 
-def section(ea: float, rho: str = "") -> str:
-    """A section of axial stiffness EA, kGA = EA/2.5 and EI = EA/100 (A = 1e-3)."""
-    e = ea * 1e3
-    return f"  rod  E={e:g}  G={e / 2.5:g}  A=1e-3  I=1e-5  {rho}"
-
-
 def run_deck(name: str, text: str, dt: float, *args: str) -> Path:
     outdir = OUT / f"{name}-dt{dt:g}"
     outdir.mkdir(parents=True, exist_ok=True)
@@ -81,27 +76,16 @@ def integrator_line(integrator: str) -> str:
     return f"  integrator {integrator}\n" if integrator else ""
 
 
+def dynamics_deck(title: str, ea: float, geometry: pendulums.Geometry, integrator: str, extra: str, time: str,
+                  track: str) -> str:
+    """The deck of `geometry` (fekap.models.pendulums) with the default start and tolerances."""
+    return pendulums.deck(f"{title}, EA {ea:g}", ea, geometry, f"{integrator_line(integrator)}{extra}  time {time}\n",
+                          f"  track {track}\n")
+
+
 def a01_deck(ea: float, integrator: str = "", extra: str = "") -> str:
-    return f"""TITLe A01 pendulum, EA {ea:g}
-SECTions
-{section(ea)}
-NODEs
-  A 0 0
-  B 1 0
-LINKs
-  AB A B rod 1
-SUPPorts
-  A pin
-MASSes
-  B 1
-GRAVity 0 -9.81
-ANALysis
-  type dynamics
-{integrator_line(integrator)}{extra}  time 0 0.6 1e-3
-OUTPut
-  track B
-END
-"""
+    """The A01 pendulum released from the horizontal."""
+    return dynamics_deck("A01 pendulum", ea, pendulums.point_mass_pendulum(), integrator, extra, "0 0.6 1e-3", "B")
 
 
 def orders(errors: list[float]) -> list[float]:
@@ -218,25 +202,8 @@ def test_a01_pendulum_converges_at_second_order(integrator: str, ea: float) -> N
 
 
 def rod_deck(ea: float, integrator: str = "") -> str:
-    c, s = math.cos(math.pi / 6), math.sin(math.pi / 6)
-    return f"""TITLe uniform rod pendulum released 30 degrees above the horizontal, EA {ea:g}
-SECTions
-{section(ea, "rhoA=1  rhoI=1e-6")}
-NODEs
-  A 0 0
-  B {c!r} {s!r}
-LINKs
-  AB A B rod 4
-SUPPorts
-  A pin
-GRAVity 0 -9.81
-ANALysis
-  type dynamics
-{integrator_line(integrator)}  time 0 0.57 1e-3
-OUTPut
-  track B
-END
-"""
+    return dynamics_deck("uniform rod pendulum released 30 degrees above the horizontal", ea,
+                         pendulums.rod_pendulum(), integrator, "", "0 0.57 1e-3", "B")
 
 
 def rod_exact(theta0: float = math.pi / 6, rho_i: float = 1e-6) -> tuple[float, float]:
@@ -329,29 +296,8 @@ def speed_order(integrator: str, errors: list[float], speed: float) -> None:
 
 
 def double_pendulum_deck(ea: float, integrator: str = "") -> str:
-    return f"""TITLe double pendulum of point masses on massless links, EA {ea:g}
-SECTions
-{section(ea)}
-NODEs
-  A 0 0
-  B 1 0
-  C 2 0
-LINKs
-  AB A B rod 1
-  BC B C rod 1
-SUPPorts
-  A pin
-MASSes
-  B 1
-  C 1
-GRAVity 0 -9.81
-ANALysis
-  type dynamics
-{integrator_line(integrator)}  time 0 0.3 1e-3
-OUTPut
-  track C
-END
-"""
+    return dynamics_deck("double pendulum of point masses on massless links", ea, pendulums.double_pendulum(),
+                         integrator, "", "0 0.3 1e-3", "C")
 
 
 def double_pendulum_tip(t_end: float, h: float = 1e-5) -> np.ndarray:
@@ -392,26 +338,8 @@ def last_point(outdir: Path, point: str, t_end: float) -> np.ndarray:
 
 
 def rods_double_pendulum_deck(ea: float, integrator: str = "") -> str:
-    return f"""TITLe double pendulum of two uniform rods, EA {ea:g}
-SECTions
-{section(ea, "rhoA=1  rhoI=0")}
-NODEs
-  A 0 0
-  B 1 0
-  C 2 0
-LINKs
-  AB A B rod 4
-  BC B C rod 4
-SUPPorts
-  A pin
-GRAVity 0 -9.81
-ANALysis
-  type dynamics
-{integrator_line(integrator)}  time 0 0.3 1e-3
-OUTPut
-  track C
-END
-"""
+    return dynamics_deck("double pendulum of two uniform rods", ea, pendulums.double_pendulum(rods=True),
+                         integrator, "", "0 0.3 1e-3", "C")
 
 
 def rods_double_pendulum_tip(t_end: float, h: float = 1e-5) -> np.ndarray:
@@ -461,37 +389,8 @@ def test_rods_double_pendulum_converges_at_second_order(integrator: str, ea: flo
 
 
 def slider_crank_deck(ea: float, integrator: str = "") -> str:
-    a, b = slider_crank_points()
-    return f"""TITLe free slider-crank with a flywheel, EA {ea:g}
-SECTions
-{section(ea, "rhoA=1  rhoI=0")}
-NODEs
-  O 0 0
-  A {a[0]!r} {a[1]!r}
-  B {b!r} 0
-LINKs
-  OA O A rod 2
-  AB A B rod 4
-SUPPorts
-  O pin
-SLIDelines
-  slider B guide -5 0 5 0 pin
-MASSes
-  B 2
-  O 0 0.05 OA
-GRAVity 0 -9.81
-ANALysis
-  type dynamics
-{integrator_line(integrator)}  time 0 0.3 1e-3
-OUTPut
-  track A
-END
-"""
-
-
-def slider_crank_points(theta: float = math.pi / 3, r: float = 1.0, length: float = 2.0) -> tuple[tuple, float]:
-    a = (r * math.cos(theta), r * math.sin(theta))
-    return a, a[0] + math.sqrt(length**2 - a[1] ** 2)
+    return dynamics_deck("free slider-crank with a flywheel", ea, pendulums.slider_crank(), integrator, "",
+                         "0 0.3 1e-3", "A")
 
 
 @functools.lru_cache
