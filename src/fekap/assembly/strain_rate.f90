@@ -35,6 +35,13 @@ module fekap_assembly_strain_rate
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
    public :: strain_rates, strain_accelerations, strain_rate_rcond, rate_geometry_at
 
+   !> Entries of an element's rows of B: Gamma1 and Gamma2 on the six dofs
+   !> (x1, y1, theta1, x2, y2, theta2), kappa L on theta1 and theta2.
+   integer, parameter :: element_entries = 14
+   !> The dof (1 to 6) and the row (1 to 3) of each of the element's entries.
+   integer, parameter :: entry_dof(element_entries) = [1, 2, 3, 4, 5, 6, 1, 2, 3, 4, 5, 6, 3, 6]
+   integer, parameter :: entry_row(element_entries) = [1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 3, 3]
+
    !> B_f of a mesh, in band storage, and its factor.
    type :: strain_rate_type
       !> Whether the square-root form applies: B_f square (as many strain and
@@ -48,6 +55,13 @@ module fekap_assembly_strain_rate
       integer, allocatable :: element_row(:, :)
       !> (nslide): band row of each slideline's gap.
       integer, allocatable :: slide_row(:)
+      !> (2, element_entries, nelem): where each element's entries of B go,
+      !> as mesh_type%scatter_map for K: pairs (entry of element_values' list,
+      !> place in ab taken as one array), element_count(1, e) of them, then
+      !> element_count(2, e) pairs (entry, place in bd); fixed dofs have none.
+      integer, allocatable :: element_map(:, :, :)
+      !> (2, nelem): the lengths of the two lists of element_map.
+      integer, allocatable :: element_count(:, :)
       !> (2 kl + ku + 1, n): B_f as dgbtrf stores it, then its LU factor.
       real(dp), allocatable :: ab(:, :)
       integer, allocatable :: ipiv(:)
@@ -156,8 +170,42 @@ contains
       allocate (self%section(2, nelem), self%slide_ns(6, nslide), self%slide_ts(6, nslide), &
          & self%slide_nm(3, nslide), source=0.0_dp)
       allocate (self%slide_dofs(6, nslide), source=0)
+      call build_element_map(self, mesh)
       self%applies = .true.
    end subroutine new_strain_rate
+
+   !> The destinations of the elements' entries of B (element_map), from the
+   !> band rows of their strains and the dofs' equations, once: the
+   !> assembly of each iteration then adds each entry with one index.
+   pure subroutine build_element_map(self, mesh)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer :: band(2, element_entries), driven(2, element_entries), nb, nd, e, m, dof, eq, row, ldab
+      ldab = size(self%ab, 1)
+      allocate (self%element_map(2, element_entries, size(mesh%elements)), source=0)
+      allocate (self%element_count(2, size(mesh%elements)), source=0)
+      do e = 1, size(mesh%elements)
+         nb = 0
+         nd = 0
+         do m = 1, element_entries
+            dof = mesh%edof(entry_dof(m), e)
+            if (dof == 0) cycle
+            row = self%element_row(entry_row(m), e)
+            eq = mesh%eq(dof)
+            if (eq > 0) then
+               ! ab(kl + ku + 1 + row - eq, eq), as scatter_row puts it.
+               nb = nb + 1
+               band(:, nb) = [m, self%kl + self%ku + 1 + row - eq + (eq - 1)*ldab]
+            else if (mesh%drive_col(dof) > 0) then
+               nd = nd + 1
+               driven(:, nd) = [m, row + (mesh%drive_col(dof) - 1)*self%n]
+            end if
+         end do
+         self%element_map(:, 1:nb, e) = band(:, 1:nb)
+         self%element_map(:, nb + 1:nb + nd, e) = driven(:, 1:nd)
+         self%element_count(:, e) = [nb, nd]
+      end do
+   end subroutine build_element_map
 
    !> The dofs of slideline i on its segment k (0 for a ground guide's points).
    pure subroutine slide_dofs_of(mesh, i, k, dofs)
@@ -188,11 +236,11 @@ contains
       real(dp), contiguous, intent(out), optional :: strain(:)
       real(dp), intent(out), optional :: largest
       integer, intent(out), optional :: element
-      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, row(6, 2), xs(2), x1(2)
-      real(dp) :: worst
-      integer :: e, i, k, r
-      self%ab = 0
-      self%bd = 0
+      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, xs(2), x1(2)
+      real(dp) :: worst, values(element_entries)
+      integer :: e, i, k
+      call zero(self%ab, size(self%ab))
+      call zero(self%bd, size(self%bd))
       self%factored = .false.
       if (present(largest)) largest = 0
       if (present(element)) element = 0
@@ -226,14 +274,12 @@ contains
                g1 = 0
                g2 = 0
             end if
-            ! Gradients of Gamma1, Gamma2 and kappa L in (x1, y1, theta1, x2, y2, theta2).
-            row(:, 1) = [-c*rl, -s*rl, g2/2, c*rl, s*rl, g2/2]
-            row(:, 2) = [s*rl, -c*rl, -(1 + g1)/2, -s*rl, c*rl, -(1 + g1)/2]
-            do r = 1, 2
-               call scatter_row(self, mesh, rows(r), dofs, row(:, r))
-            end do
-            ! kappa L on the rotations only (its band bounds were found so).
-            call scatter_row(self, mesh, rows(3), dofs([3, 6]), [-1.0_dp, 1.0_dp])
+            ! Gradients of Gamma1, Gamma2 in (x1, y1, theta1, x2, y2, theta2),
+            ! and of kappa L on the rotations only (its band bounds were found so).
+            values = [-c*rl, -s*rl, g2/2, c*rl, s*rl, g2/2, &
+               & s*rl, -c*rl, -(1 + g1)/2, -s*rl, c*rl, -(1 + g1)/2, -1.0_dp, 1.0_dp]
+            call scatter_entries(self%element_map(:, :, e), self%element_count(1, e), self%element_count(2, e), &
+               & values, self%ab, self%bd)
          end associate
       end do
       do i = 1, size(mesh%slides)
@@ -286,6 +332,30 @@ contains
       self%slide_ts(:, i) = [t, -(1 - alpha)*t, -alpha*t]
       self%slide_nm(:, i) = [nrm, s1]
    end subroutine slide_geometry
+
+   !> a(1:n) = 0 as one block (an assignment to a two-dimensional component
+   !> sets each column apart, a call each).
+   pure subroutine zero(a, n)
+      integer, intent(in) :: n
+      real(dp), intent(out) :: a(n)
+      a = 0
+   end subroutine zero
+
+   !> Add an element's entries of B through its lists of destinations
+   !> (element_map): nb into the band storage ab, then nd into B_d, each
+   !> array taken in memory order.
+   pure subroutine scatter_entries(map, nb, nd, values, ab, bd)
+      integer, intent(in) :: map(2, element_entries), nb, nd
+      real(dp), intent(in) :: values(element_entries)
+      real(dp), intent(inout) :: ab(*), bd(*)
+      integer :: m
+      do m = 1, nb
+         ab(map(2, m)) = ab(map(2, m)) + values(map(1, m))
+      end do
+      do m = nb + 1, nb + nd
+         bd(map(2, m)) = bd(map(2, m)) + values(map(1, m))
+      end do
+   end subroutine scatter_entries
 
    !> Row `row` of B on the dofs `dofs` (0: none): free columns into the
    !> band, driven ones into B_d.
