@@ -9,14 +9,14 @@ module fekap_assembly_assemble
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type, slide_type
    use fekap_linalg_band, only: band_matrix_type
-   use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain, max_gauss
+   use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain, max_gauss, section_values
    use fekap_assembly_tracking, only: slide_position
    use fekap_contact_slideline, only: slide_force, slide_second_derivative, slide_tie_force, &
       & slide_tie_second_derivative
    implicit none
    private
 
-   public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain
+   public :: assemble_residual, assemble_residual_sections, assemble_tangent, assemble_second_derivative, max_strain
    public :: gather, scatter, scatter_element, subtract
 
 contains
@@ -45,6 +45,32 @@ contains
       call add_contact(mesh, q, seg, r)
    end subroutine assemble_residual
 
+   !> assemble_residual, keeping each element's sections at q in `section`
+   !> (as assemble_tangent's): the square-root form's B at the same q takes
+   !> their cosines and sines. A routine of its own, so that
+   !> assemble_residual (the dynamics' Newton) has no branch for it.
+   pure subroutine assemble_residual_sections(mesh, q, t, seg, r, section)
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q(:), t
+      integer, intent(in) :: seg(:)
+      real(dp), intent(out) :: r(:)
+      real(dp), intent(out) :: section(section_values, max_gauss, size(mesh%elements))
+      real(dp) :: pe(6), xe(6)
+      integer :: e, i
+      call mesh%loads%at(t, r)
+      r = -r
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+         end do
+         call beam_residual(mesh%elements(e), xe, pe, section=section(:, :, e))
+         do i = 1, 6
+            r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
+         end do
+      end do
+      call add_contact(mesh, q, seg, r)
+   end subroutine assemble_residual_sections
+
    !> Residual as assemble_residual, and the tangent dR/dq: free-free part into
    !> the band matrix (equation order), free-driven part into kfd(eq, drive).
    !> `geometric_above` leaves out the beams' geometric stiffness where they are
@@ -63,7 +89,7 @@ contains
       real(dp), intent(in), optional :: geometric_above
       real(dp), intent(out) :: strain
       integer, intent(out) :: element
-      real(dp), intent(out), optional :: section(2, max_gauss, size(mesh%elements))
+      real(dp), intent(out), optional :: section(section_values, max_gauss, size(mesh%elements))
       real(dp) :: pe(6), ke(6, 6), xe(6), s
       integer :: e, i
       call mesh%loads%at(t, r)
@@ -198,7 +224,7 @@ contains
       real(dp), intent(in) :: q(:), v(:)
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: d2(:)
-      real(dp), intent(in), optional :: section(2, max_gauss, size(mesh%elements))
+      real(dp), intent(in), optional :: section(section_values, max_gauss, size(mesh%elements))
       real(dp) :: de(6), xs(2), x1(2), x2(2), ve(6), vt(5), dt(5), xe(6)
       integer :: e, i, dofs(6), tdofs(5)
       d2 = 0

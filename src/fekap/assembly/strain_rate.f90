@@ -23,6 +23,7 @@
 !> of the cancellation of a global product: they are the residuals of the
 !> rates' refinement step.
 module fekap_assembly_strain_rate
+   use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type
@@ -227,7 +228,10 @@ contains
    !> the exact gradients of the strains (Newton's). With `strain`, the
    !> strains and gaps themselves by band rows (Newton's residual); with
    !> `largest`, the largest element strain (as beam_max_strain) and its element.
-   subroutine assemble_strain_rate(self, mesh, q, seg, stress_free, strain, largest, element)
+   !> `section`: the sections that the beams' assembly found at q
+   !> (assemble_residual's or assemble_tangent's), whose cosines and sines
+   !> serve where their angle is this one to the bit (section_of).
+   subroutine assemble_strain_rate(self, mesh, q, seg, stress_free, strain, largest, element, section)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: q(:)
@@ -236,6 +240,8 @@ contains
       real(dp), contiguous, intent(out), optional :: strain(:)
       real(dp), intent(out), optional :: largest
       integer, intent(out), optional :: element
+      !> (section_values, max_gauss, nelem): see above.
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
       real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, xs(2), x1(2)
       real(dp) :: worst, values(element_entries)
       integer :: e, i, k
@@ -251,8 +257,7 @@ contains
             end do
             rl = 1/el%length
             phi = el%angle + (xe(3) + xe(6))/2
-            c = cos(phi)
-            s = sin(phi)
+            call section_of(phi, e, c, s, section)
             self%section(:, e) = [c, s]
             a1 = (xe(4) - xe(1))*rl
             a2 = (xe(5) - xe(2))*rl
@@ -294,23 +299,48 @@ contains
    !> as assemble_strain_rate leaves it, without assembling B or touching
    !> its factor: their residuals at q with a factor made at a configuration
    !> round-off away (a Newton iterate that converged at its first correction).
-   subroutine rate_geometry_at(self, mesh, q, seg)
+   !> `section` as assemble_strain_rate's.
+   subroutine rate_geometry_at(self, mesh, q, seg, section)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: q(:)
       integer, intent(in) :: seg(:)
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
       real(dp) :: phi, xs(2), x1(2)
       integer :: e, i
       do e = 1, size(mesh%elements)
          associate (dofs => mesh%edof(:, e))
             phi = mesh%elements(e)%angle + (q(dofs(3)) + q(dofs(6)))/2
-            self%section(:, e) = [cos(phi), sin(phi)]
+            call section_of(phi, e, self%section(1, e), self%section(2, e), section)
          end associate
       end do
       do i = 1, size(mesh%slides)
          call slide_geometry(self, mesh, i, seg(i), q, xs, x1)
       end do
    end subroutine rate_geometry_at
+
+   !> cos(phi) and sin(phi) of element e's section angle phi: those of
+   !> `section` (section_values, max_gauss, nelem; the beams' assembly at
+   !> the same configuration) where its angle is phi to the bit, else
+   !> computed. The beam takes the angle at its Gauss point as theta0 + theta1/2
+   !> + theta2/2, rounded otherwise than (theta1 + theta2)/2 here in some
+   !> cases: those compute their own, so that B is the same to the bit.
+   pure subroutine section_of(phi, e, c, s, section)
+      real(dp), intent(in) :: phi
+      integer, intent(in) :: e
+      real(dp), intent(out) :: c, s
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
+      if (present(section)) then
+         ! The same bits (a signed zero included): the same cosine and sine.
+         if (transfer(section(3, 1, e), 1_int64) == transfer(phi, 1_int64)) then
+            c = section(1, 1, e)
+            s = section(2, 1, e)
+            return
+         end if
+      end if
+      c = cos(phi)
+      s = sin(phi)
+   end subroutine section_of
 
    !> Slideline i's gap geometry at q on its segment iseg: its dofs, its
    !> gradient N_s (61), T_s (63) and the master's unit normal and length, and

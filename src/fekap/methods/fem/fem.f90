@@ -390,7 +390,7 @@ contains
                if (self%root_form) then
                   call assemble_system(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
                   residual = residual_norm(system, mesh)
-                  call rate_geometry_at(self%root, mesh, qt, self%seg)
+                  call rate_geometry_at(self%root, mesh, qt, self%seg, system%section)
                end if
                exit verification
             end if
@@ -408,7 +408,7 @@ contains
                root_solved = .false.
                if (newton%by_estimate) call root_correction(self, qt, .true., correction, root_solved)
                if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
-                  call factor_root(self, qt, self%seg, info)
+                  call factor_root(self, qt, self%seg, info, system%section)
                   exit verification
                end if
             else
