@@ -10,13 +10,14 @@ module fekap_fem_linear_system
    use fekap_assembly_mesh, only: mesh_type
    use fekap_linalg_band, only: band_matrix_type, new_band_matrix
    use fekap_assembly_assemble, only: assemble_residual, assemble_residual_sections, assemble_tangent, &
-      & assemble_second_derivative
+      & assemble_drive_block, assemble_second_derivative
    use fekap_element_beam, only: max_gauss, section_values
    use fekap_stepping_stepper, only: clock_seconds
    implicit none
    private
 
    public :: linear_system_type, new_linear_system, assemble_system, assemble_system_residual, factor_system
+   public :: assemble_system_drive_block
    public :: system_pivot, residual_norm, newton_correction, apply_correction, drive_response, drive_load_rhs
    public :: solve_system, apply_response, assemble_second_derivative_at, system_rcond, phase_start, phase_end
 
@@ -86,6 +87,28 @@ contains
       counts%tangent_assemblies = counts%tangent_assemblies + 1
       counts%slideline_evaluations = counts%slideline_evaluations + size(mesh%slides)
    end subroutine assemble_system
+
+   !> The residual and, of the tangent, the free-driven block kfd alone at q
+   !> (assemble_drive_block), with the largest element strain and the
+   !> sections at q, as assemble_system leaves them; kff is left as it was
+   !> (not the tangent at q): the square-root form's need of K at a
+   !> configuration whose B_f it factors. Timed, and counted as a residual assembly.
+   subroutine assemble_system_drive_block(self, mesh, q, t, seg, geometric_above, counts)
+      type(linear_system_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: t, geometric_above
+      real(dp), contiguous, intent(in) :: q(:)
+      !> Master segment of each slideline.
+      integer, intent(in) :: seg(:)
+      type(work_counts_type), intent(inout) :: counts
+      real(dp) :: clock
+      clock = phase_start(self)
+      call assemble_drive_block(mesh, q, t, seg, self%r, self%kfd, geometric_above, self%assembled_strain, &
+         & self%assembled_element, self%section)
+      call phase_end(self, clock, counts%seconds_assembly)
+      counts%residual_assemblies = counts%residual_assemblies + 1
+      counts%slideline_evaluations = counts%slideline_evaluations + size(mesh%slides)
+   end subroutine assemble_system_drive_block
 
    !> The residual alone at q into r (with `sections`, the sections at q
    !> into residual_section), timed and counted.
