@@ -9,14 +9,15 @@ module fekap_assembly_assemble
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type, slide_type
    use fekap_linalg_band, only: band_matrix_type
-   use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain, max_gauss
+   use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain, max_gauss, section_values
    use fekap_assembly_tracking, only: slide_position
    use fekap_contact_slideline, only: slide_force, slide_second_derivative, slide_tie_force, &
       & slide_tie_second_derivative
    implicit none
    private
 
-   public :: assemble_residual, assemble_tangent, assemble_second_derivative, max_strain
+   public :: assemble_residual, assemble_residual_sections, assemble_tangent, assemble_drive_block
+   public :: assemble_second_derivative, max_strain
    public :: gather, scatter, scatter_element, subtract
 
 contains
@@ -45,6 +46,32 @@ contains
       call add_contact(mesh, q, seg, r)
    end subroutine assemble_residual
 
+   !> assemble_residual, keeping each element's sections at q in `section`
+   !> (as assemble_tangent's): the square-root form's B at the same q takes
+   !> their cosines and sines. A routine of its own, so that
+   !> assemble_residual (the dynamics' Newton) has no branch for it.
+   pure subroutine assemble_residual_sections(mesh, q, t, seg, r, section)
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: q(:), t
+      integer, intent(in) :: seg(:)
+      real(dp), intent(out) :: r(:)
+      real(dp), intent(out) :: section(section_values, max_gauss, size(mesh%elements))
+      real(dp) :: pe(6), xe(6)
+      integer :: e, i
+      call mesh%loads%at(t, r)
+      r = -r
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+         end do
+         call beam_residual(mesh%elements(e), xe, pe, section=section(:, :, e))
+         do i = 1, 6
+            r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
+         end do
+      end do
+      call add_contact(mesh, q, seg, r)
+   end subroutine assemble_residual_sections
+
    !> Residual as assemble_residual, and the tangent dR/dq: free-free part into
    !> the band matrix (equation order), free-driven part into kfd(eq, drive).
    !> `geometric_above` leaves out the beams' geometric stiffness where they are
@@ -63,7 +90,7 @@ contains
       real(dp), intent(in), optional :: geometric_above
       real(dp), intent(out) :: strain
       integer, intent(out) :: element
-      real(dp), intent(out), optional :: section(2, max_gauss, size(mesh%elements))
+      real(dp), intent(out), optional :: section(section_values, max_gauss, size(mesh%elements))
       real(dp) :: pe(6), ke(6, 6), xe(6), s
       integer :: e, i
       call mesh%loads%at(t, r)
@@ -93,6 +120,65 @@ contains
       end do
       call add_contact(mesh, q, seg, r, kff, kfd)
    end subroutine assemble_tangent
+
+   !> The residual as assemble_tangent's and, of the tangent, the free-driven
+   !> block kfd alone: an element's tangent only where it has entries there
+   !> (mesh%scatter_count(2, e) > 0), the same sums in the same order as
+   !> assemble_tangent's kfd. What the square-root form needs of K at a
+   !> configuration whose B_f it factors (K_fd scales the next step's
+   !> residual test); `strain`, `element` and `section` as assemble_tangent's.
+   pure subroutine assemble_drive_block(mesh, q, t, seg, r, kfd, geometric_above, strain, element, section)
+      type(mesh_type), intent(in) :: mesh
+      !> The configuration and the time (of the loads).
+      real(dp), intent(in) :: q(:), t
+      integer, intent(in) :: seg(:)
+      real(dp), intent(out) :: r(:)
+      real(dp), contiguous, intent(out) :: kfd(:, :)
+      real(dp), intent(in) :: geometric_above
+      real(dp), intent(out) :: strain
+      integer, intent(out) :: element
+      real(dp), intent(out) :: section(section_values, max_gauss, size(mesh%elements))
+      real(dp) :: pe(6), ke(6, 6), xe(6), s
+      integer :: e, i
+      call mesh%loads%at(t, r)
+      r = -r
+      kfd = 0
+      strain = 0
+      element = 0
+      do e = 1, size(mesh%elements)
+         do i = 1, 6
+            xe(i) = q(mesh%edof(i, e))
+         end do
+         if (mesh%scatter_count(2, e) > 0) then
+            call beam_residual(mesh%elements(e), xe, pe, ke, geometric_above, s, section(:, :, e))
+         else
+            call beam_residual(mesh%elements(e), xe, pe, strain=s, section=section(:, :, e))
+         end if
+         if (s > strain .or. element == 0) then
+            strain = s
+            element = e
+         end if
+         do i = 1, 6
+            r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
+         end do
+         if (mesh%scatter_count(2, e) > 0) then
+            call scatter_element_driven(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), &
+               & mesh%scatter_count(2, e), ke, kfd)
+         end if
+      end do
+      call add_contact(mesh, q, seg, r, kfd=kfd)
+   end subroutine assemble_drive_block
+
+   !> scatter_element's free-driven entries alone.
+   pure subroutine scatter_element_driven(map, nb, nd, ke, driven)
+      integer, intent(in) :: map(2, 36), nb, nd
+      real(dp), intent(in) :: ke(36)
+      real(dp), intent(inout) :: driven(*)
+      integer :: m
+      do m = nb + 1, nb + nd
+         driven(map(2, m)) = driven(map(2, m)) + ke(map(1, m))
+      end do
+   end subroutine scatter_element_driven
 
    !> Add an element tangent through its precomputed lists of destinations
    !> (see mesh_type%scatter_map): nb entries into the band storage, then nd
@@ -146,7 +232,8 @@ contains
    end subroutine scatter
 
    !> r -= F^c and, when given, K -= K^c: the gap springs (65), (72) and the
-   !> rotational ties of prismatic joints.
+   !> rotational ties of prismatic joints. With kfd alone, its part of K^c
+   !> alone (scatter_driven).
    pure subroutine add_contact(mesh, q, seg, r, kff, kfd)
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: q(:)
@@ -162,6 +249,9 @@ contains
             if (present(kff)) then
                call slide_force(xs, x1, x2, sl%kp, f, k)
                call scatter(mesh, dofs, -k, kff, kfd)
+            else if (present(kfd)) then
+               call slide_force(xs, x1, x2, sl%kp, f, k)
+               call scatter_driven(mesh, dofs, -k, kfd)
             else
                call slide_force(xs, x1, x2, sl%kp, f)
             end if
@@ -171,6 +261,9 @@ contains
                if (present(kff)) then
                   call slide_tie_force(q(sl%slave_rot), x1, x2, sl%c0(seg(i)), sl%kr, ft, kt)
                   call scatter(mesh, tdofs, -kt, kff, kfd)
+               else if (present(kfd)) then
+                  call slide_tie_force(q(sl%slave_rot), x1, x2, sl%c0(seg(i)), sl%kr, ft, kt)
+                  call scatter_driven(mesh, tdofs, -kt, kfd)
                else
                   call slide_tie_force(q(sl%slave_rot), x1, x2, sl%c0(seg(i)), sl%kr, ft)
                end if
@@ -179,6 +272,27 @@ contains
          end associate
       end do
    end subroutine add_contact
+
+   !> scatter's free-driven entries alone: ke on the dofs `dofs` (0: none)
+   !> into kfd, in scatter's order.
+   pure subroutine scatter_driven(mesh, dofs, ke, kfd)
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: dofs(:)
+      real(dp), intent(in) :: ke(:, :)
+      real(dp), intent(inout) :: kfd(:, :)
+      integer :: i, j, ei, dj
+      do j = 1, size(dofs)
+         dj = dofs(j)
+         if (dj == 0) cycle
+         if (mesh%eq(dj) > 0 .or. mesh%drive_col(dj) <= 0) cycle
+         do i = 1, size(dofs)
+            if (dofs(i) == 0) cycle
+            ei = mesh%eq(dofs(i))
+            if (ei == 0) cycle
+            kfd(ei, mesh%drive_col(dj)) = kfd(ei, mesh%drive_col(dj)) + ke(i, j)
+         end do
+      end do
+   end subroutine scatter_driven
 
    !> r(dofs) -= f, skipping absent dofs.
    pure subroutine subtract(r, dofs, f)
@@ -198,7 +312,7 @@ contains
       real(dp), intent(in) :: q(:), v(:)
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: d2(:)
-      real(dp), intent(in), optional :: section(2, max_gauss, size(mesh%elements))
+      real(dp), intent(in), optional :: section(section_values, max_gauss, size(mesh%elements))
       real(dp) :: de(6), xs(2), x1(2), x2(2), ve(6), vt(5), dt(5), xe(6)
       integer :: e, i, dofs(6), tdofs(5)
       d2 = 0

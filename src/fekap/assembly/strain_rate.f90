@@ -23,6 +23,7 @@
 !> of the cancellation of a global product: they are the residuals of the
 !> rates' refinement step.
 module fekap_assembly_strain_rate
+   use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type
@@ -34,6 +35,13 @@ module fekap_assembly_strain_rate
 
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
    public :: strain_rates, strain_accelerations, strain_rate_rcond, rate_geometry_at
+
+   !> Entries of an element's rows of B: Gamma1 and Gamma2 on the six dofs
+   !> (x1, y1, theta1, x2, y2, theta2), kappa L on theta1 and theta2.
+   integer, parameter :: element_entries = 14
+   !> The dof (1 to 6) and the row (1 to 3) of each of the element's entries.
+   integer, parameter :: entry_dof(element_entries) = [1, 2, 3, 4, 5, 6, 1, 2, 3, 4, 5, 6, 3, 6]
+   integer, parameter :: entry_row(element_entries) = [1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 3, 3]
 
    !> B_f of a mesh, in band storage, and its factor.
    type :: strain_rate_type
@@ -48,6 +56,13 @@ module fekap_assembly_strain_rate
       integer, allocatable :: element_row(:, :)
       !> (nslide): band row of each slideline's gap.
       integer, allocatable :: slide_row(:)
+      !> (2, element_entries, nelem): where each element's entries of B go,
+      !> as mesh_type%scatter_map for K: pairs (entry of element_values' list,
+      !> place in ab taken as one array), element_count(1, e) of them, then
+      !> element_count(2, e) pairs (entry, place in bd); fixed dofs have none.
+      integer, allocatable :: element_map(:, :, :)
+      !> (2, nelem): the lengths of the two lists of element_map.
+      integer, allocatable :: element_count(:, :)
       !> (2 kl + ku + 1, n): B_f as dgbtrf stores it, then its LU factor.
       real(dp), allocatable :: ab(:, :)
       integer, allocatable :: ipiv(:)
@@ -156,8 +171,42 @@ contains
       allocate (self%section(2, nelem), self%slide_ns(6, nslide), self%slide_ts(6, nslide), &
          & self%slide_nm(3, nslide), source=0.0_dp)
       allocate (self%slide_dofs(6, nslide), source=0)
+      call build_element_map(self, mesh)
       self%applies = .true.
    end subroutine new_strain_rate
+
+   !> The destinations of the elements' entries of B (element_map), from the
+   !> band rows of their strains and the dofs' equations, once: the
+   !> assembly of each iteration then adds each entry with one index.
+   pure subroutine build_element_map(self, mesh)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer :: band(2, element_entries), driven(2, element_entries), nb, nd, e, m, dof, eq, row, ldab
+      ldab = size(self%ab, 1)
+      allocate (self%element_map(2, element_entries, size(mesh%elements)), source=0)
+      allocate (self%element_count(2, size(mesh%elements)), source=0)
+      do e = 1, size(mesh%elements)
+         nb = 0
+         nd = 0
+         do m = 1, element_entries
+            dof = mesh%edof(entry_dof(m), e)
+            if (dof == 0) cycle
+            row = self%element_row(entry_row(m), e)
+            eq = mesh%eq(dof)
+            if (eq > 0) then
+               ! ab(kl + ku + 1 + row - eq, eq), as scatter_row puts it.
+               nb = nb + 1
+               band(:, nb) = [m, self%kl + self%ku + 1 + row - eq + (eq - 1)*ldab]
+            else if (mesh%drive_col(dof) > 0) then
+               nd = nd + 1
+               driven(:, nd) = [m, row + (mesh%drive_col(dof) - 1)*self%n]
+            end if
+         end do
+         self%element_map(:, 1:nb, e) = band(:, 1:nb)
+         self%element_map(:, nb + 1:nb + nd, e) = driven(:, 1:nd)
+         self%element_count(:, e) = [nb, nd]
+      end do
+   end subroutine build_element_map
 
    !> The dofs of slideline i on its segment k (0 for a ground guide's points).
    pure subroutine slide_dofs_of(mesh, i, k, dofs)
@@ -179,7 +228,10 @@ contains
    !> the exact gradients of the strains (Newton's). With `strain`, the
    !> strains and gaps themselves by band rows (Newton's residual); with
    !> `largest`, the largest element strain (as beam_max_strain) and its element.
-   subroutine assemble_strain_rate(self, mesh, q, seg, stress_free, strain, largest, element)
+   !> `section`: the sections that the beams' assembly found at q
+   !> (assemble_residual's or assemble_tangent's), whose cosines and sines
+   !> serve where their angle is this one to the bit (section_of).
+   subroutine assemble_strain_rate(self, mesh, q, seg, stress_free, strain, largest, element, section)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: q(:)
@@ -188,11 +240,13 @@ contains
       real(dp), contiguous, intent(out), optional :: strain(:)
       real(dp), intent(out), optional :: largest
       integer, intent(out), optional :: element
-      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, row(6, 2), xs(2), x1(2)
-      real(dp) :: worst
-      integer :: e, i, k, r
-      self%ab = 0
-      self%bd = 0
+      !> (section_values, max_gauss, nelem): see above.
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
+      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, xs(2), x1(2)
+      real(dp) :: worst, values(element_entries)
+      integer :: e, i, k
+      call zero(self%ab, size(self%ab))
+      call zero(self%bd, size(self%bd))
       self%factored = .false.
       if (present(largest)) largest = 0
       if (present(element)) element = 0
@@ -203,8 +257,7 @@ contains
             end do
             rl = 1/el%length
             phi = el%angle + (xe(3) + xe(6))/2
-            c = cos(phi)
-            s = sin(phi)
+            call section_of(phi, e, c, s, section)
             self%section(:, e) = [c, s]
             a1 = (xe(4) - xe(1))*rl
             a2 = (xe(5) - xe(2))*rl
@@ -226,14 +279,12 @@ contains
                g1 = 0
                g2 = 0
             end if
-            ! Gradients of Gamma1, Gamma2 and kappa L in (x1, y1, theta1, x2, y2, theta2).
-            row(:, 1) = [-c*rl, -s*rl, g2/2, c*rl, s*rl, g2/2]
-            row(:, 2) = [s*rl, -c*rl, -(1 + g1)/2, -s*rl, c*rl, -(1 + g1)/2]
-            do r = 1, 2
-               call scatter_row(self, mesh, rows(r), dofs, row(:, r))
-            end do
-            ! kappa L on the rotations only (its band bounds were found so).
-            call scatter_row(self, mesh, rows(3), dofs([3, 6]), [-1.0_dp, 1.0_dp])
+            ! Gradients of Gamma1, Gamma2 in (x1, y1, theta1, x2, y2, theta2),
+            ! and of kappa L on the rotations only (its band bounds were found so).
+            values = [-c*rl, -s*rl, g2/2, c*rl, s*rl, g2/2, &
+               & s*rl, -c*rl, -(1 + g1)/2, -s*rl, c*rl, -(1 + g1)/2, -1.0_dp, 1.0_dp]
+            call scatter_entries(self%element_map(:, :, e), self%element_count(1, e), self%element_count(2, e), &
+               & values, self%ab, self%bd)
          end associate
       end do
       do i = 1, size(mesh%slides)
@@ -248,23 +299,48 @@ contains
    !> as assemble_strain_rate leaves it, without assembling B or touching
    !> its factor: their residuals at q with a factor made at a configuration
    !> round-off away (a Newton iterate that converged at its first correction).
-   subroutine rate_geometry_at(self, mesh, q, seg)
+   !> `section` as assemble_strain_rate's.
+   subroutine rate_geometry_at(self, mesh, q, seg, section)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: q(:)
       integer, intent(in) :: seg(:)
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
       real(dp) :: phi, xs(2), x1(2)
       integer :: e, i
       do e = 1, size(mesh%elements)
          associate (dofs => mesh%edof(:, e))
             phi = mesh%elements(e)%angle + (q(dofs(3)) + q(dofs(6)))/2
-            self%section(:, e) = [cos(phi), sin(phi)]
+            call section_of(phi, e, self%section(1, e), self%section(2, e), section)
          end associate
       end do
       do i = 1, size(mesh%slides)
          call slide_geometry(self, mesh, i, seg(i), q, xs, x1)
       end do
    end subroutine rate_geometry_at
+
+   !> cos(phi) and sin(phi) of element e's section angle phi: those of
+   !> `section` (section_values, max_gauss, nelem; the beams' assembly at
+   !> the same configuration) where its angle is phi to the bit, else
+   !> computed. The beam takes the angle at its Gauss point as theta0 + theta1/2
+   !> + theta2/2, rounded otherwise than (theta1 + theta2)/2 here in some
+   !> cases: those compute their own, so that B is the same to the bit.
+   pure subroutine section_of(phi, e, c, s, section)
+      real(dp), intent(in) :: phi
+      integer, intent(in) :: e
+      real(dp), intent(out) :: c, s
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
+      if (present(section)) then
+         ! The same bits (a signed zero included): the same cosine and sine.
+         if (transfer(section(3, 1, e), 1_int64) == transfer(phi, 1_int64)) then
+            c = section(1, 1, e)
+            s = section(2, 1, e)
+            return
+         end if
+      end if
+      c = cos(phi)
+      s = sin(phi)
+   end subroutine section_of
 
    !> Slideline i's gap geometry at q on its segment iseg: its dofs, its
    !> gradient N_s (61), T_s (63) and the master's unit normal and length, and
@@ -286,6 +362,30 @@ contains
       self%slide_ts(:, i) = [t, -(1 - alpha)*t, -alpha*t]
       self%slide_nm(:, i) = [nrm, s1]
    end subroutine slide_geometry
+
+   !> a(1:n) = 0 as one block (an assignment to a two-dimensional component
+   !> sets each column apart, a call each).
+   pure subroutine zero(a, n)
+      integer, intent(in) :: n
+      real(dp), intent(out) :: a(n)
+      a = 0
+   end subroutine zero
+
+   !> Add an element's entries of B through its lists of destinations
+   !> (element_map): nb into the band storage ab, then nd into B_d, each
+   !> array taken in memory order.
+   pure subroutine scatter_entries(map, nb, nd, values, ab, bd)
+      integer, intent(in) :: map(2, element_entries), nb, nd
+      real(dp), intent(in) :: values(element_entries)
+      real(dp), intent(inout) :: ab(*), bd(*)
+      integer :: m
+      do m = 1, nb
+         ab(map(2, m)) = ab(map(2, m)) + values(map(1, m))
+      end do
+      do m = nb + 1, nb + nd
+         bd(map(2, m)) = bd(map(2, m)) + values(map(1, m))
+      end do
+   end subroutine scatter_entries
 
    !> Row `row` of B on the dofs `dofs` (0: none): free columns into the
    !> band, driven ones into B_d.

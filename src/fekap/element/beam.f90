@@ -23,6 +23,10 @@ module fekap_element_beam
 
    !> Most Gauss points of an element (see beam_type%ngauss).
    integer, parameter, public :: max_gauss = 2
+   !> What beam_residual keeps of a section (its `section`): the cosine and
+   !> sine of its angle, and the angle itself (to tell whether another
+   !> evaluation at the same angle can take them; the square-root form's B).
+   integer, parameter, public :: section_values = 3
 
    !> Immutable definition of one element.
    type :: beam_type
@@ -72,12 +76,21 @@ contains
       real(dp), intent(in) :: xe(6), n1, n2, rl
       real(dp), intent(out) :: c, s, g1, g2
       real(dp) :: phi
+      call gauss_strain(self, xe, n1, n2, rl, c, s, g1, g2, phi)
+   end subroutine point_strain
+
+   !> point_strain with the angle phi, private so that this module's kernels
+   !> inline it (the release build's -fPIC keeps public procedures out of line).
+   pure subroutine gauss_strain(self, xe, n1, n2, rl, c, s, g1, g2, phi)
+      type(beam_type), intent(in) :: self
+      real(dp), intent(in) :: xe(6), n1, n2, rl
+      real(dp), intent(out) :: c, s, g1, g2, phi
       phi = self%angle + n1*xe(3) + n2*xe(6)
       ! One sincos call: the compiler pairs cos and sin of the same argument.
       c = cos(phi)
       s = sin(phi)
       call section_strain(xe, rl, c, s, g1, g2)
-   end subroutine point_strain
+   end subroutine gauss_strain
 
    !> The strains Gamma1, Gamma2 (27) of a section whose angle has cosine c
    !> and sine s (known from an earlier evaluation at the same xe).
@@ -117,10 +130,10 @@ contains
       real(dp), intent(in), optional :: geometric_above
       !> The largest strain, as beam_max_strain (a by-product of the Gauss points).
       real(dp), intent(out), optional :: strain
-      !> cos and sin of the section angle at each Gauss point, for
-      !> beam_second_derivative at the same xe.
-      real(dp), intent(out), optional :: section(2, max_gauss)
-      real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, fx, fy, fm, fk
+      !> cos and sin of the section angle and the angle at each Gauss point,
+      !> for beam_second_derivative at the same xe (see section_values).
+      real(dp), intent(out), optional :: section(section_values, max_gauss)
+      real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, fx, fy, fm, fk, phi
       real(dp) :: g13, g23, g33, kg_strain, ea, ga, ca, cb, m11, m12, m22, hx, hy, r
       real(dp) :: th(2, 2), rr(3), ei
       integer :: ig
@@ -144,9 +157,9 @@ contains
          wl = w*self%length/2
          n1 = (1 - xi)/2
          n2 = (1 + xi)/2
-         call point_strain(self, xe, n1, n2, rl, c, s, g1, g2)     ! (27)
+         call gauss_strain(self, xe, n1, n2, rl, c, s, g1, g2, phi)     ! (27)
          if (present(strain)) strain = max(strain, abs(g1), abs(g2))
-         if (present(section)) section(:, ig) = [c, s]
+         if (present(section)) section(:, ig) = [c, s, phi]
          sp = ea*g1                                                ! (30)
          sv = ga*g2
          sm = self%ei*kap
@@ -230,7 +243,7 @@ contains
       real(dp), intent(out) :: d2p(6)
       !> cos and sin of the section angles at xe, from beam_residual: spares
       !> their evaluation (a third of the sincos calls of a step).
-      real(dp), intent(in), optional :: section(2, max_gauss)
+      real(dp), intent(in), optional :: section(section_values, max_gauss)
       real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, rl, vw1, vw2, vp, d1, d2, vp2
       real(dp) :: sp, sv, gv1, gv2, q1, q2, y(3)
       integer :: ig

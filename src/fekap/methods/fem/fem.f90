@@ -28,8 +28,8 @@ module fekap_fem
    use fekap_stepping_stepper, only: stepper_type, clock_seconds, phase_timed
    use fekap_fem_setup, only: start_configuration
    use fekap_fem_convergence, only: estimate_margin
-   use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, factor_system, residual_norm, &
-      & newton_correction
+   use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, assemble_system_drive_block, &
+      & factor_system, residual_norm, newton_correction
    use fekap_stepping_newton, only: newton_contract_type, newton_report_type, always_refactor_type, newton_solve, &
       & stop_spent, stop_diverged, stop_singular, stop_at_floor
    use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
@@ -383,14 +383,14 @@ contains
             if (self%loaded) exit verification
             if (newton%at_predictor) then
                ! The factor at the predictor serves (fem_correct). The square-root
-               ! form took its correction, of round-off size: K (its free-driven
-               ! block is the next step's residual scale) and the residual are
+               ! form took its correction, of round-off size: K's free-driven
+               ! block (the next step's residual scale) and the residual are
                ! assembled at the corrected configuration, as below, and the
                ! rates' residuals are taken there (rate_geometry_at).
                if (self%root_form) then
-                  call assemble_system(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
+                  call assemble_system_drive_block(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
                   residual = residual_norm(system, mesh)
-                  call rate_geometry_at(self%root, mesh, qt, self%seg)
+                  call rate_geometry_at(self%root, mesh, qt, self%seg, system%section)
                end if
                exit verification
             end if
@@ -399,7 +399,13 @@ contains
             ! accepted, the rates' tangent. The last Newton factor, one correction
             ! away, would give rates off by that correction times the ratio of
             ! axial to bending stiffness (EA L^2 / EI; docs/performance.md).
-            call assemble_system(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
+            ! The square-root form factors B_f instead and needs of K its
+            ! free-driven block alone (the next step's residual scale).
+            if (self%root_form) then
+               call assemble_system_drive_block(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
+            else
+               call assemble_system(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
+            end if
             ! The residual reported for the step is the one at the accepted configuration.
             residual = residual_norm(system, mesh)
             if (self%root_form) then
@@ -408,7 +414,7 @@ contains
                root_solved = .false.
                if (newton%by_estimate) call root_correction(self, qt, .true., correction, root_solved)
                if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
-                  call factor_root(self, qt, self%seg, info)
+                  call factor_root(self, qt, self%seg, info, system%section)
                   exit verification
                end if
             else

@@ -37,7 +37,7 @@ contains
       call assemble_system(self%system, self%mesh, self%state%q, self%state%t, self%seg, &
          & merge(0.0_dp, huge(1.0_dp), self%loaded), self%counts)
       if (self%root_form) then
-         call factor_root(self, self%state%q, self%state%seg, info)
+         call factor_root(self, self%state%q, self%state%seg, info, self%system%section)
       else
          call factor_system(self%system, info, self%counts)
       end if
@@ -60,9 +60,9 @@ contains
          call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
          return
       end if
-      call assemble_system_residual(self%system, self%mesh, qt, t, self%seg, self%counts)
+      call assemble_system_residual(self%system, self%mesh, qt, t, self%seg, self%counts, sections=.true.)
       call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work, &
-         & self%system%assembled_strain, self%system%assembled_element)
+         & self%system%assembled_strain, self%system%assembled_element, self%system%residual_section)
       if (self%system%assembled_strain >= kg_above) then
          call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
       end if
@@ -95,12 +95,15 @@ contains
 
    !> Assemble and factor the stress-free B at q (slidelines on seg): the
    !> square-root form's factor at a configuration; info > 0 if B_f is singular there.
-   subroutine factor_root(self, q, seg, info)
+   !> `section`: the sections at q of the system's last assembly there
+   !> (assemble_strain_rate's).
+   subroutine factor_root(self, q, seg, info, section)
       class(fem_core_type), intent(inout) :: self
       real(dp), contiguous, intent(in) :: q(:)
       integer, intent(in) :: seg(:)
       integer, intent(out) :: info
-      call assemble_strain_rate(self%root, self%mesh, q, seg, .true.)
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
+      call assemble_strain_rate(self%root, self%mesh, q, seg, .true., section=section)
       call timed_root_factor(self, info)
    end subroutine factor_root
 
@@ -166,7 +169,7 @@ contains
       rcond = 0
       if (self%root_form) then
          ! On the scale of the run's best, which is B_f's in the square-root form.
-         call factor_root(self, q, self%seg, root_info)
+         call factor_root(self, q, self%seg, root_info, self%system%section)
          if (root_info == 0) call strain_rate_rcond(self%root, rcond)
       else if (info == 0) then
          call system_rcond(self%system, rcond, self%counts)

@@ -9,13 +9,15 @@ module fekap_fem_linear_system
    use fekap_model_work, only: work_counts_type
    use fekap_assembly_mesh, only: mesh_type
    use fekap_linalg_band, only: band_matrix_type, new_band_matrix
-   use fekap_assembly_assemble, only: assemble_residual, assemble_tangent, assemble_second_derivative
-   use fekap_element_beam, only: max_gauss
+   use fekap_assembly_assemble, only: assemble_residual, assemble_residual_sections, assemble_tangent, &
+      & assemble_drive_block, assemble_second_derivative
+   use fekap_element_beam, only: max_gauss, section_values
    use fekap_stepping_stepper, only: clock_seconds
    implicit none
    private
 
    public :: linear_system_type, new_linear_system, assemble_system, assemble_system_residual, factor_system
+   public :: assemble_system_drive_block
    public :: system_pivot, residual_norm, newton_correction, apply_correction, drive_response, drive_load_rhs
    public :: solve_system, apply_response, assemble_second_derivative_at, system_rcond, phase_start, phase_end
 
@@ -33,10 +35,15 @@ module fekap_fem_linear_system
       !> assembly, and its element.
       real(dp) :: assembled_strain = 0
       integer :: assembled_element = 0
-      !> (2, max_gauss, nelem): cos and sin of the elements' section angles at
-      !> the configuration of the last tangent assembly, for the second
-      !> derivative of the rates (see assemble_second_derivative).
+      !> (section_values, max_gauss, nelem): cos and sin of the elements'
+      !> section angles, and the angles, at the configuration of the last
+      !> tangent assembly, for the second derivative of the rates (see
+      !> assemble_second_derivative) and the square-root form's B there.
       real(dp), allocatable :: section(:, :, :)
+      !> The same at the configuration of the last residual assembly that
+      !> asked for them (assemble_system_residual's `sections`), for the
+      !> square-root form's B there.
+      real(dp), allocatable :: residual_section(:, :, :)
       !> Pivot ratio of the factor in kff, once computed (see system_pivot).
       real(dp) :: pivot = 0
       logical :: pivot_known = .false.
@@ -57,7 +64,8 @@ contains
       call new_band_matrix(self%kff, mesh%nfree, mesh%kd, dense=dense, top=mesh%envelope)
       allocate (self%kfd(mesh%nfree, mesh%ndriven), self%rhs(mesh%nfree, 1), source=0.0_dp)
       allocate (self%r(mesh%ndof), source=0.0_dp)
-      allocate (self%section(2, max_gauss, size(mesh%elements)), source=0.0_dp)
+      allocate (self%section(section_values, max_gauss, size(mesh%elements)), source=0.0_dp)
+      allocate (self%residual_section(section_values, max_gauss, size(mesh%elements)), source=0.0_dp)
    end subroutine new_linear_system
 
    !> Residual and tangent at q (geometric stiffness where strained above
@@ -80,17 +88,48 @@ contains
       counts%slideline_evaluations = counts%slideline_evaluations + size(mesh%slides)
    end subroutine assemble_system
 
-   !> The residual alone at q into r, timed and counted.
-   subroutine assemble_system_residual(self, mesh, q, t, seg, counts)
+   !> The residual and, of the tangent, the free-driven block kfd alone at q
+   !> (assemble_drive_block), with the largest element strain and the
+   !> sections at q, as assemble_system leaves them; kff is left as it was
+   !> (not the tangent at q): the square-root form's need of K at a
+   !> configuration whose B_f it factors. Timed, and counted as a residual assembly.
+   subroutine assemble_system_drive_block(self, mesh, q, t, seg, geometric_above, counts)
+      type(linear_system_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), intent(in) :: t, geometric_above
+      real(dp), contiguous, intent(in) :: q(:)
+      !> Master segment of each slideline.
+      integer, intent(in) :: seg(:)
+      type(work_counts_type), intent(inout) :: counts
+      real(dp) :: clock
+      clock = phase_start(self)
+      call assemble_drive_block(mesh, q, t, seg, self%r, self%kfd, geometric_above, self%assembled_strain, &
+         & self%assembled_element, self%section)
+      call phase_end(self, clock, counts%seconds_assembly)
+      counts%residual_assemblies = counts%residual_assemblies + 1
+      counts%slideline_evaluations = counts%slideline_evaluations + size(mesh%slides)
+   end subroutine assemble_system_drive_block
+
+   !> The residual alone at q into r (with `sections`, the sections at q
+   !> into residual_section), timed and counted.
+   subroutine assemble_system_residual(self, mesh, q, t, seg, counts, sections)
       type(linear_system_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       real(dp), intent(in) :: t
       real(dp), contiguous, intent(in) :: q(:)
       integer, intent(in) :: seg(:)
       type(work_counts_type), intent(inout) :: counts
+      logical, intent(in), optional :: sections
       real(dp) :: clock
+      logical :: keep
       clock = phase_start(self)
-      call assemble_residual(mesh, q, t, seg, self%r)
+      keep = .false.
+      if (present(sections)) keep = sections
+      if (keep) then
+         call assemble_residual_sections(mesh, q, t, seg, self%r, self%residual_section)
+      else
+         call assemble_residual(mesh, q, t, seg, self%r)
+      end if
       call phase_end(self, clock, counts%seconds_assembly)
       counts%residual_assemblies = counts%residual_assemblies + 1
       counts%slideline_evaluations = counts%slideline_evaluations + size(mesh%slides)
