@@ -37,9 +37,6 @@ KNOWN_FAILURES = {
     "a02-n2-dt0p01": {"run": NO_CHANGE_POINTS},
     "a02-n4-dt0p025": {"run": NO_CHANGE_POINTS},
     "a02-n40-dt0p05": {"run": NO_CHANGE_POINTS},
-    "scissor-10": {"rates": "the spatial rate solve squares the condition number (K = B^T k B, no square-root "
-                            "form): velocities 1.2e-10 and accelerations 1.6e-10 of the largest off the closed "
-                            "form, where the planar run is within 2e-14"},
     "peaucellier-flat": {"run": "the spatial stepper has no change-point handling, and its predictor (the motion's "
                                 "third and fourth rates) carries the step at t = 0.5, 0.013 degrees from the flat "
                                 "bifurcation, where Newton fails even with 8 step cuts (exit 3)",
@@ -50,8 +47,8 @@ KNOWN_FAILURES = {
                                  "other assembly branch (C at y = -3.87 instead of 3.87); the planar FEM's check "
                                  "cuts that step"},
 }
-# The dense LU of the spatial stepper takes minutes on its 2,000 dofs (no band solver yet).
-TOO_SLOW = {"scissor-100"}
+# Decks whose spatial run takes too long for the suite (none since the band solver).
+TOO_SLOW: set[str] = set()
 
 
 def planar_decks() -> list[str]:

@@ -19,7 +19,7 @@ module fekap_spatial_kinematics
    use fekap_kinds, only: dp
    use fekap_vectors, only: cross
    use fekap_error, only: error_type, analysis_error
-   use fekap_linalg_lapack, only: dense_lu_factor, dense_lu_solve
+   use fekap_spatial_tangent, only: spatial_tangent_type, new_spatial_tangent
    use fekap_element_se3, only: so3_exp, so3_update
    use fekap_element_se3_beam, only: se3_beam_residual, se3_beam_convective, truss_residual, truss_convective
    use fekap_spatial_mechanism, only: spatial_mechanism_type, point_free, point_line, frame_free, frame_revolute, &
@@ -29,7 +29,7 @@ module fekap_spatial_kinematics
 
    public :: spatial_state_type, new_spatial_state, spatial_configuration_type, configure, frame_curvature
    public :: assemble_spatial, set_drives, update_state, spatial_newton, spatial_rates, spatial_report_type
-   public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular
+   public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular, tangent_for
 
    !> Where a mechanism is: its generalized dofs and its free frames' rotations.
    type :: spatial_state_type
@@ -44,6 +44,10 @@ module fekap_spatial_kinematics
    type :: spatial_configuration_type
       real(dp), allocatable :: x(:, :), g(:, :, :)
       real(dp), allocatable :: r(:, :, :), w(:, :, :)
+      !> The dofs that G of point i depends on, point_dofs(point_start(i):
+      !> point_start(i + 1) - 1), and those of W of frame i (its own and its
+      !> parent's): the other columns of G and W are zero.
+      integer, allocatable :: point_start(:), point_dofs(:), frame_start(:), frame_dofs(:)
    end type spatial_configuration_type
 
    !> The outcome of one Newton solve.
@@ -53,6 +57,11 @@ module fekap_spatial_kinematics
       real(dp) :: correction = 0
       logical :: converged = .false.
    end type spatial_report_type
+
+   !> Refinement steps of each rate solve (spatial_rates_factored): one takes
+   !> the normal equations' error, of order kappa(K) eps = kappa(k^1/2 B)^2 eps,
+   !> to kappa(k^1/2 B) eps plus its square.
+   integer, parameter :: rate_refinements = 1
 
 contains
 
@@ -94,11 +103,12 @@ contains
       type(spatial_mechanism_type), intent(in) :: m
       type(spatial_state_type), intent(in) :: s
       type(spatial_configuration_type), intent(out) :: c
-      real(dp) :: rp(3, 3), wp(3, m%ndof), e1(3, 3), e2(3, 3)
+      real(dp) :: rp(3, 3), e1(3, 3), e2(3, 3)
       integer :: i, k, np, nf
       np = size(m%points)
       nf = size(s%r, 3)
       allocate (c%x(3, np), c%g(3, m%ndof, np), c%r(3, 3, nf), c%w(3, m%ndof, nf), source=0.0_dp)
+      call dof_supports(m, c)
       do i = 1, np
          associate (p => m%points(i))
             select case (p%kind)
@@ -117,7 +127,11 @@ contains
       end do
       do i = 1, nf
          associate (f => m%frames(i))
-            call parent_of(f%parent, rp, wp)
+            rp = 0
+            do k = 1, 3
+               rp(k, k) = 1
+            end do
+            if (f%parent > 0) rp = c%r(:, :, f%parent)
             select case (f%kind)
             case (frame_free)
                c%r(:, :, i) = s%r(:, :, i)
@@ -127,13 +141,13 @@ contains
             case (frame_revolute)
                e1 = so3_exp(s%q(f%dof)*f%axis)
                c%r(:, :, i) = matmul(rp, e1)
-               c%w(:, :, i) = matmul(transpose(e1), wp)
+               call carry_parent(c, m%frames(i)%parent, i, transpose(e1))
                c%w(:, f%dof, i) = c%w(:, f%dof, i) + f%axis
             case (frame_universal)
                e1 = so3_exp(s%q(f%dof)*f%axis)
                e2 = so3_exp(s%q(f%dof + 1)*f%axis2)
                c%r(:, :, i) = matmul(rp, matmul(e1, e2))
-               c%w(:, :, i) = matmul(transpose(matmul(e1, e2)), wp)
+               call carry_parent(c, m%frames(i)%parent, i, transpose(matmul(e1, e2)))
                c%w(:, f%dof, i) = c%w(:, f%dof, i) + matmul(f%axis, e2)
                c%w(:, f%dof + 1, i) = c%w(:, f%dof + 1, i) + f%axis2
             case default                                 ! frame_fixed
@@ -143,23 +157,145 @@ contains
             end select
          end associate
       end do
-   contains
-      pure subroutine parent_of(j, rp, wp)
-         integer, intent(in) :: j
-         real(dp), intent(out) :: rp(3, 3), wp(:, :)
-         integer :: k
-         if (j == 0) then
-            rp = 0
-            do k = 1, 3
-               rp(k, k) = 1
-            end do
-            wp = 0
-         else
-            rp = c%r(:, :, j)
-            wp = c%w(:, :, j)
-         end if
-      end subroutine parent_of
    end subroutine configure
+
+   !> W of frame i from its parent j's, E^T W_p, on the parent's dofs (the others are zero).
+   pure subroutine carry_parent(c, j, i, et)
+      type(spatial_configuration_type), intent(inout) :: c
+      integer, intent(in) :: j, i
+      real(dp), intent(in) :: et(3, 3)
+      integer, allocatable :: list(:)
+      if (j == 0) return
+      list = c%frame_dofs(c%frame_start(j):c%frame_start(j + 1) - 1)
+      c%w(:, list, i) = matmul(et, c%w(:, list, j))
+   end subroutine carry_parent
+
+   !> The dofs each point's position and each frame's rotation depend on:
+   !> a free point's 3, a line point's stroke; a free frame's 3, a revolute
+   !> (universal) frame's angle (2) after its parent's.
+   pure subroutine dof_supports(m, c)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_configuration_type), intent(inout) :: c
+      integer :: i, k, np, nf, n, own, j
+      np = size(m%points)
+      nf = size(c%r, 3)
+      allocate (c%point_start(np + 1), c%frame_start(nf + 1))
+      c%point_start(1) = 1
+      do i = 1, np
+         select case (m%points(i)%kind)
+         case (point_free)
+            n = 3
+         case (point_line)
+            n = 1
+         case default
+            n = 0
+         end select
+         c%point_start(i + 1) = c%point_start(i) + n
+      end do
+      allocate (c%point_dofs(c%point_start(np + 1) - 1))
+      do i = 1, np
+         do k = c%point_start(i), c%point_start(i + 1) - 1
+            c%point_dofs(k) = m%points(i)%dof + k - c%point_start(i)
+         end do
+      end do
+      c%frame_start(1) = 1
+      do i = 1, nf
+         c%frame_start(i + 1) = c%frame_start(i) + own_dofs(i) + inherited(i)
+      end do
+      allocate (c%frame_dofs(c%frame_start(nf + 1) - 1))
+      do i = 1, nf
+         k = c%frame_start(i)
+         j = m%frames(i)%parent
+         n = inherited(i)
+         if (n > 0) c%frame_dofs(k:k + n - 1) = c%frame_dofs(c%frame_start(j):c%frame_start(j + 1) - 1)
+         own = own_dofs(i)
+         do j = 0, own - 1
+            c%frame_dofs(k + n + j) = m%frames(i)%dof + j
+         end do
+      end do
+   contains
+      pure integer function own_dofs(i)
+         integer, intent(in) :: i
+         select case (m%frames(i)%kind)
+         case (frame_free)
+            own_dofs = 3
+         case (frame_revolute)
+            own_dofs = 1
+         case (frame_universal)
+            own_dofs = 2
+         case default
+            own_dofs = 0
+         end select
+      end function own_dofs
+
+      pure integer function inherited(i)
+         integer, intent(in) :: i
+         inherited = 0
+         if (m%frames(i)%parent > 0 .and. any(m%frames(i)%kind == [frame_revolute, frame_universal])) then
+            inherited = c%frame_start(m%frames(i)%parent + 1) - c%frame_start(m%frames(i)%parent)
+         end if
+      end function inherited
+   end subroutine dof_supports
+
+   !> The dofs of an element: those of its points and frames (0: none), without repeats.
+   pure function element_dofs(c, points, frames) result(dofs)
+      type(spatial_configuration_type), intent(in) :: c
+      integer, intent(in) :: points(:), frames(:)
+      integer, allocatable :: dofs(:)
+      integer, allocatable :: all(:)
+      integer :: i, n
+      all = [integer ::]
+      do i = 1, size(points)
+         all = [all, c%point_dofs(c%point_start(points(i)):c%point_start(points(i) + 1) - 1)]
+      end do
+      do i = 1, size(frames)
+         if (frames(i) > 0) all = [all, c%frame_dofs(c%frame_start(frames(i)):c%frame_start(frames(i) + 1) - 1)]
+      end do
+      allocate (dofs(size(all)))
+      n = 0
+      do i = 1, size(all)
+         if (any(dofs(1:n) == all(i))) cycle
+         n = n + 1
+         dofs(n) = all(i)
+      end do
+      dofs = dofs(1:n)
+   end function element_dofs
+
+   !> The storage of m's tangent: band order from the elements' couplings.
+   subroutine tangent_for(m, kt)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_tangent_type), intent(out) :: kt
+      type(spatial_configuration_type) :: c
+      integer, allocatable :: group_start(:), group_dof(:), dofs(:)
+      integer :: i, ne
+      call configure(m, new_spatial_state(m), c)
+      ne = 0
+      if (allocated(m%beams)) ne = ne + size(m%beams)
+      if (allocated(m%trusses)) ne = ne + size(m%trusses)
+      allocate (group_start(ne + 1))
+      group_start(1) = 1
+      group_dof = [integer ::]
+      ne = 0
+      if (allocated(m%beams)) then
+         do i = 1, size(m%beams)
+            dofs = element_dofs(c, m%nodes(m%beams(i)%nodes)%point, m%nodes(m%beams(i)%nodes)%frame)
+            call add_group()
+         end do
+      end if
+      if (allocated(m%trusses)) then
+         do i = 1, size(m%trusses)
+            dofs = element_dofs(c, m%trusses(i)%points, [integer ::])
+            call add_group()
+         end do
+      end if
+      call new_spatial_tangent(kt, m%ndof, free_dofs(m), group_start, group_dof)
+   contains
+      subroutine add_group()
+         ne = ne + 1
+         group_dof = [group_dof, dofs]
+         group_start(ne + 1) = size(group_dof) + 1
+      end subroutine add_group
+   end subroutine tangent_for
 
    !> The body angular acceleration each frame has along q (+) s v at s = 0
    !> with no dof acceleration: zero for free and fixed frames; for a child,
@@ -200,69 +336,105 @@ contains
    end function frame_curvature
 
    !> The residual r = sum G^T f and, if asked, the material tangent
-   !> K = sum G^T B^T k B G at state s. With v (and kappa, from
-   !> frame_curvature), conv = sum G^T B^T k c, the convective load.
-   pure subroutine assemble_spatial(m, c, residual, tangent, v, kappa, conv)
+   !> K = sum G^T B^T k B G at state s, as a full array (tangent) or in the
+   !> band storage of tangent_for (sparse). With v (and kappa, from
+   !> frame_curvature), conv = sum G^T B^T k c, the convective load. With
+   !> rate, rate_load = sum G^T B^T k (B (G rate)), K rate computed element
+   !> by element from each element's strain rate B (G rate) (the square-root
+   !> form's residual: no cancellation of a global product K rate, whose
+   !> rounding would carry the squared condition number into the rates).
+   !> Each element works on its own dofs only (element_dofs).
+   pure subroutine assemble_spatial(m, c, residual, tangent, v, kappa, conv, rate, rate_load, sparse)
       type(spatial_mechanism_type), intent(in) :: m
       type(spatial_configuration_type), intent(in) :: c
       real(dp), intent(out) :: residual(:)
       real(dp), intent(out), optional :: tangent(:, :)
       real(dp), intent(in), optional :: v(:), kappa(:, :)
       real(dp), intent(out), optional :: conv(:)
-      real(dp) :: x(3, 2), r(3, 3, 2), f(12), ke(12, 12), ge(12, m%ndof), b(6, 12), ce(6)
-      real(dp) :: nv(3, 2), nw(3, 2), na(3, 2), ft(6), kt(6, 6), gt(6, m%ndof), et
+      real(dp), intent(in), optional :: rate(:)
+      real(dp), intent(out), optional :: rate_load(:)
+      type(spatial_tangent_type), intent(inout), optional :: sparse
+      real(dp) :: x(3, 2), r(3, 3, 2), f(12), ke(12, 12), b(6, 12), ce(6)
+      real(dp) :: nv(3, 2), nw(3, 2), na(3, 2), ft(6), kt(6, 6), et, u(3)
+      real(dp), allocatable :: ge(:, :), gt(:, :), kes(:, :)
+      integer, allocatable :: dofs(:)
       integer :: i, n, p, fr
+      logical :: with_tangent
+      with_tangent = present(tangent) .or. present(sparse)
       residual = 0
       if (present(tangent)) tangent = 0
+      if (present(sparse)) call sparse%zero()
       if (present(conv)) conv = 0
+      if (present(rate_load)) rate_load = 0
       if (allocated(m%beams)) then
          do i = 1, size(m%beams)
+            associate (nodes => m%nodes(m%beams(i)%nodes))
+               dofs = element_dofs(c, nodes%point, nodes%frame)
+            end associate
+            if (allocated(ge)) deallocate (ge)
+            allocate (ge(12, size(dofs)))
             do n = 1, 2
                p = m%nodes(m%beams(i)%nodes(n))%point
                fr = m%nodes(m%beams(i)%nodes(n))%frame
                x(:, n) = c%x(:, p)
                r(:, :, n) = c%r(:, :, fr)
-               ge(6*n - 5:6*n - 3, :) = c%g(:, :, p)
-               ge(6*n - 2:6*n, :) = c%w(:, :, fr)
+               ge(6*n - 5:6*n - 3, :) = c%g(:, dofs, p)
+               ge(6*n - 2:6*n, :) = c%w(:, dofs, fr)
                if (present(conv)) then
-                  nv(:, n) = matmul(c%g(:, :, p), v)
-                  nw(:, n) = matmul(c%w(:, :, fr), v)
+                  nv(:, n) = matmul(ge(6*n - 5:6*n - 3, :), v(dofs))
+                  nw(:, n) = matmul(ge(6*n - 2:6*n, :), v(dofs))
                   na(:, n) = kappa(:, fr)
                end if
             end do
-            if (present(tangent)) then
+            if (with_tangent) then
                call se3_beam_residual(m%beams(i)%element, x, r, f, ke, material_only=.true., compatibility=b)
-               tangent = tangent + matmul(transpose(ge), matmul(ke, ge))
+               kes = matmul(transpose(ge), matmul(ke, ge))
+               if (present(tangent)) tangent(dofs, dofs) = tangent(dofs, dofs) + kes
+               if (present(sparse)) call sparse%add_element(dofs, kes)
             else
                call se3_beam_residual(m%beams(i)%element, x, r, f, compatibility=b)
             end if
-            residual = residual + matmul(f, ge)
+            residual(dofs) = residual(dofs) + matmul(f, ge)
             if (present(conv)) then
                ce = se3_beam_convective(x, r, nv, nw, na)
-               conv = conv + matmul(matmul(matmul(m%beams(i)%element%k, ce), b), ge)
+               conv(dofs) = conv(dofs) + matmul(matmul(matmul(m%beams(i)%element%k, ce), b), ge)
+            end if
+            if (present(rate_load)) then
+               ce = matmul(b, matmul(ge, rate(dofs)))
+               rate_load(dofs) = rate_load(dofs) + matmul(matmul(matmul(m%beams(i)%element%k, ce), b), ge)
             end if
          end do
       end if
       if (allocated(m%trusses)) then
          do i = 1, size(m%trusses)
+            dofs = element_dofs(c, m%trusses(i)%points, [integer ::])
+            if (allocated(gt)) deallocate (gt)
+            allocate (gt(6, size(dofs)))
             do n = 1, 2
                p = m%trusses(i)%points(n)
                x(:, n) = c%x(:, p)
-               gt(3*n - 2:3*n, :) = c%g(:, :, p)
-               if (present(conv)) nv(:, n) = matmul(c%g(:, :, p), v)
+               gt(3*n - 2:3*n, :) = c%g(:, dofs, p)
+               if (present(conv)) nv(:, n) = matmul(gt(3*n - 2:3*n, :), v(dofs))
             end do
-            if (present(tangent)) then
+            if (with_tangent) then
                call truss_residual(m%trusses(i)%element, x, ft, kt)
-               tangent = tangent + matmul(transpose(gt), matmul(kt, gt))
+               kes = matmul(transpose(gt), matmul(kt, gt))
+               if (present(tangent)) tangent(dofs, dofs) = tangent(dofs, dofs) + kes
+               if (present(sparse)) call sparse%add_element(dofs, kes)
             else
                call truss_residual(m%trusses(i)%element, x, ft)
             end if
-            residual = residual + matmul(ft, gt)
+            residual(dofs) = residual(dofs) + matmul(ft, gt)
+            u = (x(:, 2) - x(:, 1))/norm2(x(:, 2) - x(:, 1))
             if (present(conv)) then
                ! B = (-u, u), k = EA/L.
                et = truss_convective(x, nv)*m%trusses(i)%element%ea/m%trusses(i)%element%length
-               x(:, 1) = (x(:, 2) - x(:, 1))/norm2(x(:, 2) - x(:, 1))
-               conv = conv + et*matmul([-x(:, 1), x(:, 1)], gt)
+               conv(dofs) = conv(dofs) + et*matmul([-u, u], gt)
+            end if
+            if (present(rate_load)) then
+               et = dot_product(u, matmul(gt(4:6, :) - gt(1:3, :), rate(dofs)))* &
+                  & m%trusses(i)%element%ea/m%trusses(i)%element%length
+               rate_load(dofs) = rate_load(dofs) + et*matmul([-u, u], gt)
             end if
          end do
       end if
@@ -308,27 +480,25 @@ contains
       type(spatial_report_type), intent(out) :: report
       type(error_type), allocatable, intent(out) :: error
       type(spatial_configuration_type) :: c
-      real(dp) :: res(m%ndof), k(m%ndof, m%ndof), vd(m%ndof), ad(m%ndof), dq(m%ndof), scale(m%ndof)
-      real(dp), allocatable :: kff(:, :), rhs(:)
-      integer, allocatable :: fdof(:), ipiv(:)
+      type(spatial_tangent_type) :: kt
+      real(dp) :: res(m%ndof), vd(m%ndof), ad(m%ndof), dq(m%ndof), scale(m%ndof)
+      real(dp), allocatable :: rhs(:)
       integer :: it, info
-      fdof = free_dofs(m)
+      call tangent_for(m, kt)
       call set_drives(m, t, s, vd, ad)
       scale = merge(1/m%length, 1.0_dp, m%is_length)
-      allocate (ipiv(size(fdof)))
       do it = 1, max_iterations
          call configure(m, s, c)
-         call assemble_spatial(m, c, res, k)
-         kff = k(fdof, fdof)
-         rhs = -res(fdof)
-         call dense_lu_factor(kff, ipiv, info)
+         call assemble_spatial(m, c, res, sparse=kt)
+         call kt%factor(info)
          if (info /= 0) then
-            call singular(error, fdof(info), t)
+            call singular(error, info, t)
             return
          end if
-         call dense_lu_solve(kff, ipiv, rhs, info)
+         rhs = -res(kt%fdof)
+         call kt%solve(rhs)
          dq = 0
-         dq(fdof) = rhs
+         dq(kt%fdof) = rhs
          call update_state(m, s, dq)
          report%iterations = it
          report%correction = maxval(abs(dq*scale))
@@ -350,50 +520,65 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(spatial_configuration_type) :: c
       type(spatial_state_type) :: sd
-      real(dp) :: res(m%ndof), k(m%ndof, m%ndof), ad(m%ndof)
-      real(dp), allocatable :: kff(:, :)
-      integer, allocatable :: fdof(:), ipiv(:)
+      type(spatial_tangent_type) :: kt
+      real(dp) :: res(m%ndof), ad(m%ndof)
       integer :: info
-      fdof = free_dofs(m)
+      call tangent_for(m, kt)
       sd = s
       call set_drives(m, t, sd, v, ad)
       call configure(m, s, c)
-      call assemble_spatial(m, c, res, k)
-      kff = k(fdof, fdof)
-      allocate (ipiv(size(fdof)))
-      call dense_lu_factor(kff, ipiv, info)
+      call assemble_spatial(m, c, res, sparse=kt)
+      call kt%factor(info)
       if (info /= 0) then
-         call singular(error, fdof(info), t)
+         call singular(error, info, t)
          return
       end if
-      call spatial_rates_factored(m, s, c, k, kff, ipiv, fdof, v, ad, a)
+      call spatial_rates_factored(m, s, c, kt, v, ad, a)
    end subroutine spatial_rates
 
-   !> The rates at state s (configuration c, tangent k, its free block kff
-   !> factored by dense_lu_factor with ipiv) given the drives' rates in v and
-   !> second rates ad (zero at the free dofs): v and a of every dof.
-   subroutine spatial_rates_factored(m, s, c, k, kff, ipiv, fdof, v, ad, a)
+   !> The rates at state s (configuration c, tangent kt assembled there and
+   !> factored) given the drives' rates in v and second rates ad (zero at the
+   !> free dofs): v and a of every dof. Each
+   !> solve of the normal equations K_ff x_f = -K_fd x_d - l is refined once
+   !> with its residual computed in the square-root form, K x + l = sum G^T
+   !> B^T k (B (G x) + c) from each element's strain rate (assemble_spatial's
+   !> rate_load), not as the global product K x: the correction then carries
+   !> the condition number of k^1/2 B G_f, not its square (semi-normal
+   !> equations with a refinement step; the planar FEM's square B_f solve of
+   !> docs/hard-cases.md, section 7, does not apply: the spatial B_f of a
+   !> planar loop has more rows than columns, its redundant constraints).
+   subroutine spatial_rates_factored(m, s, c, kt, v, ad, a)
       type(spatial_mechanism_type), intent(in) :: m
       type(spatial_state_type), intent(in) :: s
       type(spatial_configuration_type), intent(in) :: c
-      real(dp), intent(in) :: k(:, :), ad(:)
-      real(dp), contiguous, intent(in) :: kff(:, :)
-      integer, contiguous, intent(in) :: ipiv(:)
-      integer, intent(in) :: fdof(:)
+      type(spatial_tangent_type), intent(in) :: kt
+      real(dp), intent(in) :: ad(:)
       real(dp), intent(inout) :: v(:)
       real(dp), intent(out) :: a(:)
-      real(dp) :: res(m%ndof), conv(m%ndof), kappa(3, size(s%r, 3))
+      real(dp) :: res(m%ndof), conv(m%ndof), load(m%ndof), kappa(3, size(s%r, 3))
       real(dp), allocatable :: rhs(:)
-      integer :: info
-      rhs = -matmul(k(fdof, :), v)
-      call dense_lu_solve(kff, ipiv, rhs, info)
-      v(fdof) = rhs
+      integer :: i
+      rhs = -kt%product(v)
+      call kt%solve(rhs)
+      v(kt%fdof) = rhs
+      do i = 1, rate_refinements
+         call assemble_spatial(m, c, res, rate=v, rate_load=load)
+         rhs = -load(kt%fdof)
+         call kt%solve(rhs)
+         v(kt%fdof) = v(kt%fdof) + rhs
+      end do
       kappa = frame_curvature(m, s, c, v)
       call assemble_spatial(m, c, res, v=v, kappa=kappa, conv=conv)
       a = ad
-      rhs = -matmul(k(fdof, :), a) - conv(fdof)
-      call dense_lu_solve(kff, ipiv, rhs, info)
-      a(fdof) = rhs
+      rhs = -kt%product(a) - conv(kt%fdof)
+      call kt%solve(rhs)
+      a(kt%fdof) = rhs
+      do i = 1, rate_refinements
+         call assemble_spatial(m, c, res, rate=a, rate_load=load)
+         rhs = -load(kt%fdof) - conv(kt%fdof)
+         call kt%solve(rhs)
+         a(kt%fdof) = a(kt%fdof) + rhs
+      end do
    end subroutine spatial_rates_factored
 
    subroutine singular(error, dof, t)

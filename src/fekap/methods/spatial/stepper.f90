@@ -20,10 +20,11 @@ module fekap_spatial_stepper
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type
    use fekap_stepping_stepper, only: stepper_type
-   use fekap_linalg_lapack, only: dense_lu_factor, dense_lu_solve
    use fekap_spatial_mechanism, only: spatial_mechanism_type
    use fekap_spatial_kinematics, only: spatial_state_type, new_spatial_state, spatial_configuration_type, &
-      & configure, assemble_spatial, set_drives, update_state, free_dofs, spatial_rates_factored, point_rate
+      & configure, assemble_spatial, set_drives, update_state, free_dofs, spatial_rates_factored, point_rate, &
+      & tangent_for
+   use fekap_spatial_tangent, only: spatial_tangent_type
    use fekap_spatial_build, only: spatial_map_type, build_spatial_mechanism
    use fekap_spatial_link_motion, only: link_motion_type, new_link_motion, fill_link_motion
    implicit none
@@ -61,6 +62,8 @@ module fekap_spatial_stepper
       real(dp) :: tol = 1.0e-12_dp
       integer :: max_iter = 25
       integer, allocatable :: fdof(:)
+      !> The tangent's band storage and its factor at the last iterate.
+      type(spatial_tangent_type) :: kt
       !> The norm of the free dofs' residual at the last converged configuration.
       real(dp) :: residual = 0
       !> The links' rotations of the last step (links.csv).
@@ -85,6 +88,7 @@ contains
       self%tol = model%analysis%length_tol
       self%max_iter = model%analysis%max_iter
       self%fdof = free_dofs(self%m)
+      call tangent_for(self%m, self%kt)
       self%difference_step = model%analysis%dt/4
       call new_link_motion(self%links, model, self%m, self%map%node_frame, self%map%node_point)
       allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%jerk(self%m%ndof), self%snap(self%m%ndof), &
@@ -188,16 +192,13 @@ contains
    !> residuals: for additive dofs an O(h^2) error (O(h^6) in the
    !> predictor); a free frame's j is a body quantity, whose rate differs
    !> from its k by commutator terms (an O(h^4) error in the predictor).
-   subroutine curve_rates(self, t, k, kff, ipiv)
+   subroutine curve_rates(self, t)
       type(spatial_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t, k(:, :)
-      real(dp), contiguous, intent(in) :: kff(:, :)
-      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp), intent(in) :: t
       type(spatial_state_type) :: sd
       real(dp) :: vd(self%m%ndof), ap(self%m%ndof), am(self%m%ndof), a0(self%m%ndof), rp(self%m%ndof), &
          & rm(self%m%ndof), d, h1, hh
       real(dp), allocatable :: rhs(:)
-      integer :: info
       d = self%difference_step
       sd = self%s
       call set_drives(self%m, t + d, sd, vd, ap)
@@ -208,8 +209,8 @@ contains
       self%snap = (ap - 2*a0 + am)/d**2
       rp = residual_along(d*self%v + d**2/2*self%a)
       rm = residual_along(-d*self%v + d**2/2*self%a)
-      rhs = -3*(rp(self%fdof) - rm(self%fdof))/d**3 - matmul(k(self%fdof, :), self%jerk)
-      call dense_lu_solve(kff, ipiv, rhs, info)
+      rhs = -3*(rp(self%fdof) - rm(self%fdof))/d**3 - self%kt%product(self%jerk)
+      call self%kt%solve(rhs)
       self%jerk(self%fdof) = rhs
       if (self%jerks >= 2 .and. t > self%t1 .and. self%t1 > self%t2) then
          ! j(tau) through (0, j), (-h1, j1), (-hh, j2): its rate at 0.
@@ -222,8 +223,8 @@ contains
       call remember_jerk()
       rp = residual_along(d*self%v + d**2/2*self%a + d**3/6*self%jerk)
       rm = residual_along(-d*self%v + d**2/2*self%a - d**3/6*self%jerk)
-      rhs = -12*(rp(self%fdof) + rm(self%fdof))/d**4 - matmul(k(self%fdof, :), self%snap)
-      call dense_lu_solve(kff, ipiv, rhs, info)
+      rhs = -12*(rp(self%fdof) + rm(self%fdof))/d**4 - self%kt%product(self%snap)
+      call self%kt%solve(rhs)
       self%snap(self%fdof) = rhs
    contains
       !> The last two configurations' j for the next ones' k.
@@ -257,10 +258,9 @@ contains
       logical, intent(out) :: converged
       character(:), allocatable, intent(out) :: why
       type(spatial_configuration_type) :: c
-      real(dp) :: res(self%m%ndof), k(self%m%ndof, self%m%ndof), ad(self%m%ndof), dq(self%m%ndof)
+      real(dp) :: res(self%m%ndof), ad(self%m%ndof), dq(self%m%ndof)
       real(dp) :: scale(self%m%ndof), correction, last
-      real(dp), allocatable :: kff(:, :), rhs(:)
-      integer, allocatable :: ipiv(:)
+      real(dp), allocatable :: rhs(:)
       integer :: info, it
       character(len=80) :: text
       logical :: refining
@@ -270,22 +270,24 @@ contains
       why = ''
       call set_drives(self%m, t, self%s, self%v, ad)
       scale = merge(1/self%m%length, 1.0_dp, self%m%is_length)
-      allocate (ipiv(size(self%fdof)))
       last = huge(1.0_dp)
       do it = 0, self%max_iter
          call configure(self%m, self%s, c)
-         call assemble_spatial(self%m, c, res, k)
+         call assemble_spatial(self%m, c, res, sparse=self%kt)
          self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         kff = k(self%fdof, self%fdof)
-         call dense_lu_factor(kff, ipiv, info)
-         self%counts%lu_factorisations = self%counts%lu_factorisations + 1
+         call self%kt%factor(info)
+         if (self%kt%is_lu()) then
+            self%counts%lu_factorisations = self%counts%lu_factorisations + 1
+         else
+            self%counts%cholesky_factorisations = self%counts%cholesky_factorisations + 1
+         end if
          if (info /= 0) then
-            write (text, '(a,i0)') 'singular tangent at dof ', self%fdof(info)
+            write (text, '(a,i0)') 'singular tangent at dof ', info
             why = trim(text)
             return
          end if
          rhs = -res(self%fdof)
-         call dense_lu_solve(kff, ipiv, rhs, info)
+         call self%kt%solve(rhs)
          dq = 0
          dq(self%fdof) = rhs
          correction = maxval(abs(dq*scale))
@@ -297,11 +299,11 @@ contains
             ! Converged at this iterate, which is the solution to round-off:
             ! its factored tangent gives the rates.
             self%residual = norm2(res(self%fdof))
-            call spatial_rates_factored(self%m, self%s, c, k, kff, ipiv, self%fdof, self%v, ad, self%a)
+            call spatial_rates_factored(self%m, self%s, c, self%kt, self%v, ad, self%a)
             self%counts%velocity_solves = self%counts%velocity_solves + 1
             self%counts%acceleration_solves = self%counts%acceleration_solves + 1
             call update_state(self%m, self%s, dq)
-            call curve_rates(self, t, k, kff, ipiv)
+            call curve_rates(self, t)
             converged = .true.
             return
          end if
@@ -373,9 +375,9 @@ contains
       nt = 0
       if (allocated(self%m%beams)) nb = size(self%m%beams)
       if (allocated(self%m%trusses)) nt = size(self%m%trusses)
-      write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0,a,i0,a)') 'spatial mechanism: ', size(self%m%points), ' points, ', &
-         & size(self%m%frames), ' frames, ', nb, ' beams, ', nt, ' trusses; ', self%m%ndof, ' dofs, ', &
-         & size(self%fdof), ' free (dense LU)'
+      write (line, '(a,i0,a,i0,a,i0,a,i0,a,i0,a,i0,a,i0,a)') 'spatial mechanism: ', size(self%m%points), &
+         & ' points, ', size(self%m%frames), ' frames, ', nb, ' beams, ', nt, ' trusses; ', self%m%ndof, ' dofs, ', &
+         & size(self%fdof), ' free (band, half-bandwidth ', self%kt%kff%kd, ')'
       text = trim(line)
    end function spatial_plan_text
 
