@@ -53,7 +53,8 @@ module fekap_linalg_band
       !> A(j, i) - A(i, j) for i <= j at asym(kd + 1 + i - j, j), while not symmetric.
       real(dp), allocatable :: asym(:, :)
       !> Factor: Cholesky (U^T D U up to narrow_band, U^T U beyond) in rows
-      !> 1:kd+1, or band LU in rows 1:3*kd+1.
+      !> 1:kd+1, or band LU in rows 1:3*kd+1; allocated by the first
+      !> factorisation, with 3*kd+1 rows from the first LU on.
       real(dp), allocatable :: f(:, :)
       integer, allocatable :: ipiv(:)
       !> Whether the factor in f is an LU (the fallback) rather than a Cholesky factor.
@@ -86,7 +87,8 @@ module fekap_linalg_band
 
 contains
 
-   !> Allocate an n x n band matrix of half-bandwidth kd (all storage, once).
+   !> Allocate an n x n band matrix of half-bandwidth kd (all storage but the
+   !> factor's, once).
    pure subroutine new_band_matrix(self, n, kd, dense, top)
       type(band_matrix_type), intent(out) :: self
       integer, intent(in) :: n, kd
@@ -99,10 +101,14 @@ contains
       self%n = n
       self%kd = kd
       if (present(dense)) self%dense = dense
+      ! The factor's storage f is allocated by the first factorisation
+      ! (band_factor): a run in the square-root form never factors K, whose
+      ! LU storage would be (3 kd + 1) n numbers (27 MB for the 10,000-cell
+      ! scissor lift), and a Cholesky factor needs only kd + 1 rows.
       if (self%dense) then
          allocate (self%a(kd + 1, n), self%f(0, 0), self%fd(n, n), source=0.0_dp)
       else
-         allocate (self%a(kd + 1, n), self%f(3*kd + 1, n), source=0.0_dp)
+         allocate (self%a(kd + 1, n), source=0.0_dp)
       end if
       allocate (self%ipiv(n), source=0)
       allocate (self%diag(n), self%recip(n), source=0.0_dp)
@@ -174,13 +180,14 @@ contains
       integer, intent(out) :: info
       integer :: i, j, kd, ld
       kd = self%kd
-      ld = size(self%f, 1)
       self%diag = self%a(kd + 1, :)
       if (self%dense) then
          call dense_factor(self, info)
          return
       end if
       self%is_lu = .false.
+      if (.not. allocated(self%f)) allocate (self%f(kd + 1, self%n), source=0.0_dp)
+      ld = size(self%f, 1)
       if (self%symmetric) then
          if (kd <= narrow_band) then
             call band_ldlt(self%a, self%f, self%n, kd, self%top, info, self%recip)
@@ -192,6 +199,11 @@ contains
       end if
       ! Not positive definite (or not symmetric): expand to general band storage, rows kd+1:3kd+1.
       self%is_lu = .true.
+      if (size(self%f, 1) < 3*kd + 1) then
+         deallocate (self%f)
+         allocate (self%f(3*kd + 1, self%n))
+         ld = size(self%f, 1)
+      end if
       self%f = 0
       do j = 1, self%n
          do i = max(1, j - kd), min(self%n, j + kd)
@@ -387,6 +399,9 @@ contains
       class(band_matrix_type), intent(in) :: self
       integer :: j
       real(dp) :: pivot
+      ratio = 0
+      ! Never factored: no pivots (as a zero factor's).
+      if (.not. allocated(self%f)) return
       ratio = 1
       if (.not. self%dense .and. .not. self%is_lu .and. self%kd <= narrow_band) then
          ! U^T D U: band_column_pivot's D(j), without a call per column.
@@ -427,6 +442,8 @@ contains
          rcond = 1
          return
       end if
+      ! Never factored: singular as far as the factor tells (a zero pivot).
+      if (.not. allocated(self%f)) return
       if (.not. self%dense .and. .not. self%is_lu .and. self%kd <= narrow_band) then
          call ldlt_rcond(self, rcond)
          return
