@@ -24,6 +24,7 @@ module fekap_spatial_kinematics
    use fekap_element_se3_beam, only: se3_beam_residual, se3_beam_convective, truss_residual, truss_convective
    use fekap_spatial_mechanism, only: spatial_mechanism_type, point_free, point_line, frame_free, frame_revolute, &
       & frame_universal
+   use fekap_spatial_slideline, only: assemble_slides
    implicit none
    private
 
@@ -42,6 +43,8 @@ module fekap_spatial_kinematics
    !> point positions x and G = dx/dq, frame rotations R and W = dtheta/dq
    !> (body increments).
    type :: spatial_configuration_type
+      !> The state's dofs (the slides' strokes).
+      real(dp), allocatable :: q(:)
       real(dp), allocatable :: x(:, :), g(:, :, :)
       real(dp), allocatable :: r(:, :, :), w(:, :, :)
    end type spatial_configuration_type
@@ -99,6 +102,7 @@ contains
       np = size(m%points)
       nf = size(s%r, 3)
       allocate (c%x(3, np), c%g(3, m%ndof, np), c%r(3, 3, nf), c%w(3, m%ndof, nf), source=0.0_dp)
+      c%q = s%q
       do i = 1, np
          associate (p => m%points(i))
             select case (p%kind)
@@ -266,6 +270,8 @@ contains
             end if
          end do
       end if
+      ! Points on lines carried by moving frames (penalty slidelines).
+      call assemble_slides(m, c%q, c%x, c%g, c%r, c%w, residual, tangent, v, kappa, conv)
    end subroutine assemble_spatial
 
    !> The drives' values at t in s%q; their rates and second rates in vd, ad
