@@ -138,7 +138,13 @@ class SpatialRun:
         return f"{self.mech.name(quantity)} ({self.mech.unit(quantity)})"
 
     def joint_kind(self, name: str) -> str:
-        return next((j.kind for j in self.layout.joints if j.name == name), "")
+        """A joints.csv row's kind: its joint's, and a cylindrical joint's stroke row
+        (``JOINT.stroke``) a prismatic one's (its angle row, ``JOINT``, a revolute one's)."""
+        kind = next((j.kind for j in self.layout.joints if j.name == name), "")
+        if not kind and name.endswith(".stroke"):
+            base = next((j.kind for j in self.layout.joints if j.name == name[:-len(".stroke")]), "")
+            kind = "prismatic" if base == "cylindrical" else ""
+        return kind
 
     def ground_axes(self) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
         """Each ground joint's axis: (joint, kind, the joint's place at the start, unit axis),
@@ -383,6 +389,8 @@ def drive_values(run: SpatialRun, steps: list[int]) -> tuple[str, np.ndarray] | 
     if not run.layout.drives:
         return None
     kind, joint = run.layout.drives[0]
+    if kind == "stroke" and run.joint_kind(f"{joint}.stroke") == "prismatic":
+        joint = f"{joint}.stroke"            # a cylindrical joint's stroke row
     if joint not in run.joints:
         return None
     step, _, angle = run.joints[joint].curve("angle")

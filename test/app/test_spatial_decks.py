@@ -255,7 +255,8 @@ def rotate(r: np.ndarray, n: np.ndarray, theta: Jet) -> list[Jet]:
 
 def test_cylindrical_joint_matches_closed_form(tmp_path):
     """A rod on a cylindrical joint to the ground, its angle and its stroke
-    both driven: the block and the rod's end against Rodrigues' formula."""
+    both driven: the block and the rod's end against Rodrigues' formula, the
+    joint's two rows of joints.csv against the drives."""
     out = run_deck("cylinder", tmp_path)
     t = columns(out, "points.csv", "point", "T")["t"]
     check(len(t) == 101 and abs(t[-1] - 2) < 1e-15, "100 steps to t = 2")
@@ -267,6 +268,9 @@ def test_cylindrical_joint_matches_closed_form(tmp_path):
     check_jets("block C", columns(out, "points.csv", "point", "C"), XYZ, block)
     check_jets("rod end T", columns(out, "points.csv", "point", "T"), XYZ,
                [block[i] + e for i, e in enumerate(rotate(r, n, theta))])
+    # joints.csv: the joint's angle (row JC) and stroke (row JC.stroke).
+    check_joint(out, "JC", theta)
+    check_joint(out, "JC.stroke", stroke)
     check_iterations(out)
 
 
@@ -448,3 +452,55 @@ def test_beam_between_spherical_joints_is_input_error(tmp_path):
         check(phrase in done.stderr, f"the message does not say {phrase!r}: {done.stderr}")
     written = sorted(p.name for p in out.iterdir()) if out.exists() else []
     check(not written, f"files were written: {written}")
+
+
+def test_welded_chain_between_spherical_joints_is_input_error(tmp_path):
+    """The RSSR's coupler as two beams welded at their shared midpoint M
+    (links that share a node are welded): between the two spherical joints
+    the chain turns freely about the line through them, which no single
+    beam's check sees; the build stops at the chain's first LINKs line and
+    names both links, and nothing is written. With the midpoint moved off
+    the line the chain still turns about the line through the joints, and
+    is refused as well."""
+    text = (DECKS / "rssr.deck").read_text()
+    old_link, old_node = "  coupler  B2  C2  bar  truss\n", "  C2   1  3.5  sqrt(15)/2\n"
+    check(old_link in text and old_node in text, "the RSSR deck's coupler lines changed")
+    for name, mid in (("straight", "1  1.75  sqrt(15)/4"), ("bent", "1.3  1.75  sqrt(15)/4")):
+        bad = tmp_path / f"{name}.deck"
+        bad.write_text(text.replace(old_link, "  coupler  B2  M  bar\n  coupler2  M  C2  bar\n")
+                       .replace(old_node, old_node + f"  M    {mid}\n"))
+        line, col = field_place(bad.read_text(), "coupler", 1)
+        out = tmp_path / f"out-{name}"
+        done = run_fekap("-o", str(out), str(bad))
+        check(done.returncode == 2, f"{name}: exit {done.returncode}, not 2 (input error): {done.stderr}")
+        for phrase in (f"{bad}:{line}:{col}:", "links coupler, coupler2 turn together freely", "truss"):
+            check(phrase in done.stderr, f"{name}: the message does not say {phrase!r}: {done.stderr}")
+        written = sorted(p.name for p in out.iterdir()) if out.exists() else []
+        check(not written, f"{name}: files were written: {written}")
+
+
+def test_sleeve_on_a_turning_arm_matches_closed_form(tmp_path):
+    """A cylindrical joint between two moving links (decks/spatial/sleeve.deck):
+    the sleeve S slides along and turns about the axis of an arm turning
+    about z, its stroke s = 0.2 sin 2t and angle psi = 3t driven, the arm's
+    angle phi = 2t. S = Rz(phi) (0.5 + s, 0, 0) and the end of the sleeve's
+    rod E = S + Rz(phi) (0, -0.3 sin psi, 0.3 cos psi) at every output time;
+    the joint's angle and stroke rows of joints.csv (JS, JS.stroke)."""
+    out = run_deck("sleeve", tmp_path)
+    t = columns(out, "points.csv", "point", "S")["t"]
+    check(len(t) == 101 and abs(t[-1] - 2) < 1e-15, "100 steps to t = 2")
+    phi, psi = Jet(2 * t, 2.0, 0.0), Jet(3 * t, 3.0, 0.0)
+    stroke = 0.2 * jsin(Jet(2 * t, 2.0, 0.0))
+    c, s = jcos(phi), jsin(phi)
+    r = 0.5 + stroke
+    sleeve = [r * c, r * s, Jet(np.zeros_like(t))]
+    local = (Jet(np.zeros_like(t)), -0.3 * jsin(psi), 0.3 * jcos(psi))
+    rod_end = [sleeve[0] + c * local[0] - s * local[1], sleeve[1] + s * local[0] + c * local[1],
+               sleeve[2] + local[2]]
+    check_jets("sleeve S", columns(out, "points.csv", "point", "S"), XYZ, sleeve)
+    check_jets("rod end E", columns(out, "points.csv", "point", "E"), XYZ, rod_end)
+    check_jets("arm tip T", columns(out, "points.csv", "point", "T"), XYZ, [c, s, Jet(np.zeros_like(t))])
+    check_joint(out, "JO", phi)
+    check_joint(out, "JS", psi)
+    check_joint(out, "JS.stroke", stroke)
+    check_iterations(out)

@@ -5,10 +5,12 @@ positions within 1e-12 of the model size, velocities and accelerations
 within 1e-10 of the planar run's largest, z, vz and az zero; the decks'
 redundant constraints (a planar loop of revolute joints about parallel axes
 has three in 3D) included. Besides the decks: a roller with an x drive, a
-prismatic ground guide, a clamp, a meshed link, each against its planar
-run; and what --spatial refuses (kinetostatics, statics, dynamics, sliders
-on moving links, a rotation drive at a hinge), each an input error that
-names the deck (and its line) with nothing written."""
+prismatic ground guide, a clamp, a meshed link, a prismatic slider on a
+moving link, each against its planar run; and what --spatial refuses
+(kinetostatics, statics, dynamics, a rotation drive at a hinge), each an
+input error that names the deck (and its line) with nothing written. The
+sliders on moving links (quick-return, quick-return-meshed-lever,
+slider-meshed-guide) run as spatial slides (fekap_spatial_slideline)."""
 
 from __future__ import annotations
 
@@ -28,12 +30,17 @@ OUT_OF_PLANE_TOL = 1e-13
 
 # Decks that are no kinematics: --spatial refuses them.
 NOT_KINEMATICS = {"cantilever-rollup", "fourbar-kinetostatics", "slider-crank-kinetostatics", "statics-cantilever"}
-# Decks with a slider on moving links (SLIDelines ... on LINK): refused, with the line.
-SLIDER_ON_LINKS = {"quick-return": 21, "quick-return-meshed-lever": 22, "slider-meshed-guide": 22}
 # Decks the spatial stepper does not pass, and why (docs/deck-format.md, "Planar decks in 3D").
 NO_CHANGE_POINTS = ("the spatial stepper has no change-point handling: at t = 0.25 every bar of the A02 chain is "
                     "horizontal and the tangent loses N ranks; Newton fails even with 8 step cuts (exit 3)")
+SQUARED_SLIDER = ("the spatial rate solve squares the condition number (K = B^T k B, no square-root form), and "
+                  "the deck's links (EA = 100 against EI = 1 at lengths up to 474) spread it: velocities {} and "
+                  "accelerations {} of the largest off the planar run, whose rates are within 1e-12 of the exact "
+                  "Example 5 (positions agree within 6e-16; with EA = 1, EI = 1e5 the spatial rates are within "
+                  "4e-14 of the largest)")
 KNOWN_FAILURES = {
+    "quick-return": {"rates": SQUARED_SLIDER.format("9.5e-9", "7.8e-9")},
+    "quick-return-meshed-lever": {"rates": SQUARED_SLIDER.format("1.4e-8", "1.6e-8")},
     "a02-n2-dt0p01": {"run": NO_CHANGE_POINTS},
     "a02-n4-dt0p025": {"run": NO_CHANGE_POINTS},
     "a02-n40-dt0p05": {"run": NO_CHANGE_POINTS},
@@ -60,7 +67,7 @@ def stem(deck: str) -> str:
     return Path(deck).stem
 
 
-KINEMATICS = [d for d in planar_decks() if stem(d) not in NOT_KINEMATICS | set(SLIDER_ON_LINKS) | TOO_SLOW]
+KINEMATICS = [d for d in planar_decks() if stem(d) not in NOT_KINEMATICS | TOO_SLOW]
 
 
 @pytest.fixture(scope="module")
@@ -144,19 +151,11 @@ def test_other_analyses_are_refused(tmp_path, deck):
     check(not out.exists(), f"{deck}: {out} was written")
 
 
-@pytest.mark.parametrize("deck", [d for d in planar_decks() if stem(d) in SLIDER_ON_LINKS])
-def test_sliders_on_links_are_refused_at_their_line(tmp_path, deck):
-    out = tmp_path / "out"
-    done = run_fekap("-q", "--spatial", "-o", str(out), deck)
-    check(done.returncode == 2, f"{deck}: exit {done.returncode}, not 2: {done.stderr}")
-    where = f"{deck}:{SLIDER_ON_LINKS[stem(deck)]}:3: error: --spatial does not take sliders on moving links yet"
-    check(done.stderr.startswith(where), f"{deck}: {done.stderr}")
-    check(not out.exists(), f"{deck}: {out} was written")
-
-
 # Decks for what the shipped decks do not have: a roller driven along x, a
 # prismatic ground guide, a roller with a clamp, a ground link clamped at one
-# end, a meshed coupler.
+# end, a meshed coupler, a block on a moving link (an inverted slider-crank:
+# the crank's pin A slides along the lever QB on a block, the link BLK, that
+# keeps the lever's angle).
 HEADER = "SECTions\n  bar E=1 G=1 A=100 I=1 k=5/6\nANALysis\n  time 0 1 0.02\n"
 ROLLER = HEADER + """NODEs
   O 0 0
@@ -208,11 +207,33 @@ DRIVes
   rotation AB rate 2*pi
 END
 """
+PRISMATIC_ON_LINK = HEADER + """NODEs
+  O 0 0
+  A 1 0
+  Q 3 0
+  B -1 0
+  A2 1.5 0
+LINKs
+  OA O A bar
+  QB Q B bar
+  BLK A A2 bar
+SUPPorts
+  O pin
+  Q pin
+SLIDelines
+  slot A on QB prismatic BLK
+DRIVes
+  rotation OA rate 2*pi
+OUTPut
+  track A A2 B
+END
+"""
 
 
 @pytest.mark.parametrize("name,text", [("roller", ROLLER), ("prismatic-guide", PRISMATIC_GUIDE),
                                        ("roller-clamp", ROLLER_CLAMP),
-                                       ("clamped-meshed", CLAMPED_MESHED)])
+                                       ("clamped-meshed", CLAMPED_MESHED),
+                                       ("prismatic-on-link", PRISMATIC_ON_LINK)])
 def test_joints_of_other_decks_match_planar(tmp_path, name, text):
     deck = tmp_path / f"{name}.deck"
     deck.write_text(text)

@@ -349,11 +349,6 @@ contains
                cycle
             end if
          end if
-         if (any(j%kind == [joint_prismatic, joint_cylindrical]) .and. j%node(2) /= 0) then
-            call ctx%error(iline, 4, 'a '//ctx%field(iline, 2)//' joint slides a node along a line of the ground', &
-               & label='write ground as its other node (between two moving links it is not there yet)')
-            cycle
-         end if
          ax = 0
          fine = .true.
          do k = 1, nax

@@ -62,16 +62,31 @@ module fekap_model_spatial
 
 contains
 
-   !> The joints whose relative motion a run reports (joints.csv), in the
-   !> deck's order: every revolute (its angle) and prismatic joint (its stroke).
-   pure function reported_joints(spatial) result(list)
+   !> The rows of joints.csv, in the deck's order: the joint of each row,
+   !> and whether the row is its stroke (else its angle): a revolute joint's
+   !> angle, a prismatic joint's stroke, a cylindrical joint's angle and then
+   !> its stroke (the row named JOINT.stroke).
+   pure subroutine reported_joints(spatial, list, stroke)
       type(spatial_model_type), intent(in) :: spatial
-      integer, allocatable :: list(:)
+      integer, allocatable, intent(out) :: list(:)
+      logical, allocatable, intent(out) :: stroke(:)
       integer :: k
-      allocate (list(0))
+      allocate (list(0), stroke(0))
       if (.not. allocated(spatial%joints)) return
-      list = pack([(k, k=1, size(spatial%joints))], &
-         & spatial%joints%kind == joint_revolute .or. spatial%joints%kind == joint_prismatic)
-   end function reported_joints
+      do k = 1, size(spatial%joints)
+         select case (spatial%joints(k)%kind)
+         case (joint_revolute)
+            list = [list, k]
+            stroke = [stroke, .false.]
+         case (joint_prismatic)
+            list = [list, k]
+            stroke = [stroke, .true.]
+         case (joint_cylindrical)
+            list = [list, k, k]
+            stroke = [stroke, .false., .true.]
+         case default                                    ! spherical, universal, weld: not reported
+         end select
+      end do
+   end subroutine reported_joints
 
 end module fekap_model_spatial

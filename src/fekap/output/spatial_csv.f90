@@ -1,7 +1,8 @@
 !> The CSV tables of a spatial run: points.csv with z columns
 !> (`step,t,point,x,y,z[,vx,vy,vz[,ax,ay,az]]`) and joints.csv
-!> (`step,t,joint,angle[,rate[,acceleration]]`: each revolute joint's angle
-!> and each prismatic joint's stroke relative to the deck's configuration,
+!> (`step,t,joint,angle[,rate[,acceleration]]`: each revolute joint's angle,
+!> each prismatic joint's stroke and each cylindrical joint's angle and
+!> stroke (row JOINT.stroke) relative to the deck's configuration,
 !> fekap_model_spatial's reported_joints), nodes.csv with z columns
 !> (`step,t,A.x,A.y,A.z,B.x,...`) and mechanism.txt with the nodes' z, the
 !> joints and their drives. Rows are appended to the file's text buffer as
@@ -65,14 +66,17 @@ contains
       character(*), intent(in) :: prefix
       logical, intent(in) :: velocities, accelerations
       integer, allocatable :: joints(:)
+      logical, allocatable :: stroke(:)
+      character(:), allocatable :: name
       integer :: i
-      joints = reported_joints(model%spatial)
+      call reported_joints(model%spatial, joints, stroke)
       do i = 1, size(joints)
-         associate (name => model%spatial%joints(joints(i))%name)
-            call reserve_text(out, row_length(len(name), 3))
-            call append_rates_row(out%text, out%n, prefix, name, result%joint_motion(1:1, i), result%joint_motion(2:2, i), &
-               & result%joint_motion(3:3, i), result%has_velocity, velocities, accelerations)
-         end associate
+         name = model%spatial%joints(joints(i))%name
+         ! A cylindrical joint's second row: its stroke.
+         if (stroke(i) .and. model%spatial%joints(joints(i))%kind == joint_cylindrical) name = name//'.stroke'
+         call reserve_text(out, row_length(len(name), 3))
+         call append_rates_row(out%text, out%n, prefix, name, result%joint_motion(1:1, i), result%joint_motion(2:2, i), &
+            & result%joint_motion(3:3, i), result%has_velocity, velocities, accelerations)
       end do
    end subroutine write_joints_rows
 

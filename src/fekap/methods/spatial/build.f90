@@ -8,7 +8,11 @@
 !> angle counted with a sign. A joint's angle (stroke) is the second node's
 !> rotation about (motion along) the axis relative to the first node's, zero
 !> at the deck's configuration; a drive prescribes its change since the
-!> start time, law(t) - law(t_start).
+!> start time, law(t) - law(t_start). A prismatic or cylindrical joint
+!> between two nodes is a slide (fekap_spatial_slideline): its second node's
+!> point stays on the line through that node's start place along the axis,
+!> carried by the first node's frame; the second node's frame is the
+!> first's (prismatic) or its revolute child about the axis (cylindrical).
 module fekap_spatial_build
    use fekap_kinds, only: dp
    use fekap_vectors, only: cross
@@ -20,7 +24,7 @@ module fekap_spatial_build
    use fekap_model_spatial, only: spatial_joint_type, reported_joints, joint_spherical, joint_revolute, joint_universal, &
       & joint_prismatic, joint_cylindrical, joint_weld
    use fekap_spatial_mechanism, only: spatial_mechanism_type, add_point, add_frame, add_node, add_beam, &
-      & add_truss, add_drive, point_fixed, point_free, point_line, frame_fixed, frame_free, frame_revolute, &
+      & add_truss, add_drive, add_slide, point_fixed, point_free, point_line, frame_fixed, frame_free, frame_revolute, &
       & frame_universal
    implicit none
    private
@@ -49,8 +53,8 @@ contains
       integer, allocatable :: point_set(:), frame_set(:), ground_joint(:), class_point(:), class_frame(:)
       integer, allocatable :: angle_dof(:), stroke_dof(:), queue(:), mech_node(:)
       real(dp), allocatable :: angle_sign(:), stroke_sign(:)
-      logical, allocatable :: has_frame(:), used(:)
-      real(dp) :: d(3), v(3), sign
+      logical, allocatable :: has_frame(:), used(:), report_stroke(:)
+      real(dp) :: d(3), v(3), sign, kp
       type(law_type) :: law
       nn = size(model%nodes)
       nj = size(model%spatial%joints)
@@ -60,6 +64,7 @@ contains
          ! Points: the nodes of a joint share one.
          point_set = [(i, i=1, nn)]
          do k = 1, nj
+            if (is_slide(joints(k))) cycle
             if (joints(k)%node(2) > 0) call join(point_set, joints(k)%node(1), joints(k)%node(2))
          end do
          allocate (ground_joint(nn), class_point(nn), source=0)
@@ -118,7 +123,7 @@ contains
          end do
          frame_set = [(i, i=1, nn)]
          do k = 1, nj
-            if (joints(k)%kind == joint_weld .and. joints(k)%node(2) > 0) then
+            if (any(joints(k)%kind == [joint_weld, joint_prismatic]) .and. joints(k)%node(2) > 0) then
                call join(frame_set, joints(k)%node(1), joints(k)%node(2))
             end if
          end do
@@ -126,6 +131,8 @@ contains
             if (has_frame(i)) has_frame(find_root(frame_set, i)) = .true.
          end do
          call check_free_spin(model, frame_set, error)
+         if (allocated(error)) return
+         call check_free_bodies(model, frame_set, error)
          if (allocated(error)) return
          allocate (class_frame(nn), source=0)
          allocate (queue(nn), source=0)
@@ -168,7 +175,8 @@ contains
                c = queue(head)
                head = head + 1
                do k = 1, nj
-                  if (all(joints(k)%kind /= [joint_revolute, joint_universal]) .or. joints(k)%node(2) == 0) cycle
+                  if (all(joints(k)%kind /= [joint_revolute, joint_universal, joint_cylindrical]) .or. &
+                     & joints(k)%node(2) == 0) cycle
                   if (used(k)) cycle
                   if (find_root(frame_set, joints(k)%node(1)) == c) then
                      o = find_root(frame_set, joints(k)%node(2))
@@ -187,7 +195,7 @@ contains
                         & 'spherical, or remove it', error)
                      return
                   end if
-                  if (joints(k)%kind == joint_revolute) then
+                  if (any(joints(k)%kind == [joint_revolute, joint_cylindrical])) then
                      call add_frame(m, frame_revolute, class_frame(o), class_frame(c), joints(k)%axis, error=error)
                      angle_dof(k) = m%frames(class_frame(o))%dof
                      angle_sign(k) = sign
@@ -244,6 +252,33 @@ contains
             end if
          end do
 
+         ! The slides, with a penalty of the links' largest axial stiffness per
+         ! length (as the planar default_penalty: no new scale in the tangent).
+         kp = 0
+         if (allocated(m%beams)) then
+            do i = 1, size(m%beams)
+               kp = max(kp, m%beams(i)%element%section(1)/m%beams(i)%element%length)
+            end do
+         end if
+         if (allocated(m%trusses)) then
+            do i = 1, size(m%trusses)
+               kp = max(kp, m%trusses(i)%element%ea/m%trusses(i)%element%length)
+            end do
+         end if
+         if (.not. kp > 0) kp = 1
+         do k = 1, nj
+            if (.not. is_slide(joints(k))) cycle
+            associate (a => joints(k)%node(1), b => joints(k)%node(2))
+               call add_slide(m, map%node_point(a), class_frame(find_root(frame_set, a)), map%node_point(b), &
+                  & position(b) - position(a), joints(k)%axis, kp, i, error)
+               if (allocated(error)) then
+                  error%message = joints(k)%name//': '//error%message
+                  return
+               end if
+               stroke_dof(k) = m%slides(i)%dof
+            end associate
+         end do
+
          do k = 1, size(model%spatial%drives)
             associate (drive => model%spatial%drives(k))
                if (drive%stroke) then
@@ -257,11 +292,11 @@ contains
             if (allocated(error)) return
          end do
 
-         map%report_joint = reported_joints(model%spatial)
+         call reported_joints(model%spatial, map%report_joint, report_stroke)
          allocate (map%report_dof(size(map%report_joint)), map%report_sign(size(map%report_joint)))
          do i = 1, size(map%report_joint)
             k = map%report_joint(i)
-            if (joints(k)%kind == joint_revolute) then
+            if (.not. report_stroke(i)) then
                map%report_dof(i) = angle_dof(k)
                map%report_sign(i) = angle_sign(k)
             else
@@ -328,6 +363,127 @@ contains
          end associate
       end do
    end subroutine check_free_spin
+
+   !> Bodies whose rotation nothing holds but their points: the frames
+   !> joined by beams (and welds) make a body; one no revolute, universal,
+   !> prismatic, cylindrical or weld joint holds turns freely about the line
+   !> through its points that meet the rest (spherical joints, trusses,
+   !> slides, the ground) when those points are on one line (two spherical
+   !> joints: links welded into a chain between them). Its tangent has a zero
+   !> pivot that round-off hides (LU finds none), so it is an input error at
+   !> the body's first LINKs line (check_free_spin catches the single beam
+   !> first, with its own message).
+   subroutine check_free_bodies(model, frame_set, error)
+      type(model_type), intent(in) :: model
+      integer, intent(in) :: frame_set(:)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: body(size(frame_set)), nn, k, i, b, first, count
+      logical :: held(size(frame_set)), meets(size(frame_set)), beam_node(size(frame_set))
+      real(dp) :: places(3, size(frame_set)), size_
+      character(len=24) :: where_
+      character(:), allocatable :: names
+      nn = size(frame_set)
+      ! Bodies: frame classes joined by beams.
+      body = [(find_root(frame_set, i), i=1, nn)]
+      beam_node = .false.
+      do k = 1, size(model%links)
+         if (model%spatial%truss(k)) cycle
+         call join(body, model%links(k)%node(1), model%links(k)%node(2))
+         beam_node(model%links(k)%node) = .true.
+      end do
+      ! Held: a joint other than spherical (a weld between two nodes only if
+      ! it joins two bodies). Meets: a node of a joint other than such a
+      ! weld, or a truss's end.
+      held = .false.
+      meets = .false.
+      do k = 1, size(model%spatial%joints)
+         associate (joint => model%spatial%joints(k))
+            if (joint%kind == joint_weld .and. joint%node(2) > 0) then
+               if (find_root(body, joint%node(1)) == find_root(body, joint%node(2))) cycle
+            end if
+            do i = 1, 2
+               if (joint%node(i) == 0) cycle
+               meets(joint%node(i)) = .true.
+               if (joint%kind /= joint_spherical) held(find_root(body, joint%node(i))) = .true.
+            end do
+         end associate
+      end do
+      do k = 1, size(model%links)
+         if (model%spatial%truss(k)) meets(model%links(k)%node) = .true.
+      end do
+      size_ = 1
+      do i = 1, nn
+         size_ = max(size_, norm2(place(i)))
+      end do
+      do b = 1, nn
+         if (find_root(body, b) /= b .or. held(b)) cycle
+         if (.not. any([(beam_node(i) .and. find_root(body, i) == b, i=1, nn)])) cycle
+         count = 0
+         do i = 1, nn
+            if (meets(i) .and. find_root(body, i) == b) then
+               count = count + 1
+               places(:, count) = place(i)
+            end if
+         end do
+         if (.not. collinear(places(:, 1:count), 1.0e-9_dp*size_)) cycle
+         first = 0
+         names = ''
+         do k = 1, size(model%links)
+            if (model%spatial%truss(k) .or. find_root(body, model%links(k)%node(1)) /= b) cycle
+            if (first == 0) then
+               first = k
+               names = model%links(k)%name
+            else
+               names = names//', '//model%links(k)%name
+            end if
+         end do
+         associate (link => model%links(first))
+            write (where_, '(i0,a,i0)') link%loc%line, ':', link%loc%col
+            call input_error(error, link%loc%file//':'//trim(where_)//': error: links '//names// &
+               & ' turn together freely about the line through the points where they meet the rest of the '// &
+               & 'mechanism (no joint but spherical ones holds their rotation); hold one of their nodes'' '// &
+               & 'rotation with a revolute, universal or weld joint, or, for a straight chain, make it one truss')
+         end associate
+         return
+      end do
+   contains
+      pure function place(node) result(x)
+         integer, intent(in) :: node
+         real(dp) :: x(3)
+         x = [model%nodes(node)%x, model%spatial%z(node)]
+      end function place
+   end subroutine check_free_bodies
+
+   !> Whether the points p(:, i) lie on one line, within tol.
+   pure logical function collinear(p, tol)
+      real(dp), intent(in) :: p(:, :), tol
+      real(dp) :: far, u(3)
+      integer :: i, ifar
+      collinear = .true.
+      if (size(p, 2) < 2) return
+      far = 0
+      ifar = 1
+      do i = 2, size(p, 2)
+         if (norm2(p(:, i) - p(:, 1)) > far) then
+            far = norm2(p(:, i) - p(:, 1))
+            ifar = i
+         end if
+      end do
+      if (far < tol) return
+      u = (p(:, ifar) - p(:, 1))/far
+      do i = 2, size(p, 2)
+         if (norm2(cross(p(:, i) - p(:, 1), u)) > tol) then
+            collinear = .false.
+            return
+         end if
+      end do
+   end function collinear
+
+   !> Whether a joint slides a node along a line carried by another's frame.
+   pure logical function is_slide(joint)
+      type(spatial_joint_type), intent(in) :: joint
+      is_slide = any(joint%kind == [joint_prismatic, joint_cylindrical]) .and. joint%node(2) > 0
+   end function is_slide
 
    !> Whether a joint to the ground fixes its point (not a line to slide on).
    pure logical function grounds_point(joint)

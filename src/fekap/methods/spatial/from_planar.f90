@@ -16,6 +16,13 @@
 !>                  joint to the ground along the free line, and a revolute
 !>                  joint about +z from it to each group (a weld for the
 !>                  clamped group, or a prismatic slideline's slave link);
+!>   slider on a moving link (SLIDelines `on LINK`)
+!>                  a slider block NODE.SLIDELINE on a prismatic joint to
+!>                  the link's first node (a slide along the line through
+!>                  the slave's place in the link's direction, carried by
+!>                  that node's rotation: fekap_spatial_slideline), and a
+!>                  revolute joint about +z from it to each group (a weld
+!>                  for a prismatic slideline's slave link);
 !>   meshed link    its elements as links LINK, LINK#2, ... between the
 !>                  interior nodes LINK#1, ... (welded, as links sharing a
 !>                  node are in a spatial model);
@@ -29,7 +36,7 @@
 !> about parallel axes make a planar loop redundant in 3D (a four-bar has
 !> three redundant constraints), which the method takes without special
 !> settings (Eischen, Sun & Marler's links are elastic; docs/spatial.md).
-!> Kinematics only; a slider on moving links is not converted yet.
+!> Kinematics only.
 module fekap_spatial_from_planar
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
@@ -69,6 +76,8 @@ contains
       !> Per original node: its slider block's prismatic joint (0: none).
       integer, allocatable :: block_joint(:)
       integer :: nn, nl, k, n, j, e, g, ng, nd, blk, ground_link, slide
+      !> Slider blocks on moving links: the block node and its slideline.
+      integer, allocatable :: moving_block(:), moving_slide(:)
       integer, allocatable :: at_link(:), at_end(:), group(:), group_node(:)
       real(dp) :: axis(3), factor
       character(:), allocatable :: what
@@ -91,7 +100,7 @@ contains
       nl = size(model%links)
       nodes = model%nodes
       links = model%links
-      allocate (joints(0), drives(0))
+      allocate (joints(0), drives(0), moving_block(0), moving_slide(0))
 
       ! Meshed links: one link per element, welded at the interior nodes LINK#k.
       allocate (elem_end(nl, 2), end_joint(nl, 2), source=0)
@@ -170,10 +179,10 @@ contains
          end do
          if (slide > 0) then
             associate (s => model%slidelines(slide))
-               if (.not. s%ground) then
-                  call loc_error(s%loc, '--spatial does not take sliders on moving links yet: slideline '// &
-                     & s%name//' keeps node '//model%nodes(n)%name//' on links', &
-                     & 'run this deck without --spatial (a spatial slideline along a line is still to come)')
+               if (.not. s%ground .and. size(s%master_links) /= 1) then
+                  call loc_error(s%loc, '--spatial takes a slider on one moving link: slideline '// &
+                     & s%name//' keeps node '//model%nodes(n)%name//' on a line of several links', &
+                     & 'run this deck without --spatial')
                   return
                end if
                if (k > 0) then
@@ -209,9 +218,14 @@ contains
             end associate
          else if (slide > 0) then
             associate (s => model%slidelines(slide))
-               axis = [s%guide(:, 2) - s%guide(:, 1), 0.0_dp]
                if (s%kind == slide_prismatic) ground_link = s%slave_link
-               call add_block(model%nodes(n)%name//'.'//s%name, axis, s%loc, ground_link)
+               if (s%ground) then
+                  axis = [s%guide(:, 2) - s%guide(:, 1), 0.0_dp]
+                  call add_block(model%nodes(n)%name//'.'//s%name, axis, s%loc, ground_link)
+               else
+                  call add_moving_block(model%nodes(n)%name//'.'//s%name, s%loc, ground_link)
+                  moving_slide = [moving_slide, slide]
+               end if
                if (allocated(error)) return
             end associate
          else
@@ -219,6 +233,15 @@ contains
                call add_joint(joint_revolute, group_node(1), group_node(g), model%nodes(n)%loc, z_axis)
             end do
          end if
+      end do
+
+      ! The slides of the blocks on moving links, now that the master links'
+      ! end nodes are known: along the link, carried by its first node.
+      do j = 1, size(moving_block)
+         k = model%slidelines(moving_slide(j))%master_links(1)
+         axis = [model%nodes(model%links(k)%node(2))%x - model%nodes(model%links(k)%node(1))%x, 0.0_dp]
+         call add_joint(joint_prismatic, links(elem_end(k, 1))%node(1), moving_block(j), &
+            & model%slidelines(moving_slide(j))%loc, axis)
       end do
 
       ! Drives: a link's rotation is its end's revolute joint to the ground
@@ -354,6 +377,28 @@ contains
             end if
          end do
       end subroutine add_block
+
+      !> A slider block at node n on a moving link (its slide added after the
+      !> nodes), and a joint from it to each group: a weld for the group of
+      !> link `welded` (0: none), else a revolute about +z. Its revolute
+      !> joints turn relative to the link, so they hold no rotation drive.
+      subroutine add_moving_block(name, loc, welded)
+         character(*), intent(in) :: name
+         type(source_loc_type), intent(in) :: loc
+         integer, intent(in) :: welded
+         integer :: b, gg
+         call add_node(name, model%nodes(n)%x, loc)
+         if (allocated(error)) return
+         b = size(nodes)
+         moving_block = [moving_block, b]
+         do gg = 1, ng
+            if (welded > 0 .and. any(at_link == welded .and. group == gg)) then
+               call add_joint(joint_weld, b, group_node(gg), loc)
+            else
+               call add_joint(joint_revolute, b, group_node(gg), loc, z_axis)
+            end if
+         end do
+      end subroutine add_moving_block
 
       !> An input error at loc.
       subroutine loc_error(loc, message, advice)

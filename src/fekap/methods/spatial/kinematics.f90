@@ -23,7 +23,8 @@ module fekap_spatial_kinematics
    use fekap_element_se3, only: so3_exp, so3_update
    use fekap_element_se3_beam, only: se3_beam_residual, se3_beam_convective, truss_residual, truss_convective
    use fekap_spatial_mechanism, only: spatial_mechanism_type, point_free, point_line, frame_free, frame_revolute, &
-      & frame_universal
+      & frame_universal, spatial_slide_type
+   use fekap_spatial_slideline, only: slide_gap, slide_convective
    implicit none
    private
 
@@ -42,6 +43,8 @@ module fekap_spatial_kinematics
    !> point positions x and G = dx/dq, frame rotations R and W = dtheta/dq
    !> (body increments).
    type :: spatial_configuration_type
+      !> The state's dofs (the slides' strokes).
+      real(dp), allocatable :: q(:)
       real(dp), allocatable :: x(:, :), g(:, :, :)
       real(dp), allocatable :: r(:, :, :), w(:, :, :)
       !> The dofs that G of point i depends on, point_dofs(point_start(i):
@@ -109,6 +112,7 @@ contains
       nf = size(s%r, 3)
       allocate (c%x(3, np), c%g(3, m%ndof, np), c%r(3, 3, nf), c%w(3, m%ndof, nf), source=0.0_dp)
       call dof_supports(m, c)
+      c%q = s%q
       do i = 1, np
          associate (p => m%points(i))
             select case (p%kind)
@@ -272,6 +276,7 @@ contains
       ne = 0
       if (allocated(m%beams)) ne = ne + size(m%beams)
       if (allocated(m%trusses)) ne = ne + size(m%trusses)
+      if (allocated(m%slides)) ne = ne + size(m%slides)
       allocate (group_start(ne + 1))
       group_start(1) = 1
       group_dof = [integer ::]
@@ -285,6 +290,12 @@ contains
       if (allocated(m%trusses)) then
          do i = 1, size(m%trusses)
             dofs = element_dofs(c, m%trusses(i)%points, [integer ::])
+            call add_group()
+         end do
+      end if
+      if (allocated(m%slides)) then
+         do i = 1, size(m%slides)
+            dofs = slide_dofs(c, m%slides(i))
             call add_group()
          end do
       end if
@@ -356,7 +367,8 @@ contains
       type(spatial_tangent_type), intent(inout), optional :: sparse
       real(dp) :: x(3, 2), r(3, 3, 2), f(12), ke(12, 12), b(6, 12), ce(6)
       real(dp) :: nv(3, 2), nw(3, 2), na(3, 2), ft(6), kt(6, 6), et, u(3)
-      real(dp), allocatable :: ge(:, :), gt(:, :), kes(:, :)
+      real(dp) :: ra(3, 3), gap(3), ns(3, 10), omega(3), ka(3), cs(3)
+      real(dp), allocatable :: ge(:, :), gt(:, :), gs(:, :), ng(:, :), kes(:, :)
       integer, allocatable :: dofs(:)
       integer :: i, n, p, fr
       logical :: with_tangent
@@ -438,7 +450,63 @@ contains
             end if
          end do
       end if
+      if (allocated(m%slides)) then
+         ! Points on lines carried by moving frames (penalty slidelines,
+         ! fekap_spatial_slideline): force N^T kp g, tangent kp N^T N.
+         do i = 1, size(m%slides)
+            associate (sl => m%slides(i))
+               dofs = slide_dofs(c, sl)
+               if (allocated(gs)) deallocate (gs)
+               allocate (gs(10, size(dofs)), source=0.0_dp)
+               gs(1:3, :) = c%g(:, dofs, sl%point_b)
+               gs(4:6, :) = c%g(:, dofs, sl%point_a)
+               ra = identity()
+               if (sl%frame_a > 0) then
+                  ra = c%r(:, :, sl%frame_a)
+                  gs(7:9, :) = c%w(:, dofs, sl%frame_a)
+               end if
+               where (dofs == sl%dof) gs(10, :) = 1
+               call slide_gap(c%x(:, sl%point_a), ra, c%x(:, sl%point_b), c%q(sl%dof), sl%offset, sl%axis, gap, ns)
+               ng = matmul(ns, gs)
+               residual(dofs) = residual(dofs) + sl%kp*matmul(gap, ng)
+               if (with_tangent) then
+                  kes = sl%kp*matmul(transpose(ng), ng)
+                  if (present(tangent)) tangent(dofs, dofs) = tangent(dofs, dofs) + kes
+                  if (present(sparse)) call sparse%add_element(dofs, kes)
+               end if
+               if (present(conv)) then
+                  omega = 0
+                  ka = 0
+                  if (sl%frame_a > 0) then
+                     omega = matmul(gs(7:9, :), v(dofs))
+                     ka = kappa(:, sl%frame_a)
+                  end if
+                  cs = slide_convective(ra, c%q(sl%dof), sl%offset, sl%axis, omega, ka, v(sl%dof))
+                  conv(dofs) = conv(dofs) + sl%kp*matmul(cs, ng)
+               end if
+               if (present(rate_load)) rate_load(dofs) = rate_load(dofs) + sl%kp*matmul(matmul(ng, rate(dofs)), ng)
+            end associate
+         end do
+      end if
    end subroutine assemble_spatial
+
+   !> The dofs a slide's gap depends on: its points', its line frame's and its stroke.
+   pure function slide_dofs(c, sl) result(dofs)
+      type(spatial_configuration_type), intent(in) :: c
+      type(spatial_slide_type), intent(in) :: sl
+      integer, allocatable :: dofs(:)
+      dofs = element_dofs(c, [sl%point_b, sl%point_a], [sl%frame_a])
+      if (.not. any(dofs == sl%dof)) dofs = [dofs, sl%dof]
+   end function slide_dofs
+
+   pure function identity() result(e)
+      real(dp) :: e(3, 3)
+      integer :: k
+      e = 0
+      do k = 1, 3
+         e(k, k) = 1
+      end do
+   end function identity
 
    !> The drives' values at t in s%q; their rates and second rates in vd, ad
    !> (full-length vectors, zero at the free dofs).

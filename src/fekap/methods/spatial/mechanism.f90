@@ -8,7 +8,13 @@
 !>               an axis fixed in that frame, R_B = R_A exp(theta n^);
 !>   universal   two angles about two perpendicular axes,
 !>               R_B = R_A exp(alpha n1^) exp(beta n2^);
-!>   prismatic   (to the ground) a point on a line, x = x0 + s t, one dof.
+!>   prismatic   (to the ground) a point on a line, x = x0 + s t, one dof;
+!>   slide       a point on a line carried by a moving frame (a prismatic or
+!>               cylindrical joint between links): the paper's penalty
+!>               slideline with the stroke s as a dof (fekap_spatial_slideline);
+!>               the slider's rotation is set by the frame tree (the line's
+!>               frame for a prismatic joint, a revolute child about the
+!>               line for a cylindrical one).
 !>
 !> These are the eliminated ("relative-angle dof") joints of the study
 !> shared/studies/spatial-se3 (its item 5): as accurate as penalty joints,
@@ -26,7 +32,7 @@ module fekap_spatial_mechanism
    private
 
    public :: spatial_mechanism_type, add_point, add_frame, add_node, add_beam, add_truss, add_drive
-   public :: add_spherical, add_revolute, add_universal
+   public :: add_spherical, add_revolute, add_universal, add_slide
 
    !> Kinds of point: fixed (no dof), free (3 translations), on a ground line (1).
    integer, parameter, public :: point_fixed = 0, point_free = 1, point_line = 2
@@ -70,6 +76,19 @@ module fekap_spatial_mechanism
       integer :: points(2) = 0
    end type spatial_truss_type
 
+   !> A slider point on a line carried by a moving frame: the line is
+   !> x_A + R_A (offset + s axis) (point A, frame A), its stroke s a dof;
+   !> the penalty kp on the gap g = x_B - x_A - R_A (offset + s axis) keeps
+   !> point B on it (fekap_spatial_slideline).
+   type, public :: spatial_slide_type
+      !> The line's point and frame, the slider's point.
+      integer :: point_a = 0, frame_a = 0, point_b = 0
+      integer :: dof = 0
+      !> In frame A's body axes: the line's place at s = 0 (from point A) and unit direction.
+      real(dp) :: offset(3) = 0, axis(3) = 0
+      real(dp) :: kp = 0
+   end type spatial_slide_type
+
    type, public :: spatial_drive_type
       integer :: dof = 0
       type(law_type) :: law
@@ -82,6 +101,7 @@ module fekap_spatial_mechanism
       type(spatial_beam_type), allocatable :: beams(:)
       type(spatial_truss_type), allocatable :: trusses(:)
       type(spatial_drive_type), allocatable :: drives(:)
+      type(spatial_slide_type), allocatable :: slides(:)
       integer :: ndof = 0
       !> Whether a dof is a length (scaled by `length` in convergence tests).
       logical, allocatable :: is_length(:)
@@ -281,6 +301,43 @@ contains
       m%trusses = [m%trusses, t]
       m%length = max(m%length, t%element%length)
    end subroutine add_truss
+
+   !> A slide of point b along the line through point a's place plus offset
+   !> (global axes at the reference configuration, where every frame is I),
+   !> direction axis, carried by frame fa (0: the ground); penalty kp > 0.
+   !> Its stroke dof is id's `dof`.
+   subroutine add_slide(m, a, fa, b, offset, axis, kp, id, error)
+      type(spatial_mechanism_type), intent(inout) :: m
+      integer, intent(in) :: a, fa, b
+      real(dp), intent(in) :: offset(3), axis(3), kp
+      integer, intent(out) :: id
+      type(error_type), allocatable, intent(out) :: error
+      type(spatial_slide_type) :: sl
+      integer :: nf, np
+      if (.not. allocated(m%slides)) allocate (m%slides(0))
+      nf = 0
+      if (allocated(m%frames)) nf = size(m%frames)
+      np = 0
+      if (allocated(m%points)) np = size(m%points)
+      if (fa < 0 .or. fa > nf .or. a < 1 .or. a > np .or. b < 1 .or. b > np) then
+         call input_error(error, 'a slide names a point or frame that does not exist')
+         return
+      end if
+      if (.not. kp > 0) then
+         call input_error(error, 'a slide needs a positive penalty')
+         return
+      end if
+      call unit_axis(axis, sl%axis, error)
+      if (allocated(error)) return
+      sl%point_a = a
+      sl%frame_a = fa
+      sl%point_b = b
+      sl%offset = offset
+      sl%kp = kp
+      call new_dofs(m, 1, .true., sl%dof)
+      m%slides = [m%slides, sl]
+      id = size(m%slides)
+   end subroutine add_slide
 
    !> Prescribe dof by a time law (a revolute frame's angle: its frame%dof;
    !> a line point's stroke: its point%dof).
