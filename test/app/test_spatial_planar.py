@@ -33,14 +33,7 @@ NOT_KINEMATICS = {"cantilever-rollup", "fourbar-kinetostatics", "slider-crank-ki
 # Decks the spatial stepper does not pass, and why (docs/deck-format.md, "Planar decks in 3D").
 NO_CHANGE_POINTS = ("the spatial stepper has no change-point handling: at t = 0.25 every bar of the A02 chain is "
                     "horizontal and the tangent loses N ranks; Newton fails even with 8 step cuts (exit 3)")
-SQUARED_SLIDER = ("the spatial rate solve squares the condition number (K = B^T k B, no square-root form), and "
-                  "the deck's links (EA = 100 against EI = 1 at lengths up to 474) spread it: velocities {} and "
-                  "accelerations {} of the largest off the planar run, whose rates are within 1e-12 of the exact "
-                  "Example 5 (positions agree within 6e-16; with EA = 1, EI = 1e5 the spatial rates are within "
-                  "4e-14 of the largest)")
 KNOWN_FAILURES = {
-    "quick-return": {"rates": SQUARED_SLIDER.format("9.5e-9", "7.8e-9")},
-    "quick-return-meshed-lever": {"rates": SQUARED_SLIDER.format("1.4e-8", "1.6e-8")},
     "a02-n2-dt0p01": {"run": NO_CHANGE_POINTS},
     "a02-n4-dt0p025": {"run": NO_CHANGE_POINTS},
     "a02-n40-dt0p05": {"run": NO_CHANGE_POINTS},

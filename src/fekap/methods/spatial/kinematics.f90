@@ -354,6 +354,9 @@ contains
    !> by element from each element's strain rate B (G rate) (the square-root
    !> form's residual: no cancellation of a global product K rate, whose
    !> rounding would carry the squared condition number into the rates).
+   !> With conv as well, rate_load = sum G^T B^T k (B (G rate) + c): K rate +
+   !> conv with each element's strain acceleration summed before k scales
+   !> it, the accelerations' residual in the same form.
    !> Each element works on its own dofs only (element_dofs).
    pure subroutine assemble_spatial(m, c, residual, tangent, v, kappa, conv, rate, rate_load, sparse)
       type(spatial_mechanism_type), intent(in) :: m
@@ -407,12 +410,13 @@ contains
                call se3_beam_residual(m%beams(i)%element, x, r, f, compatibility=b)
             end if
             residual(dofs) = residual(dofs) + matmul(f, ge)
+            ce = 0
             if (present(conv)) then
                ce = se3_beam_convective(x, r, nv, nw, na)
                conv(dofs) = conv(dofs) + matmul(matmul(matmul(m%beams(i)%element%k, ce), b), ge)
             end if
             if (present(rate_load)) then
-               ce = matmul(b, matmul(ge, rate(dofs)))
+               ce = ce + matmul(b, matmul(ge, rate(dofs)))
                rate_load(dofs) = rate_load(dofs) + matmul(matmul(matmul(m%beams(i)%element%k, ce), b), ge)
             end if
          end do
@@ -438,15 +442,16 @@ contains
             end if
             residual(dofs) = residual(dofs) + matmul(ft, gt)
             u = (x(:, 2) - x(:, 1))/norm2(x(:, 2) - x(:, 1))
+            et = 0
             if (present(conv)) then
                ! B = (-u, u), k = EA/L.
-               et = truss_convective(x, nv)*m%trusses(i)%element%ea/m%trusses(i)%element%length
-               conv(dofs) = conv(dofs) + et*matmul([-u, u], gt)
+               et = truss_convective(x, nv)
+               conv(dofs) = conv(dofs) + et*m%trusses(i)%element%ea/m%trusses(i)%element%length*matmul([-u, u], gt)
             end if
             if (present(rate_load)) then
-               et = dot_product(u, matmul(gt(4:6, :) - gt(1:3, :), rate(dofs)))* &
-                  & m%trusses(i)%element%ea/m%trusses(i)%element%length
-               rate_load(dofs) = rate_load(dofs) + et*matmul([-u, u], gt)
+               et = et + dot_product(u, matmul(gt(4:6, :) - gt(1:3, :), rate(dofs)))
+               rate_load(dofs) = rate_load(dofs) + et*m%trusses(i)%element%ea/m%trusses(i)%element%length* &
+                  & matmul([-u, u], gt)
             end if
          end do
       end if
@@ -474,6 +479,7 @@ contains
                   if (present(tangent)) tangent(dofs, dofs) = tangent(dofs, dofs) + kes
                   if (present(sparse)) call sparse%add_element(dofs, kes)
                end if
+               cs = 0
                if (present(conv)) then
                   omega = 0
                   ka = 0
@@ -484,7 +490,7 @@ contains
                   cs = slide_convective(ra, c%q(sl%dof), sl%offset, sl%axis, omega, ka, v(sl%dof))
                   conv(dofs) = conv(dofs) + sl%kp*matmul(cs, ng)
                end if
-               if (present(rate_load)) rate_load(dofs) = rate_load(dofs) + sl%kp*matmul(matmul(ng, rate(dofs)), ng)
+               if (present(rate_load)) rate_load(dofs) = rate_load(dofs) + sl%kp*matmul(cs + matmul(ng, rate(dofs)), ng)
             end associate
          end do
       end if
@@ -642,8 +648,8 @@ contains
       call kt%solve(rhs)
       a(kt%fdof) = rhs
       do i = 1, rate_refinements
-         call assemble_spatial(m, c, res, rate=a, rate_load=load)
-         rhs = -load(kt%fdof) - conv(kt%fdof)
+         call assemble_spatial(m, c, res, v=v, kappa=kappa, conv=conv, rate=a, rate_load=load)
+         rhs = -load(kt%fdof)
          call kt%solve(rhs)
          a(kt%fdof) = a(kt%fdof) + rhs
       end do
