@@ -504,3 +504,22 @@ def test_sleeve_on_a_turning_arm_matches_closed_form(tmp_path):
     check_joint(out, "JS", psi)
     check_joint(out, "JS.stroke", stroke)
     check_iterations(out)
+
+
+def test_slide_on_no_link_is_input_error(tmp_path):
+    """A cylindrical joint between two nodes whose first node is on no link:
+    nothing carries its line, an input error at the joint's line."""
+    text = (DECKS / "sleeve.deck").read_text()
+    old_node, old_joint = "  E    0.5  0  0.3", "  JS  cylindrical  M       S   1 0 0"
+    check(old_node in text and old_joint in text, "the sleeve deck's lines changed")
+    bad = tmp_path / "bad.deck"
+    bad.write_text(text.replace(old_node, old_node + "\n  X    0.5  0  0")
+                   .replace(old_joint, "  JS  cylindrical  X       S   1 0 0"))
+    line, col = field_place(bad.read_text(), "JS", 1)
+    out = tmp_path / "out"
+    done = run_fekap("-o", str(out), str(bad))
+    check(done.returncode == 2, f"exit {done.returncode}, not 2 (input error): {done.stderr}")
+    for phrase in (f"{bad}:{line}:{col}:", "the first node of joint JS is on no beam link"):
+        check(phrase in done.stderr, f"the message does not say {phrase!r}: {done.stderr}")
+    written = sorted(p.name for p in out.iterdir()) if out.exists() else []
+    check(not written, f"files were written: {written}")

@@ -54,6 +54,7 @@ contains
       integer, allocatable :: angle_dof(:), stroke_dof(:), queue(:), mech_node(:)
       real(dp), allocatable :: angle_sign(:), stroke_sign(:)
       logical, allocatable :: has_frame(:), used(:), report_stroke(:)
+      logical :: carried
       real(dp) :: d(3), v(3), sign, kp
       type(law_type) :: law
       nn = size(model%nodes)
@@ -268,6 +269,20 @@ contains
          if (.not. kp > 0) kp = 1
          do k = 1, nj
             if (.not. is_slide(joints(k))) cycle
+            carried = .false.
+            do i = 1, size(model%links)
+               if (model%spatial%truss(i)) cycle
+               if (find_root(frame_set, model%links(i)%node(1)) == find_root(frame_set, joints(k)%node(1)) .or. &
+                  & find_root(frame_set, model%links(i)%node(2)) == find_root(frame_set, joints(k)%node(1))) then
+                  carried = .true.
+               end if
+            end do
+            if (.not. carried) then
+               call joint_error(joints(k), 'the first node of joint '//joints(k)%name//' is on no beam link, '// &
+                  & 'so nothing carries the line its second node slides along', &
+                  & 'write first a node of the link that carries the line (a beam, not a truss)', error)
+               return
+            end if
             associate (a => joints(k)%node(1), b => joints(k)%node(2))
                call add_slide(m, map%node_point(a), class_frame(find_root(frame_set, a)), map%node_point(b), &
                   & position(b) - position(a), joints(k)%axis, kp, i, error)
