@@ -22,6 +22,10 @@
 !> differences (strain_rates, strain_accelerations), which keeps them free
 !> of the cancellation of a global product: they are the residuals of the
 !> rates' refinement step.
+!>
+!> The module is over 600 lines with one concept: B's assembly (its entries'
+!> destinations found once), its band LU, solves and condition estimate in
+!> loops, and the rates' residuals all work on B's band row order and storage.
 module fekap_assembly_strain_rate
    use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
@@ -284,7 +288,7 @@ contains
             values = [-c*rl, -s*rl, g2/2, c*rl, s*rl, g2/2, &
                & s*rl, -c*rl, -(1 + g1)/2, -s*rl, c*rl, -(1 + g1)/2, -1.0_dp, 1.0_dp]
             call scatter_entries(self%element_map(:, :, e), self%element_count(1, e), self%element_count(2, e), &
-               & values, self%ab, self%bd)
+               & values, size(self%ab), self%ab, size(self%bd), self%bd)
          end associate
       end do
       do i = 1, size(mesh%slides)
@@ -374,10 +378,11 @@ contains
    !> Add an element's entries of B through its lists of destinations
    !> (element_map): nb into the band storage ab, then nd into B_d, each
    !> array taken in memory order.
-   pure subroutine scatter_entries(map, nb, nd, values, ab, bd)
-      integer, intent(in) :: map(2, element_entries), nb, nd
+   pure subroutine scatter_entries(map, nb, nd, values, nab, ab, nbd, bd)
+      integer, intent(in) :: map(2, element_entries), nb, nd, nab, nbd
       real(dp), intent(in) :: values(element_entries)
-      real(dp), intent(inout) :: ab(*), bd(*)
+      !> ab and bd as arrays of their sizes (one index per entry).
+      real(dp), intent(inout) :: ab(nab), bd(nbd)
       integer :: m
       do m = 1, nb
          ab(map(2, m)) = ab(map(2, m)) + values(map(1, m))

@@ -81,7 +81,7 @@ contains
       real(dp), intent(in), optional :: load_rate(:)
       integer :: k
       v = 0
-      v(mesh%driven_dof) = vd
+      call put_driven(mesh, vd, v)
       call drive_load_rhs(system, mesh, vd, load_rate)
       call solve_system(system, counts)
       do k = 1, mesh%nfree
@@ -109,7 +109,7 @@ contains
       integer :: k
       call assemble_second_derivative_at(system, mesh, q, v, seg, work, counts)
       a = 0
-      a(mesh%driven_dof) = ad
+      call put_driven(mesh, ad, a)
       call drive_load_rhs(system, mesh, ad, load_rate2)
       do k = 1, mesh%nfree
          system%rhs(k, 1) = system%rhs(k, 1) - work(mesh%eq_dof(k))
@@ -133,7 +133,7 @@ contains
       real(dp), contiguous, intent(inout) :: work(:)
       integer :: pass
       v = 0
-      v(mesh%driven_dof) = vd
+      call put_driven(mesh, vd, v)
       do pass = 1, root_passes
          call strain_rates(root, mesh, v, work)
          call add_root_correction(root, mesh, work, v)
@@ -154,7 +154,7 @@ contains
       real(dp), contiguous, intent(inout) :: work(:)
       integer :: pass
       a = 0
-      a(mesh%driven_dof) = ad
+      call put_driven(mesh, ad, a)
       do pass = 1, root_passes
          call strain_accelerations(root, mesh, v, a, work)
          call add_root_correction(root, mesh, work, a)
@@ -179,6 +179,19 @@ contains
          resp(mesh%driven_dof(j), j) = 1
       end do
    end subroutine root_drive_response
+
+   !> x(mesh%driven_dof) = values, in a loop: the assignment through the
+   !> vector subscript copied the index list to a heap temporary (a malloc
+   !> and a free) at every call.
+   pure subroutine put_driven(mesh, values, x)
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: values(:)
+      real(dp), contiguous, intent(inout) :: x(:)
+      integer :: j
+      do j = 1, size(mesh%driven_dof)
+         x(mesh%driven_dof(j)) = values(j)
+      end do
+   end subroutine put_driven
 
    !> x_f += -B_f^-1 r: the correction of the free dofs of x for the residual
    !> r (over B_f's rows, overwritten), with the factor in root.
