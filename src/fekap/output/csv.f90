@@ -5,7 +5,11 @@
 !> to the file's text buffer, which writes them in large pieces; mesh.csv,
 !> written once, goes straight to a unit open for unformatted stream access.
 !> Writers never open files themselves. Reals are written with 17
-!> significant digits, enough to round-trip.
+!> significant digits, enough to round-trip. The module is over 600 lines
+!> because the tables' rows share its row prefix, its row lengths and the
+!> cache of number texts that the prefix carries (real_text_cache_type),
+!> which keep the rows of a step in one place; splitting the once-written
+!> mechanism.txt records off would be the way to shorten it.
 module fekap_output_csv
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, effects_dynamics, integrator_names
