@@ -78,16 +78,19 @@ contains
       class(load_set_type), intent(in) :: self
       real(dp), intent(in) :: t
       real(dp), intent(out) :: f(:)
-      real(dp) :: lambda(size(self%f, 2)), df, ddf
+      real(dp) :: lambda, df, ddf
       integer :: g
-      f = 0
-      if (size(self%f, 2) == 0) return
-      do g = 1, size(self%f, 2)
-         call load_factor(self%factor(g), t, lambda(g), df, ddf)
-      end do
-      f = lambda(1)*self%f(:, 1)
+      ! No array of the factors: an automatic array is a malloc and a free
+      ! per call with gfortran, and this is called at every assembly.
+      if (size(self%f, 2) == 0) then
+         f = 0
+         return
+      end if
+      call load_factor(self%factor(1), t, lambda, df, ddf)
+      f = lambda*self%f(:, 1)
       do g = 2, size(self%f, 2)
-         f = f + lambda(g)*self%f(:, g)
+         call load_factor(self%factor(g), t, lambda, df, ddf)
+         f = f + lambda*self%f(:, g)
       end do
    end subroutine load_set_at
 

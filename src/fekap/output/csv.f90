@@ -5,7 +5,11 @@
 !> to the file's text buffer, which writes them in large pieces; mesh.csv,
 !> written once, goes straight to a unit open for unformatted stream access.
 !> Writers never open files themselves. Reals are written with 17
-!> significant digits, enough to round-trip.
+!> significant digits, enough to round-trip. The module is over 600 lines
+!> because the tables' rows share its row prefix, its row lengths and the
+!> cache of number texts that the prefix carries (real_text_cache_type),
+!> which keep the rows of a step in one place; splitting the once-written
+!> mechanism.txt records off would be the way to shorten it.
 module fekap_output_csv
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, effects_dynamics, integrator_names
@@ -13,6 +17,7 @@ module fekap_output_csv
    use fekap_model_results, only: step_result_type
    use fekap_model_reactions, only: reaction_row_type, reaction_rows
    use fekap_output_format, only: append_real, append_integer, append_text, real_text
+   use fekap_output_exact_digits, only: i8
    use fekap_output_buffer, only: text_buffer_type, reserve_text
    implicit none
    private
@@ -42,11 +47,33 @@ module fekap_output_csv
    !> integer, and of the prefix `step,t,` of a row.
    integer, parameter :: real_width = 24, integer_width = 11, prefix_length = integer_width + real_width + 2
 
+   !> Slots of real_text_cache_type (a power of two: the slot is the top
+   !> bits of a product).
+   integer, parameter :: cache_bits = 8, cache_slots = 2**cache_bits
+
+   !> The texts of the last reals written to the tables, by their bits. The
+   !> rows of a run write the same values again and again: a fixed node's
+   !> coordinates, a constant drive rate, exact zeros, a tracked point's
+   !> position in points.csv and again in nodes.csv; copying a text costs a
+   !> tenth of making it. Direct-mapped: each slot holds the last value whose
+   !> hash fell in it (length 0: none yet), its text in 24 characters of
+   !> which `length` count.
+   type, public :: real_text_cache_type
+      integer(i8) :: bits(0:cache_slots - 1) = 0
+      integer :: length(0:cache_slots - 1) = 0
+      character(len=real_width) :: text(0:cache_slots - 1) = ''
+   end type real_text_cache_type
+
    !> `step,t,`, the start of every row of a step in every table: its text
-   !> is made once per step (new_row_prefix), not once per row.
+   !> is made once per step (new_row_prefix), not once per row. It goes to
+   !> every table's rows, and with it the texts of the last reals written
+   !> (`numbers`), which the tables share: a value written again, in the
+   !> same table at a later step or in another table at the same step, is
+   !> copied, not formatted again.
    type, public :: row_prefix_type
       character(len=prefix_length) :: text = ''
       integer :: n = 0
+      type(real_text_cache_type) :: numbers
    end type row_prefix_type
 
 contains
@@ -64,7 +91,7 @@ contains
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       !> new_row_prefix of the result.
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       logical, intent(in) :: velocities, accelerations
       integer :: i, node, length
       length = 0
@@ -75,7 +102,7 @@ contains
       do i = 1, size(model%output%points)
          node = model%output%points(i)
          call append_rates_row(out%text, out%n, prefix%text(1:prefix%n), model%nodes(node)%name, result%pos(:, node), &
-            & result%vel(:, node), result%acc(:, node), result%has_velocity, velocities, accelerations)
+            & result%vel(:, node), result%acc(:, node), result%has_velocity, velocities, accelerations, prefix%numbers)
       end do
    end subroutine write_points_rows
 
@@ -92,7 +119,7 @@ contains
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       !> new_row_prefix of the result.
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       logical, intent(in) :: velocities, accelerations
       integer :: i, link, length
       length = 0
@@ -103,7 +130,8 @@ contains
       do i = 1, size(model%output%links)
          link = model%output%links(i)
          call append_rates_row(out%text, out%n, prefix%text(1:prefix%n), model%links(link)%name, result%angle(link:link), &
-            & result%omega(link:link), result%alpha(link:link), result%has_velocity, velocities, accelerations)
+            & result%omega(link:link), result%alpha(link:link), result%has_velocity, velocities, accelerations, &
+            & prefix%numbers)
       end do
    end subroutine write_links_rows
 
@@ -128,7 +156,8 @@ contains
 
    !> The prefix `step,t,` of the rows of the step of `result`.
    pure subroutine new_row_prefix(self, result)
-      type(row_prefix_type), intent(out) :: self
+      !> Its cache of texts is kept from step to step.
+      type(row_prefix_type), intent(inout) :: self
       type(step_result_type), intent(in) :: result
       self%n = 0
       call append_integer(self%text, self%n, result%step)
@@ -139,39 +168,97 @@ contains
 
    !> `step,t,name,q[,dq[,ddq]]` after its prefix `step,t,`: the rate columns
    !> as computed, left empty at a step where they are not known (a singular
-   !> configuration).
-   pure subroutine append_rates_row(text, n, prefix, name, q, dq, ddq, has_velocity, velocities, accelerations)
+   !> configuration). `cache`: the texts of the reals written before (see
+   !> row_prefix_type).
+   pure subroutine append_rates_row(text, n, prefix, name, q, dq, ddq, has_velocity, velocities, accelerations, cache)
       character(*), intent(inout) :: text
       integer, intent(inout) :: n
       character(*), intent(in) :: prefix, name
       real(dp), intent(in) :: q(:), dq(:), ddq(:)
       logical, intent(in) :: has_velocity, velocities, accelerations
-      integer :: i
-      call append_text(text, n, prefix)
-      call append_text(text, n, name)
-      call append_values(text, n, q)
+      type(real_text_cache_type), intent(inout) :: cache
+      !> The values of a row gathered for one call of append_values (a call
+      !> each of q, dq and ddq cost as much as the cache saves).
+      integer, parameter :: max_row = 16
+      real(dp) :: row(max_row)
+      integer :: i, m
+      text(n + 1:n + len(prefix)) = prefix
+      n = n + len(prefix)
+      text(n + 1:n + len(name)) = name
+      n = n + len(name)
+      m = size(q) + size(dq) + size(ddq)
+      if (velocities .and. has_velocity .and. m <= max_row) then
+         row(1:size(q)) = q
+         row(size(q) + 1:size(q) + size(dq)) = dq
+         m = size(q) + size(dq)
+         if (accelerations) then
+            row(m + 1:m + size(ddq)) = ddq
+            m = m + size(ddq)
+         end if
+         call append_values(text, n, row(1:m), cache)
+         call append_char(text, n, new_line('a'))
+         return
+      end if
+      call append_values(text, n, q, cache)
       if (velocities .and. .not. has_velocity) then
          do i = 1, size(dq) + merge(size(ddq), 0, accelerations)
             call append_char(text, n, ',')
          end do
       else if (velocities) then
-         call append_values(text, n, dq)
-         if (accelerations) call append_values(text, n, ddq)
+         call append_values(text, n, dq, cache)
+         if (accelerations) call append_values(text, n, ddq, cache)
       end if
       call append_char(text, n, new_line('a'))
    end subroutine append_rates_row
 
-   !> `,v1,v2,...`
-   pure subroutine append_values(text, n, values)
+   !> `,v1,v2,...`: each value as append_real writes it, through `cache`
+   !> (append_cached_real).
+   pure subroutine append_values(text, n, values, cache)
       character(*), intent(inout) :: text
       integer, intent(inout) :: n
       real(dp), intent(in) :: values(:)
+      type(real_text_cache_type), intent(inout) :: cache
       integer :: i
       do i = 1, size(values)
-         call append_char(text, n, ',')
-         call append_real(text, n, values(i))
+         text(n + 1:n + 1) = ','
+         n = n + 1
+         call append_cached_real(text, n, values(i), cache)
       end do
    end subroutine append_values
+
+   !> x as append_real writes it (a function of the bits of x), copied from
+   !> `cache` where x is held there, else written and then held. The caller
+   !> has reserved real_width characters for it.
+   pure subroutine append_cached_real(text, n, x, cache)
+      character(*), intent(inout) :: text
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: x
+      type(real_text_cache_type), intent(inout) :: cache
+      integer(i8), parameter :: low32 = shiftl(1_i8, 32) - 1, multiplier = 2053222753_i8
+      integer(i8) :: bits
+      integer :: slot, start
+      bits = transfer(x, 0_i8)
+      ! The two halves of the bits folded, times a 31-bit multiplier (the
+      ! product of a 32-bit number and it is below 2**63: no overflow); the
+      ! slot is the top cache_bits bits of the product.
+      slot = int(shiftr(iand(ieor(bits, shiftr(bits, 32)), low32)*multiplier, 63 - cache_bits))
+      if (n + real_width > len(text)) then
+         call append_real(text, n, x)
+      else if (cache%length(slot) > 0 .and. cache%bits(slot) == bits) then
+         ! All real_width characters, one fixed-length copy; after a shorter
+         ! text the rest is overwritten by what follows.
+         text(n + 1:n + real_width) = cache%text(slot)
+         n = n + cache%length(slot)
+      else
+         start = n
+         call append_real(text, n, x)
+         if (n - start <= real_width) then
+            cache%bits(slot) = bits
+            cache%length(slot) = n - start
+            cache%text(slot) = text(start + 1:start + real_width)
+         end if
+      end if
+   end subroutine append_cached_real
 
    !> One character (inlined here, unlike append_text of another module).
    pure subroutine append_char(text, n, c)
@@ -197,7 +284,7 @@ contains
       type(text_buffer_type), intent(inout) :: out
       type(step_result_type), intent(in) :: result
       !> new_row_prefix of the result.
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       call reserve_text(out, prefix_length + 3*(integer_width + 1) + 2*(real_width + 1))
       call append_text(out%text, out%n, prefix%text(1:prefix%n))
       call append_integer(out%text, out%n, result%iterations)
@@ -254,13 +341,13 @@ contains
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       !> new_row_prefix of the result.
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer :: i, k, ip
       real(dp) :: xa(2), xb(2)
       call reserve_text(out, prefix_length + 2*size(result%pos, 2)*(real_width + 1) + 1)
       call append_text(out%text, out%n, prefix%text(1:prefix%n - 1))
       do i = 1, size(result%pos, 2)
-         call append_values(out%text, out%n, result%pos(:, i))
+         call append_values(out%text, out%n, result%pos(:, i), prefix%numbers)
       end do
       if (model%output%mesh_nodes) then
          ip = 0
@@ -272,9 +359,9 @@ contains
                do k = 1, m - 1
                   ip = ip + 1
                   if (allocated(result%interior)) then
-                     call append_values(out%text, out%n, result%interior(:, ip))
+                     call append_values(out%text, out%n, result%interior(:, ip), prefix%numbers)
                   else
-                     call append_values(out%text, out%n, xa + (xb - xa)*real(k, dp)/m)
+                     call append_values(out%text, out%n, xa + (xb - xa)*real(k, dp)/m, prefix%numbers)
                   end if
                end do
             end associate
@@ -467,7 +554,7 @@ contains
       type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       character(*), parameter :: kinds(4) = [character(len=7) :: 'drive', 'support', 'slider', 'joint']
       type(reaction_row_type), allocatable :: rows(:)
       integer :: row
@@ -491,7 +578,7 @@ contains
          call reserve_text(buffer, row_length(len(kind) + len(link) + len(node) + 2, 3))
          call append_text(buffer%text, buffer%n, prefix%text(1:prefix%n)//kind//','//link//','//node)
          if (result%has_reactions) then
-            call append_values(buffer%text, buffer%n, result%reactions(:, irow))
+            call append_values(buffer%text, buffer%n, result%reactions(:, irow), prefix%numbers)
          else
             call append_text(buffer%text, buffer%n, ',,,')
          end if
@@ -504,11 +591,11 @@ contains
    subroutine write_energy_row(out, result, prefix)
       type(text_buffer_type), intent(inout) :: out
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       if (.not. result%has_energy) return
       call reserve_text(out, row_length(0, size(result%energy)))
       call append_text(out%text, out%n, prefix%text(1:prefix%n - 1))
-      call append_values(out%text, out%n, result%energy)
+      call append_values(out%text, out%n, result%energy, prefix%numbers)
       call append_char(out%text, out%n, new_line('a'))
    end subroutine write_energy_row
 
@@ -519,13 +606,13 @@ contains
       type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer :: i
       do i = 1, size(model%nodes)
          call reserve_text(out, row_length(len(model%nodes(i)%name), 2))
          call append_text(out%text, out%n, prefix%text(1:prefix%n)//model%nodes(i)%name)
          if (result%has_deflection) then
-            call append_values(out%text, out%n, result%deflection(:, i))
+            call append_values(out%text, out%n, result%deflection(:, i), prefix%numbers)
          else
             call append_text(out%text, out%n, ',,')
          end if

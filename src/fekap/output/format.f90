@@ -104,9 +104,14 @@ contains
       integer, intent(inout) :: n
       integer, intent(in) :: i
       character(len=12) :: buffer
-      integer :: first
+      integer :: first, k
       call integer_digits(i, buffer, first)
-      call append_text(line, n, buffer(first:))
+      ! A character at a time: a substring of variable length is a call of
+      ! memmove, dearer than the few digits of a step number.
+      do k = first, len(buffer)
+         line(n + 1:n + 1) = buffer(k:k)
+         n = n + 1
+      end do
    end subroutine append_integer
 
    !> Write x as the edit descriptor esW.D (exponent_digits = 0) or esW.DeE
@@ -233,14 +238,22 @@ contains
       integer, intent(inout) :: n
       character(*), intent(in) :: text
       integer, intent(in) :: width
+      integer :: k
       if (len(text) > width) then
          line(n + 1:n + width) = repeat('*', width)
          n = n + width
          return
       end if
-      line(n + 1:n + width - len(text)) = ''
-      n = n + width - len(text)
-      call append_text(line, n, text)
+      ! A character at a time (no memset and memmove calls for a few
+      ! characters: append_integer).
+      do k = 1, width - len(text)
+         line(n + 1:n + 1) = ' '
+         n = n + 1
+      end do
+      do k = 1, len(text)
+         line(n + 1:n + 1) = text(k:k)
+         n = n + 1
+      end do
    end subroutine pad_and_put
 
    !> Drop the leading blanks of the last `width` characters written before n.

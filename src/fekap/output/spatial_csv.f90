@@ -15,7 +15,7 @@ module fekap_output_spatial_csv
       & joint_cylindrical
    use fekap_output_buffer, only: text_buffer_type, reserve_text
    use fekap_output_csv, only: write_rates_header, row_length, append_rates_row, emit, word_at, &
-      & write_mechanism_head, write_track_record
+      & write_mechanism_head, write_track_record, real_text_cache_type
    use fekap_output_format, only: append_real, append_text, real_text
    implicit none
    private
@@ -34,20 +34,22 @@ contains
    end subroutine write_spatial_points_header
 
    !> One row per tracked point, with z.
-   subroutine write_spatial_points_rows(out, model, result, prefix, velocities, accelerations)
+   subroutine write_spatial_points_rows(out, model, result, prefix, velocities, accelerations, numbers)
       type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       !> `step,t,` of the step's rows.
       character(*), intent(in) :: prefix
       logical, intent(in) :: velocities, accelerations
+      !> The texts of the reals written before (row_prefix_type's).
+      type(real_text_cache_type), intent(inout) :: numbers
       integer :: i, node
       do i = 1, size(model%output%points)
          node = model%output%points(i)
          call reserve_text(out, row_length(len(model%nodes(node)%name), 9))
          call append_rates_row(out%text, out%n, prefix, model%nodes(node)%name, [result%pos(:, node), result%pos_z(node)], &
             & [result%vel(:, node), result%vel_z(node)], [result%acc(:, node), result%acc_z(node)], &
-            & result%has_velocity, velocities, accelerations)
+            & result%has_velocity, velocities, accelerations, numbers)
       end do
    end subroutine write_spatial_points_rows
 
@@ -59,12 +61,13 @@ contains
    end subroutine write_joints_header
 
    !> One row per reported joint.
-   subroutine write_joints_rows(out, model, result, prefix, velocities, accelerations)
+   subroutine write_joints_rows(out, model, result, prefix, velocities, accelerations, numbers)
       type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       character(*), intent(in) :: prefix
       logical, intent(in) :: velocities, accelerations
+      type(real_text_cache_type), intent(inout) :: numbers
       integer, allocatable :: joints(:)
       logical, allocatable :: stroke(:)
       character(:), allocatable :: name
@@ -76,7 +79,7 @@ contains
          if (stroke(i) .and. model%spatial%joints(joints(i))%kind == joint_cylindrical) name = name//'.stroke'
          call reserve_text(out, row_length(len(name), 3))
          call append_rates_row(out%text, out%n, prefix, name, result%joint_motion(1:1, i), result%joint_motion(2:2, i), &
-            & result%joint_motion(3:3, i), result%has_velocity, velocities, accelerations)
+            & result%joint_motion(3:3, i), result%has_velocity, velocities, accelerations, numbers)
       end do
    end subroutine write_joints_rows
 
@@ -91,19 +94,21 @@ contains
 
    !> One row per reported link (OUTPut `angles`): its rotation quaternion,
    !> angular velocity and acceleration (fekap_spatial_link_motion).
-   subroutine write_spatial_links_rows(out, model, result, prefix, velocities, accelerations)
+   subroutine write_spatial_links_rows(out, model, result, prefix, velocities, accelerations, numbers)
       type(text_buffer_type), intent(inout) :: out
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
       character(*), intent(in) :: prefix
       logical, intent(in) :: velocities, accelerations
+      type(real_text_cache_type), intent(inout) :: numbers
       integer :: i, link
       do i = 1, size(model%output%links)
          link = model%output%links(i)
          associate (name => model%links(link)%name)
             call reserve_text(out, row_length(len(name), 10))
             call append_rates_row(out%text, out%n, prefix, name, result%link_rotation(:, link), &
-               & result%link_omega(:, link), result%link_alpha(:, link), result%has_velocity, velocities, accelerations)
+               & result%link_omega(:, link), result%link_alpha(:, link), result%has_velocity, velocities, accelerations, &
+               & numbers)
          end associate
       end do
    end subroutine write_spatial_links_rows

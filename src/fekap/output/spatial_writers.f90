@@ -68,11 +68,11 @@ contains
       class(spatial_points_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_spatial_points_rows(self%buffer, model, result, prefix%text(1:prefix%n), self%velocities, &
-         & self%accelerations)
+         & self%accelerations, prefix%numbers)
       rows = rows + size(model%output%points)
    end subroutine spatial_points_row
 
@@ -94,10 +94,11 @@ contains
       class(joints_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
-      call write_joints_rows(self%buffer, model, result, prefix%text(1:prefix%n), self%velocities, self%accelerations)
+      call write_joints_rows(self%buffer, model, result, prefix%text(1:prefix%n), self%velocities, self%accelerations, &
+         & prefix%numbers)
       rows = rows + size(result%joint_motion, 2)
    end subroutine joints_row
 
@@ -119,11 +120,11 @@ contains
       class(spatial_links_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_spatial_links_rows(self%buffer, model, result, prefix%text(1:prefix%n), self%velocities, &
-         & self%accelerations)
+         & self%accelerations, prefix%numbers)
       rows = rows + size(model%output%links)
    end subroutine spatial_links_row
 
@@ -143,7 +144,7 @@ contains
       class(spatial_nodes_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_spatial_nodes_row(self%buffer, result, prefix%text(1:prefix%n))

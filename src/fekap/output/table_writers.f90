@@ -124,7 +124,7 @@ contains
       class(points_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_points_rows(self%buffer, model, result, prefix, self%velocities, self%accelerations)
@@ -149,7 +149,7 @@ contains
       class(links_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_links_rows(self%buffer, model, result, prefix, self%velocities, self%accelerations)
@@ -184,7 +184,7 @@ contains
       class(steps_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_steps_row(self%buffer, result, prefix)
@@ -208,7 +208,7 @@ contains
       class(nodes_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_nodes_row(self%buffer, model, result, prefix)
@@ -229,7 +229,7 @@ contains
       class(reactions_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_reactions_rows(self%buffer, model, result, prefix)
@@ -253,7 +253,7 @@ contains
       class(energy_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_energy_row(self%buffer, result, prefix)
@@ -275,7 +275,7 @@ contains
       class(deflection_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       call write_deflection_rows(self%buffer, model, result, prefix)

@@ -70,7 +70,7 @@ contains
       class(vtk_writer_type), intent(inout) :: self
       type(model_type), intent(in) :: model
       type(step_result_type), intent(in) :: result
-      type(row_prefix_type), intent(in) :: prefix
+      type(row_prefix_type), intent(inout) :: prefix
       integer, intent(inout) :: rows
       type(error_type), allocatable, intent(out) :: error
       integer :: unit

@@ -79,7 +79,7 @@ module fekap_output_writer
          type(model_type), intent(in) :: model
          type(step_result_type), intent(in) :: result
          !> The step's `step,t,` (made only when some writer is prefixed).
-         type(row_prefix_type), intent(in) :: prefix
+         type(row_prefix_type), intent(inout) :: prefix
          integer, intent(inout) :: rows
          type(error_type), allocatable, intent(out) :: error
       end subroutine row_interface
