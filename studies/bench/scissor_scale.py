@@ -123,7 +123,8 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 count = callgrind_marginal(binary, work, cells, *args.steps)
                 per, per_unknown = f"{count:,}", f"{count / check['equations']:,.0f}"
-            print(f"| {cells:,} | {check['equations']:,} | {per} | {per_unknown} | {ms:#.3g} | {peak:.1f} "
+            ms_text = f"{ms:#.3g}".rstrip(".")
+            print(f"| {cells:,} | {check['equations']:,} | {per} | {per_unknown} | {ms_text} | {peak:.1f} "
                   f"| {check['its']:.2f} | {check['pos']:.1e} | {check['vel']:.1e} | {check['acc']:.1e} |",
                   flush=True)
             if check["exit"] != 0:
