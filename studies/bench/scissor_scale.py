@@ -39,9 +39,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-import bench_instructions as bi
 from fekap.models import scissor
 from fekap.run import RELEASE_BIN
+
+import bench_instructions as bi
 
 SIZES = [10, 100, 1000, 10000]
 
