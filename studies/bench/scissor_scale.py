@@ -39,9 +39,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-import bench_instructions as bi
 from fekap.models import scissor
 from fekap.run import RELEASE_BIN
+
+import bench_instructions as bi
 
 SIZES = [10, 100, 1000, 10000]
 
@@ -123,7 +124,8 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 count = callgrind_marginal(binary, work, cells, *args.steps)
                 per, per_unknown = f"{count:,}", f"{count / check['equations']:,.0f}"
-            print(f"| {cells:,} | {check['equations']:,} | {per} | {per_unknown} | {ms:#.3g} | {peak:.1f} "
+            ms_text = f"{ms:#.3g}".rstrip(".")
+            print(f"| {cells:,} | {check['equations']:,} | {per} | {per_unknown} | {ms_text} | {peak:.1f} "
                   f"| {check['its']:.2f} | {check['pos']:.1e} | {check['vel']:.1e} | {check['acc']:.1e} |",
                   flush=True)
             if check["exit"] != 0:

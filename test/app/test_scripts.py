@@ -1,6 +1,7 @@
 """The benchmark and study scripts on reduced sizes: studies/tables/paper_tables.py
 --short, scripts/bench --quick, fekap.models.scissor (a 3-cell lift against its
-exact platform height, with the band and the dense solver) and
+exact platform height, with the band and the dense solver),
+studies/bench/scissor_scale.py on small lifts and
 studies/accuracy/accuracy_study.py --short. They run with the executable under test
 ($FEKAP_BIN, set by scripts/test) and write nothing into docs/.
 
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import math
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -102,6 +104,31 @@ def test_scissor_height_exact() -> None:
             listing = (outdir / f"{deck.stem}.lis").read_text()
             check(re.search(r"Cholesky factorisations\s+0$", listing, re.M) is not None,
                   "the dense solver should factor every tangent by LU")
+
+
+def test_scissor_scale_short(fekap: Path) -> None:
+    """studies/bench/scissor_scale.py on lifts of 3 and 6 cells (short runs,
+    its callgrind counts where valgrind is installed): a row per lift with 12 N
+    + 1 equations, positive counts and memory, the issue's rates to round-off
+    at one Newton iteration a step or so."""
+    options = ["--steps", "2", "4", "--cpu-steps", "2", "6", "--repeat", "1"]
+    callgrind = shutil.which("valgrind") is not None
+    if not callgrind:
+        options.append("--no-callgrind")
+    result = script(sys.executable, str(ROOT / "studies" / "bench" / "scissor_scale.py"), "3", "6",
+                    "--fekap", str(fekap), *options, timeout=300)
+    rows = [line.split("|")[1:-1] for line in result.stdout.splitlines() if re.match(r"^\| \d", line)]
+    check(len(rows) == 2, f"expected rows for N = 3 and 6:\n{result.stdout}")
+    for cells, row in zip((3, 6), rows):
+        n, equations, count, per, ms, mb, its, pos, vel, acc = (field.strip() for field in row)
+        check(int(n) == cells and int(equations) == 12 * cells + 1, f"N and equations: {row}")
+        if callgrind:
+            check(int(count.replace(",", "")) > 0 and int(per.replace(",", "")) > 0, f"instructions: {row}")
+        # The CPU time of a few steps of so small a lift is within the clock's
+        # noise (it may even come out negative); only its form is checked.
+        check(math.isfinite(float(ms)) and float(mb) > 0, f"CPU time and memory: {row}")
+        check(1.0 <= float(its) <= 1.5, f"Newton iterations per step: {row}")
+        check(max(float(pos), float(vel), float(acc)) < 1e-12, f"errors against the closed form: {row}")
 
 
 def test_scissor_deck_text() -> None:

@@ -103,8 +103,9 @@ contains
       if (present(dense)) self%dense = dense
       ! The factor's storage f is allocated by the first factorisation
       ! (band_factor): a run in the square-root form never factors K, whose
-      ! LU storage would be (3 kd + 1) n numbers (27 MB for the 10,000-cell
-      ! scissor lift), and a Cholesky factor needs only kd + 1 rows.
+      ! LU storage of (3 kd + 1) n numbers was the largest array of a large
+      ! lift's run (docs/performance.md, "Scale in the square-root form"), and
+      ! a Cholesky factor needs only kd + 1 rows.
       if (self%dense) then
          allocate (self%a(kd + 1, n), self%f(0, 0), self%fd(n, n), source=0.0_dp)
       else

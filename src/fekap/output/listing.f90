@@ -42,14 +42,14 @@ contains
       write (unit, '(/,a)') 'NODES'
       write (unit, '(2x,a12,2a24)') 'name', 'x', 'y'
       do i = 1, size(model%nodes)
-         write (unit, '(2x,a12,2a)') model%nodes(i)%name, es_text(model%nodes(i)%x(1), 24, 15), &
-            & es_text(model%nodes(i)%x(2), 24, 15)
+         write (unit, '(2x,a12,2a)') model%nodes(i)%name, fast_es_text(model%nodes(i)%x(1), 24, 15), &
+            & fast_es_text(model%nodes(i)%x(2), 24, 15)
       end do
       write (unit, '(/,a)') 'SECTIONS'
       write (unit, '(2x,a12,3a16)') 'name', 'EA', 'kGA', 'EI'
       do i = 1, size(model%sections)
-         write (unit, '(2x,a12,3a)') model%sections(i)%name, es_text(model%sections(i)%ea, 16, 7), &
-            & es_text(model%sections(i)%kga, 16, 7), es_text(model%sections(i)%ei, 16, 7)
+         write (unit, '(2x,a12,3a)') model%sections(i)%name, fast_es_text(model%sections(i)%ea, 16, 7), &
+            & fast_es_text(model%sections(i)%kga, 16, 7), fast_es_text(model%sections(i)%ei, 16, 7)
       end do
       write (unit, '(/,a)') 'LINKS'
       write (unit, '(2x,a12,2a8,a12,a9,2a20)') 'name', 'first', 'second', 'section', 'elements', 'length', &
@@ -58,8 +58,8 @@ contains
          associate (l => model%links(i))
             d = model%nodes(l%node(2))%x - model%nodes(l%node(1))%x
             write (unit, '(2x,a12,2a8,a12,i9,2a)') l%name, model%nodes(l%node(1))%name, &
-               & model%nodes(l%node(2))%name, model%sections(l%section)%name, l%nelem, es_text(norm2(d), 20, 11), &
-               & es_text(atan2(d(2), d(1))*rad2deg, 20, 11)
+               & model%nodes(l%node(2))%name, model%sections(l%section)%name, l%nelem, fast_es_text(norm2(d), 20, 11), &
+               & fast_es_text(atan2(d(2), d(1))*rad2deg, 20, 11)
          end associate
       end do
       if (allocated(model%welds)) then
@@ -100,8 +100,8 @@ contains
       if (allocated(model%loads)) then
          if (size(model%loads) > 0) write (unit, '(/,a)') 'LOADS (times the load factor t)'
          do i = 1, size(model%loads)
-            write (unit, '(2x,a12,3a)') model%nodes(model%loads(i)%node)%name, es_text(model%loads(i)%force(1), 16, 7), &
-               & es_text(model%loads(i)%force(2), 16, 7), es_text(model%loads(i)%moment, 16, 7)
+            write (unit, '(2x,a12,3a)') model%nodes(model%loads(i)%node)%name, fast_es_text(model%loads(i)%force(1), 16, 7), &
+               & fast_es_text(model%loads(i)%force(2), 16, 7), fast_es_text(model%loads(i)%moment, 16, 7)
          end do
       end if
       if (allocated(model%slidelines)) then
@@ -123,6 +123,24 @@ contains
       end if
       call write_listing_inertia(unit, model)
    end subroutine write_listing_model
+
+   !> es_text(x, width, decimals), the same characters: esW.D from
+   !> fekap_output_format's exact digits (append_es) where that writes an E
+   !> (an exponent of two digits), es_text itself otherwise (a third exponent
+   !> digit, asterisks, not a number). The model's echo writes numbers per
+   !> node and link, and es_text's formatted internal writes made it the
+   !> largest part of setting up a large model.
+   function fast_es_text(x, width, decimals) result(text)
+      real(dp), intent(in) :: x
+      integer, intent(in) :: width, decimals
+      character(:), allocatable :: text
+      character(len=64) :: line
+      integer :: n
+      n = 0
+      call append_es(line, n, x, width, decimals, 0)
+      text = line(1:n)
+      if (index(text, 'E') == 0) text = es_text(x, width, decimals)
+   end function fast_es_text
 
    !> The time law of a drive as a formula in t, e.g. `angle = angle0 + 6.28...*t`.
    function law_text(law, what) result(text)
