@@ -154,11 +154,11 @@ def trajectory_errors(t, series: dict, exact: dict, dt: float = DT) -> dict[str,
 
 # --- FEKAP -------------------------------------------------------------------------------------
 
-FEKAP_CASES = {   # name -> (computes, files)
-    "fekap P listing": ("P", "listing"),
-    "fekap PVA listing": ("PVA", "listing"),
-    "fekap P csv": ("P", "csv"),
-    "fekap PVA csv": ("PVA", "csv"),
+FEKAP_CASES = {   # name -> (computes, files, the case of bench_instructions.CASES)
+    "fekap P listing": ("P", "listing", "fourbar P listing"),
+    "fekap PVA listing": ("PVA", "listing", "fourbar PVA listing"),
+    "fekap P csv": ("P", "csv", "fourbar P csv"),
+    "fekap PVA csv": ("PVA", "csv", "fourbar PVA csv"),
 }
 
 
@@ -185,7 +185,7 @@ def read_points(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
 def run_fekap_case(name: str, binary: str, work: Path, steps: int, label: str) -> dict:
     """One FEKAP run of a case over `steps` steps: its CPU seconds, Newton iterations and
     (CSV cases) its trajectory."""
-    computes, files = FEKAP_CASES[name]
+    computes, files, _ = FEKAP_CASES[name]
     deck, options = bi.fourbar_deck(work, computes, files, steps / STEPS)
     out = work / f"{name.replace(' ', '-')}-{steps}-{label}"
     if out.exists():
@@ -550,9 +550,12 @@ def main(argv: list[str] | None = None) -> int:
     results = {name: summarise(name, rounds[name], long - short, errors[name]) for name in names}
     if not args.no_callgrind:
         print("instructions (callgrind) ...", flush=True)
-        counted = bi.measure(binary, work, [n for n in names if n in FEKAP_CASES], log=lambda *a: None)
-        for name, figures in counted.items():
+        fekap_names = [name for name in names if name in FEKAP_CASES]
+        counted = bi.measure(binary, work, [FEKAP_CASES[name][2] for name in fekap_names], log=lambda *a: None)
+        for name in fekap_names:
+            figures = counted[FEKAP_CASES[name][2]]
             results[name]["instructions_per_configuration"] = figures["instructions_per_configuration"]
+            print(f"  {name}: {figures['instructions_per_configuration']:,.0f}", flush=True)
         if not args.no_peer_callgrind:
             for name in names:
                 if name not in FEKAP_CASES and "numba" not in name:

@@ -147,3 +147,13 @@ def test_pylinkage_follows_the_closed_form() -> None:
         errors = peers.trajectory_errors(run["t"], run["series"], exact)
         worst = max(value for value in errors.values() if value is not None)
         check(len(run["t"]) == 20 and worst < 1e-10, f"pylinkage {method}: {errors}")
+
+
+def test_fekap_cases_are_the_benchmarks() -> None:
+    """Each FEKAP case of peers.py is a case of bench_instructions.py (scripts/bench) with
+    the same quantities and files, so that its callgrind count is that case's."""
+    bi = peers.bi
+    for name, (computes, files, case) in peers.FEKAP_CASES.items():
+        check(case in bi.CASES, f"{name}: {case!r} is not a case of bench_instructions.py")
+        check(case.split()[1:] == [computes, files], f"{name}: {case!r} is not {computes} {files}")
+        check(peers.CASES[name][1] == computes, f"{name}: computes {peers.CASES[name][1]}, not {computes}")
