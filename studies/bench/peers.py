@@ -23,8 +23,11 @@ The mechanism: crank 2 (A-B) at 2 pi rad/s, coupler 4 (B-C), rocker 4 (D-C), gro
   studies/exudyn/exudyn_spatial_slider_crank.py. A static solve gives positions only. B and
   C are stored at every configuration by sensors in memory;
 - pylinkage 1.3.0: `Linkage.step` (positions) and `Linkage.step_with_derivatives`
-  (positions, velocities, accelerations), its Python objects; and its numba-compiled
-  paths `step_fast` and `step_fast_with_kinematics` when numba imports.
+  (positions, velocities, accelerations), its objects, without numba (pylinkage's default
+  install, Python alone: a child process with numba's NUMBA_DISABLE_JIT=1, timed inside
+  as here) and with numba (its geometry functions compiled); and its numba-compiled loops
+  `step_fast` and `step_fast_with_kinematics`. The cases with numba are left out when
+  numba does not import.
 
 Every run's positions of B and C are compared with the closed form at every
 configuration (and its velocities and accelerations where it gives them), so that a fast
@@ -35,7 +38,8 @@ CPU time per configuration, the same rule for every code: marginal, the CPU time
 two-revolution run less a one-revolution run's, over the 10,000 configurations between
 them, so that starting, reading and setting up drop out. FEKAP's is its process's (user +
 system, fekap.timing); a peer's is time.process_time() around its solve call (Exudyn's
-SolveStatic, pylinkage's loop over its steps), in this process, after an untimed first run
+SolveStatic, pylinkage's loop over its steps; Python's garbage collector off during it, as
+timeit does), in this process, after an untimed first run
 of every case (imports, numba's compilation). Each case runs --repeat times (default 9),
 all cases taking turns in every round; the table gives the median and
 the least of the per-round figures and the ratio of each peer's median to FEKAP's median
@@ -45,19 +49,23 @@ Instructions per configuration (valgrind --tool=callgrind, marginal in the same 
 FEKAP's four cases at one and two revolutions (bench_instructions.measure, as
 `scripts/bench`); a peer's whole Python process (this script's --worker mode, one case,
 PYTHONHASHSEED=0) at PEER_CALLGRIND_STEPS configurations, since valgrind runs Python some
-50 times slower.
+50 times slower; not pylinkage's cases with numba (NEEDS_NUMBA: their counts include
+numba's compiling or cache loading, which differ between runs).
 
 Exudyn comes from PyPI into build/venv-exudyn (fekap.run.in_exudyn_venv, as the studies
 of studies/exudyn); pylinkage and numba (PEER_PACKAGES) are installed into that same
 environment on the first run. The generated table goes between <!-- peers:begin --> and
 <!-- peers:end --> of docs/performance.md ("Example 1 against other codes") unless
---no-write. It takes about 15 minutes on the shared 2-core machine (callgrind most of it;
---no-callgrind about 3).
+--no-write. It took 21.6 minutes on the shared 2-core machine at load average 22 (the
+timed rounds 5.3 of them, the rest callgrind's: --no-peer-callgrind saves about 8,
+--no-callgrind about 16).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import gc
 import importlib.util
 import json
 import math
@@ -202,6 +210,19 @@ def run_fekap_case(name: str, binary: str, work: Path, steps: int, label: str) -
     return result
 
 
+@contextlib.contextmanager
+def quiet_collector():
+    """Python's garbage collector emptied before a peer's timed solve and off during it, as
+    timeit does: its collections fall on whichever run crosses its thresholds, the likely
+    cause of a round, with it on, in which twice the steps took less CPU time."""
+    gc.collect()
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.enable()
+
+
 # --- Exudyn ------------------------------------------------------------------------------------
 
 def exudyn_model(kind: str, steps: int):
@@ -289,9 +310,10 @@ def run_exudyn_case(kind: str, steps: int, collect: bool = True) -> dict:
     """One Exudyn run of `steps` steps: its CPU seconds, Newton iterations and (`collect`)
     the sensors' trajectory."""
     mbs, settings, sensors, keep = exudyn_model(kind, steps)
-    start = time.process_time()
-    mbs.SolveStatic(settings)
-    cpu = time.process_time() - start
+    with quiet_collector():
+        start = time.process_time()
+        mbs.SolveStatic(settings)
+        cpu = time.process_time() - start
     if not collect:
         return {"cpu": cpu}
     data = {name: np.asarray(mbs.GetSensorStoredData(sensor)) for name, sensor in sensors.items()}
@@ -329,12 +351,13 @@ def run_pylinkage_case(method: str, steps: int, collect: bool = True) -> dict:
     linkage, ib, ic = pylinkage_model()
     if method.startswith("step_fast"):
         linkage.compile()
-    start = time.process_time()
-    if method.startswith("step_fast"):
-        out = getattr(linkage, method)(iterations=steps)
-    else:
-        out = list(getattr(linkage, method)(iterations=steps))
-    cpu = time.process_time() - start
+    with quiet_collector():
+        start = time.process_time()
+        if method.startswith("step_fast"):
+            out = getattr(linkage, method)(iterations=steps)
+        else:
+            out = list(getattr(linkage, method)(iterations=steps))
+        cpu = time.process_time() - start
     if not collect:
         return {"cpu": cpu}
     if method == "step_fast":
@@ -361,20 +384,56 @@ CASES = {
     "fekap PVA csv": ("FEKAP", "PVA", "the deck's CSV files"),
     "exudyn rigid": ("Exudyn 1.13.6", "P", "rigid bodies, static solver a configuration"),
     "exudyn beam": ("Exudyn 1.13.6", "P", "geometrically exact 2D beams, static solver a configuration"),
-    "pylinkage step": ("pylinkage 1.3.0", "P", "`step` (Python)"),
-    "pylinkage derivatives": ("pylinkage 1.3.0", "PVA", "`step_with_derivatives` (Python)"),
+    "pylinkage step, no numba": ("pylinkage 1.3.0", "P", "`step`, without numba (Python alone)"),
+    "pylinkage derivatives, no numba": ("pylinkage 1.3.0", "PVA",
+                                        "`step_with_derivatives`, without numba (Python alone)"),
+    "pylinkage step": ("pylinkage 1.3.0", "P", "`step`, its geometry compiled by numba"),
+    "pylinkage derivatives": ("pylinkage 1.3.0", "PVA", "`step_with_derivatives`, its geometry compiled by numba"),
     "pylinkage numba": ("pylinkage 1.3.0", "P", "`step_fast` (numba)"),
     "pylinkage numba derivatives": ("pylinkage 1.3.0", "PVA", "`step_fast_with_kinematics` (numba)"),
 }
 PYLINKAGE_METHODS = {"pylinkage step": "step", "pylinkage derivatives": "step_with_derivatives",
                      "pylinkage numba": "step_fast", "pylinkage numba derivatives": "step_fast_with_kinematics"}
+#: The cases run in a child process of this script with numba switched off (NUMBA_DISABLE_JIT=1,
+#: numba's own switch: its decorators return the Python functions), as pylinkage runs where
+#: numba, an optional extra, is not installed: the case name less this suffix.
+NO_NUMBA = ", no numba"
+#: The cases that need numba: left out when it does not import, and not counted under callgrind,
+#: where a run's count includes numba's compiling or its loading from its cache, which differ
+#: between the two run lengths (a negative marginal count was measured).
+NEEDS_NUMBA = ("pylinkage step", "pylinkage derivatives", "pylinkage numba", "pylinkage numba derivatives")
+NOT_UNDER_CALLGRIND = NEEDS_NUMBA
 #: The FEKAP case a peer is compared with: the same quantities, the listing alone.
 REFERENCE = {"P": "fekap P listing", "PVA": "fekap PVA listing"}
 COMPUTES = {"P": "positions", "PVA": "positions, velocities, accelerations"}
 
 
+def run_without_numba(name: str, steps: int, work: Path, collect: bool = True) -> dict:
+    """A case run by this script's --worker in a child process with numba switched off: the
+    child's CPU seconds of the solve (time.process_time() around it, as in this process) and
+    its trajectory, handed over in a .npz file."""
+    saved = work / f"no-numba-{steps}.npz"
+    command = [sys.executable, str(Path(__file__).resolve()), "--worker", name, str(steps)]
+    if collect:
+        command += ["--save", str(saved)]
+    proc = subprocess.run(command, capture_output=True, text=True, env=dict(os.environ, NUMBA_DISABLE_JIT="1"),
+                          check=False)
+    if proc.returncode != 0:
+        raise SystemExit(f"{name} ({steps} steps) failed in its child process: {proc.stderr[-2000:]}")
+    result = {"cpu": json.loads(proc.stdout.splitlines()[-1])["cpu"]}
+    if collect:
+        with np.load(saved) as data:
+            result["t"] = data["t"]
+            result["series"] = {key: data[key] for key in data.files if key != "t"}
+        saved.unlink()
+    return result
+
+
 def run_case(name: str, steps: int, binary: str | None = None, work: Path | None = None, label: str = "",
              collect: bool = True) -> dict:
+    if name.endswith(NO_NUMBA) and os.environ.get("NUMBA_DISABLE_JIT") != "1":
+        return run_without_numba(name, steps, work, collect)
+    name = name.removesuffix(NO_NUMBA)
     if name in FEKAP_CASES:
         return run_fekap_case(name, binary, work, steps, label)
     if name.startswith("exudyn "):
@@ -468,6 +527,8 @@ def peer_instructions(name: str, steps: tuple[int, int], work: Path) -> float:
     """Marginal instructions per configuration of a peer's whole Python process (--worker)."""
     counts = []
     env = dict(os.environ, PYTHONHASHSEED="0")
+    if name.endswith(NO_NUMBA):
+        env["NUMBA_DISABLE_JIT"] = "1"
     for n in steps:
         out = work / f"cg-{name.replace(' ', '-')}-{n}.out"
         command = ["nice", "valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable,
@@ -480,11 +541,14 @@ def peer_instructions(name: str, steps: tuple[int, int], work: Path) -> float:
     return (counts[1] - counts[0]) / (steps[1] - steps[0])
 
 
-def worker(name: str, steps: int) -> int:
-    """One run of a peer's case for callgrind: the solve alone, without the reading of its
-    results and the check, whose instructions would grow with the steps too (the timed runs
-    check every configuration)."""
-    r = run_case(name, steps, collect=False)
+def worker(name: str, steps: int, save: Path | None = None) -> int:
+    """One run of a peer's case in a child process: prints its CPU seconds; with `save`, its
+    trajectory into that .npz file (the runs without numba). Without, the solve alone: under
+    callgrind, reading the results would add instructions that grow with the steps too (the
+    timed runs check every configuration)."""
+    r = run_case(name, steps, collect=save is not None)
+    if save is not None:
+        np.savez(save, t=r["t"], **r["series"])
     print(json.dumps({"case": name, "steps": steps, "cpu": r["cpu"]}))
     return 0
 
@@ -501,9 +565,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-write", action="store_true", help="do not rewrite docs/performance.md's block")
     parser.add_argument("--json", type=Path, help="write the figures to this file")
     parser.add_argument("--worker", nargs=2, metavar=("CASE", "STEPS"), help=argparse.SUPPRESS)
+    parser.add_argument("--save", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
-        return worker(args.worker[0], int(args.worker[1]))
+        return worker(args.worker[0], int(args.worker[1]), args.save)
     command = shlex.join(["studies/bench/peers.py", *(sys.argv[1:] if argv is None else argv)])
     binary = fb.fekap_binary(args.binary)       # before re-executing: a missing binary stops here
     fb.in_exudyn_venv(__file__, sys.argv[1:])
@@ -517,7 +582,7 @@ def main(argv: list[str] | None = None) -> int:
     names = list(CASES)
     notes = []
     if not pylinkage_has_numba():
-        names = [n for n in names if "numba" not in n]
+        names = [n for n in names if n not in NEEDS_NUMBA]
         notes.append("pylinkage's numba paths not run: numba does not import.")
     work = fb.scratch_dir("fekap-peers-")
     print(f"Example 1, dt = {DT:g}: {len(names)} cases, {args.repeat} rounds of {short:,} and {long:,} steps "
@@ -558,7 +623,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"  {name}: {figures['instructions_per_configuration']:,.0f}", flush=True)
         if not args.no_peer_callgrind:
             for name in names:
-                if name not in FEKAP_CASES and "numba" not in name:
+                if name not in FEKAP_CASES and name not in NOT_UNDER_CALLGRIND:
                     results[name]["instructions_per_configuration"] = peer_instructions(name, PEER_CALLGRIND_STEPS,
                                                                                           work)
                     print(f"  {name}: {results[name]['instructions_per_configuration']:,.0f}", flush=True)
@@ -571,9 +636,11 @@ def main(argv: list[str] | None = None) -> int:
             "binary": f"FEKAP {shown} (tree at {git.stdout.strip() or 'unknown'})", "load_start": load_start,
             "load_end": load_end, "minutes": minutes, "short": short, "long": long, "repeat": args.repeat,
             "peer_callgrind": PEER_CALLGRIND_STEPS, "notes": notes}
-    if not args.no_callgrind and not args.no_peer_callgrind and any("numba" in name for name in names):
-        notes.append("pylinkage's numba paths are not counted under callgrind: a worker run of 1,000 steps "
-                     "had not finished after 4 CPU minutes under valgrind.")
+    if not args.no_callgrind and not args.no_peer_callgrind and any(name in NOT_UNDER_CALLGRIND for name in names):
+        notes.append("pylinkage's cases with numba are not counted under callgrind: a run's count includes "
+                     "numba's compiling or loading from its cache, which differ between two runs (a negative "
+                     "marginal count was measured; a run of `step_fast_with_kinematics` had not finished after "
+                     "4 CPU minutes under valgrind).")
     if args.no_callgrind or args.no_peer_callgrind:
         notes.append("Instructions: " + ("none counted (--no-callgrind)." if args.no_callgrind
                                          else "the peers' not counted (--no-peer-callgrind)."))
