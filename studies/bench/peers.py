@@ -56,9 +56,9 @@ Exudyn comes from PyPI into build/venv-exudyn (fekap.run.in_exudyn_venv, as the 
 of studies/exudyn); pylinkage and numba (PEER_PACKAGES) are installed into that same
 environment on the first run. The generated table goes between <!-- peers:begin --> and
 <!-- peers:end --> of docs/performance.md ("Example 1 against other codes") unless
---no-write. It took 21.6 minutes on the shared 2-core machine at load average 22 (the
-timed rounds 5.3 of them, the rest callgrind's: --no-peer-callgrind saves about 8,
---no-callgrind about 16).
+--no-write. It took 20-22 minutes on the shared 2-core machine at load averages of 12 to
+22 (the timed rounds 5-6 of them, the rest callgrind's: --no-peer-callgrind saves about 8,
+--no-callgrind about 15).
 """
 
 from __future__ import annotations
