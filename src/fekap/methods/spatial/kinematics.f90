@@ -15,6 +15,9 @@
 !> dofs q: translations of free points (absolute, global axes), strokes of
 !> line points, joint angles (additive), and body rotation increments of free
 !> frames (their rotation matrices are the state, updated multiplicatively).
+!> The module is over 600 lines because the configuration (positions, dof
+!> maps and the dofs each depends on), its assembly element by element and
+!> the solves that use them are one concept around one configuration type.
 module fekap_spatial_kinematics
    use fekap_kinds, only: dp
    use fekap_vectors, only: cross
@@ -106,7 +109,7 @@ contains
       type(spatial_mechanism_type), intent(in) :: m
       type(spatial_state_type), intent(in) :: s
       type(spatial_configuration_type), intent(out) :: c
-      real(dp) :: rp(3, 3), e1(3, 3), e2(3, 3)
+      real(dp) :: rp(3, 3), e1(3, 3), e2(3, 3), et(3, 3)
       integer :: i, k, np, nf
       np = size(m%points)
       nf = size(s%r, 3)
@@ -145,13 +148,15 @@ contains
             case (frame_revolute)
                e1 = so3_exp(s%q(f%dof)*f%axis)
                c%r(:, :, i) = matmul(rp, e1)
-               call carry_parent(c, m%frames(i)%parent, i, transpose(e1))
+               et = transpose(e1)
+               call carry_parent(c, m%frames(i)%parent, i, et)
                c%w(:, f%dof, i) = c%w(:, f%dof, i) + f%axis
             case (frame_universal)
                e1 = so3_exp(s%q(f%dof)*f%axis)
                e2 = so3_exp(s%q(f%dof + 1)*f%axis2)
                c%r(:, :, i) = matmul(rp, matmul(e1, e2))
-               call carry_parent(c, m%frames(i)%parent, i, transpose(matmul(e1, e2)))
+               et = transpose(matmul(e1, e2))
+               call carry_parent(c, m%frames(i)%parent, i, et)
                c%w(:, f%dof, i) = c%w(:, f%dof, i) + matmul(f%axis, e2)
                c%w(:, f%dof + 1, i) = c%w(:, f%dof + 1, i) + f%axis2
             case default                                 ! frame_fixed
@@ -265,6 +270,20 @@ contains
       dofs = dofs(1:n)
    end function element_dofs
 
+   !> The dofs of beam i (element_dofs of its nodes' points and frames).
+   pure function beam_dofs(m, c, i) result(dofs)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_configuration_type), intent(in) :: c
+      integer, intent(in) :: i
+      integer, allocatable :: dofs(:)
+      integer :: points(2), frames(2), n
+      do n = 1, 2
+         points(n) = m%nodes(m%beams(i)%nodes(n))%point
+         frames(n) = m%nodes(m%beams(i)%nodes(n))%frame
+      end do
+      dofs = element_dofs(c, points, frames)
+   end function beam_dofs
+
    !> The storage of m's tangent: band order from the elements' couplings.
    subroutine tangent_for(m, kt)
       type(spatial_mechanism_type), intent(in) :: m
@@ -283,7 +302,7 @@ contains
       ne = 0
       if (allocated(m%beams)) then
          do i = 1, size(m%beams)
-            dofs = element_dofs(c, m%nodes(m%beams(i)%nodes)%point, m%nodes(m%beams(i)%nodes)%frame)
+            dofs = beam_dofs(m, c, i)
             call add_group()
          end do
       end if
@@ -383,9 +402,7 @@ contains
       if (present(rate_load)) rate_load = 0
       if (allocated(m%beams)) then
          do i = 1, size(m%beams)
-            associate (nodes => m%nodes(m%beams(i)%nodes))
-               dofs = element_dofs(c, nodes%point, nodes%frame)
-            end associate
+            dofs = beam_dofs(m, c, i)
             if (allocated(ge)) deallocate (ge)
             allocate (ge(12, size(dofs)))
             do n = 1, 2
