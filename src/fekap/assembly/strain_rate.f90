@@ -38,7 +38,11 @@ module fekap_assembly_strain_rate
    private
 
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
-   public :: strain_rates, strain_accelerations, strain_rate_rcond, rate_geometry_at
+   public :: strain_rates, strain_accelerations, strain_rate_rcond, strain_rate_rcond_bounds, rate_geometry_at
+
+   !> The bounds from the last estimate hold while x = ||B_0^-1|| ||B_f - B_0||
+   !> is below this (within ((1 + x)/(1 - x))**2 < 2.8 of each other).
+   real(dp), parameter :: bound_reach = 0.25_dp
 
    !> Entries of an element's rows of B: Gamma1 and Gamma2 on the six dofs
    !> (x1, y1, theta1, x2, y2, theta2), kappa L on theta1 and theta2.
@@ -93,6 +97,14 @@ module fekap_assembly_strain_rate
       real(dp) :: norm1 = 0
       real(dp), allocatable :: rcond_work(:)
       integer, allocatable :: rcond_iwork(:)
+      !> B_f as assembled (before its factorisation; its rows from kl + 1)
+      !> at the last factorisation and at the last condition estimate
+      !> (allocated on the first estimate), and the estimate of ||B_f^-1||_1
+      !> made there (0: none yet), for strain_rate_rcond_bounds.
+      real(dp), allocatable :: unfactored(:, :), estimated(:, :)
+      real(dp) :: inverse_norm = 0
+      !> Whether unfactored, or estimated, holds the current factor's matrix.
+      logical :: unfactored_kept = .false., estimate_current = .false.
    end type strain_rate_type
 
 contains
@@ -424,6 +436,11 @@ contains
          self%column_max(j) = maxval(abs(self%ab(:, j)))
          self%norm1 = max(self%norm1, sum(abs(self%ab(:, j))))
       end do
+      ! The matrix kept for strain_rate_rcond_bounds and the next estimate
+      ! (rows 1 to kl are the factor's fill, zero here).
+      self%estimate_current = .false.
+      self%unfactored_kept = allocated(self%unfactored)
+      if (self%unfactored_kept) self%unfactored(self%kl + 1:, :) = self%ab(self%kl + 1:, :)
       if (self%lu_blocked) then
          call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
       else
@@ -471,7 +488,66 @@ contains
          end do
       end associate
       if (est > 0) rcond = ((1/self%norm1)/est)**2
+      ! The matrix of this estimate, for strain_rate_rcond_bounds at later
+      ! factors: kept by its factorisation (unfactored), or estimated already.
+      if (.not. self%estimate_current) then
+         self%inverse_norm = 0
+         if (.not. self%unfactored_kept) then
+            ! The first estimate: later factorisations keep their matrices.
+            if (.not. allocated(self%unfactored)) allocate (self%estimated, self%unfactored, mold=self%ab)
+            return
+         end if
+         call swap(self%estimated, self%unfactored)
+         self%unfactored_kept = .false.
+         self%estimate_current = .true.
+      end if
+      self%inverse_norm = est
+      if (.not. est > 0) self%inverse_norm = 0
    end subroutine strain_rate_rcond
+
+   !> Bounds low <= rcond <= high of the condition estimate that
+   !> strain_rate_rcond would make of the current factor (on the tangent's
+   !> scale, as it), from the last estimate made, e0 of ||B_0^-1||_1, and the
+   !> distance d = ||B_f - B_0||_1 from its matrix: with E = B_f - B_0,
+   !> B_f^-1 = (I + B_0^-1 E)^-1 B_0^-1, so ||B_f^-1|| lies between e0/(1 +
+   !> e0 d) and e0/(1 - e0 d) (Golub and Van Loan, Theorem 2.3.4) when e0 d <
+   !> 1; they are taken with e0 as the estimate of ||B_0^-1||, as the
+   !> estimate's own use takes it. low = 0 and high = huge when not known
+   !> (no estimate yet, no factor, or e0 d above bound_reach).
+   pure subroutine strain_rate_rcond_bounds(self, low, high)
+      type(strain_rate_type), intent(in) :: self
+      real(dp), intent(out) :: low, high
+      real(dp) :: reach, distance, column, limit
+      integer :: i, j
+      low = 0
+      high = huge(1.0_dp)
+      if (.not. self%factored .or. .not. self%inverse_norm > 0 .or. .not. self%norm1 > 0) return
+      limit = bound_reach/self%inverse_norm
+      distance = 0
+      if (.not. self%estimate_current) then
+         if (.not. self%unfactored_kept) return
+         do j = 1, self%n
+            column = 0
+            do i = self%kl + 1, size(self%ab, 1)
+               column = column + abs(self%unfactored(i, j) - self%estimated(i, j))
+            end do
+            distance = max(distance, column)
+            ! Too far already: the rest of the matrix is not read.
+            if (distance >= limit) return
+         end do
+      end if
+      reach = self%inverse_norm*distance
+      low = ((1 - reach)/(self%norm1*self%inverse_norm))**2
+      high = ((1 + reach)/(self%norm1*self%inverse_norm))**2
+   end subroutine strain_rate_rcond_bounds
+
+   pure subroutine swap(a, b)
+      real(dp), allocatable, intent(inout) :: a(:, :), b(:, :)
+      real(dp), allocatable :: c(:, :)
+      call move_alloc(a, c)
+      call move_alloc(b, a)
+      call move_alloc(c, b)
+   end subroutine swap
 
    !> Solve B_f x = b with the factor (b by band rows in, x by equations out).
    pure subroutine solve_strain_rate(self, x)

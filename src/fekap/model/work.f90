@@ -19,6 +19,11 @@ module fekap_model_work
       integer :: velocity_solves = 0
       integer :: acceleration_solves = 0
       integer :: slideline_evaluations = 0
+      !> The square-root form (FEM): band LU factorisations of B_f, and the
+      !> condition estimates made of them at the steps' predictors (the
+      !> others are bounded from the last one, fekap_fem_fill's check_predictor).
+      integer :: root_factorisations = 0
+      integer :: condition_estimates = 0
       !> Steps accepted at the round-off floor with the residual above the
       !> tolerance (fekap_stepping_newton's stop_at_floor).
       integer :: floor_steps = 0

@@ -398,6 +398,11 @@ contains
       write (unit, '(2x,a30,i12)') 'tangent assemblies', counts%tangent_assemblies
       write (unit, '(2x,a30,i12)') 'Cholesky factorisations', counts%cholesky_factorisations
       write (unit, '(2x,a30,i12)') 'LU factorisations (fallback)', counts%lu_factorisations
+      ! The square-root form's (FEM): B_f's LU, and its condition estimates at the predictors.
+      if (counts%root_factorisations > 0) then
+         write (unit, '(2x,a30,i12)') 'LU factorisations of B_f', counts%root_factorisations
+         write (unit, '(2x,a30,i12)') 'predictor condition estimates', counts%condition_estimates
+      end if
       write (unit, '(2x,a30,i12)') 'velocity solves', counts%velocity_solves
       write (unit, '(2x,a30,i12)') 'acceleration solves', counts%acceleration_solves
       write (unit, '(2x,a30,i12)') 'slideline evaluations', counts%slideline_evaluations

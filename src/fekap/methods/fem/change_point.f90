@@ -22,7 +22,8 @@ module fekap_fem_change_point
    implicit none
    private
 
-   public :: change_verdict, response_trusted, hermite_fill, correct_fill, fill_order, change_record_type
+   public :: change_verdict, response_trusted, estimate_needed, hermite_fill, correct_fill, fill_order, &
+      & change_record_type
 
    !> A tangent whose reciprocal condition number is below change_drop times
    !> the largest of the run's accepted configurations is near singular.
@@ -43,6 +44,13 @@ module fekap_fem_change_point
    !> one step from a collinear configuration the response is still right
    !> though the step is near singular (docs/hard-cases.md, the double crank).
    real(dp), parameter, public :: response_drop = 1.0e-6_dp
+   !> A predictor's condition estimate may be left out only when the bounds
+   !> on it (strain_rate_rcond_bounds) keep it at least skip_margin times
+   !> change_drop times the run's best (see estimate_needed): a margin for
+   !> the estimator's own error at the configuration it was made at (dlacn2
+   !> gives a lower bound of ||B^-1|| that is rarely more than a few times
+   !> short, squared on the tangent's scale).
+   real(dp), parameter, public :: skip_margin = 100
    !> Verdicts of change_verdict.
    integer, parameter, public :: change_regular = 0, change_near_singular = 1
    !> Shift of the filled row's position correction, relative to the largest
@@ -166,6 +174,17 @@ contains
          verdict = change_near_singular
       end if
    end function change_verdict
+
+   !> Whether a predictor's condition estimate must be made, given bounds
+   !> low <= rcond <= high on it (strain_rate_rcond_bounds) and the run's
+   !> best so far, reference: unless the bounds show it regular by
+   !> skip_margin (change_verdict and response_trusted would say regular and
+   !> trusted) and no better than the run's best (the reference would not
+   !> change), both whatever the estimate within the bounds.
+   pure logical function estimate_needed(low, high, reference) result(needed)
+      real(dp), intent(in) :: low, high, reference
+      needed = .not. (reference > 0 .and. low >= skip_margin*change_drop*reference .and. high <= reference)
+   end function estimate_needed
 
    !> Whether the drive response of a factor with reciprocal condition number
    !> rcond is trusted against the run's best so far, reference.

@@ -116,6 +116,7 @@ contains
       clock = phase_start(self%system)
       call factor_strain_rate(self%root, info)
       call phase_end(self%system, clock, self%counts%seconds_factorisation)
+      self%counts%root_factorisations = self%counts%root_factorisations + 1
    end subroutine timed_root_factor
 
    !> The pivot ratio of the factor at the accepted configuration (B_f's on

@@ -12,9 +12,9 @@ module fekap_fem_fill
    use fekap_fem_linear_system, only: system_rcond
    use fekap_stepping_predictor, only: predictor_margin
    use fekap_fem_rates, only: solve_velocities, solve_accelerations
-   use fekap_assembly_strain_rate, only: strain_rate_rcond
+   use fekap_assembly_strain_rate, only: strain_rate_rcond, strain_rate_rcond_bounds
    use fekap_fem_change_point, only: hermite_fill, correct_fill, fill_order, &
-      & rates_drop, fill_shift
+      & rates_drop, fill_shift, estimate_needed
    use fekap_fem_state, only: fem_state_type, fem_core_type
    use fekap_fem_factor, only: fill_tangent
    implicit none
@@ -28,14 +28,22 @@ contains
    !> try), with the factor Newton's first iteration just made there (B_f's if
    !> root_solved, else K's unless info > 0): its condition estimate against
    !> the run's best, recorded in the change-point record (record_predictor).
+   !> B_f's estimate is left out where its bounds from the last estimate
+   !> decide as the estimate would (estimate_needed; docs/hard-cases.md,
+   !> "When the estimate is made"): the lower bound stands for it, which
+   !> the branch check then trusts and which leaves the run's best as it is.
    subroutine check_predictor(self, root_solved, info)
       class(fem_core_type), intent(inout) :: self
       logical, intent(in) :: root_solved
       integer, intent(in) :: info
-      real(dp) :: rcond
+      real(dp) :: rcond, high
       rcond = 0
       if (root_solved) then
-         call strain_rate_rcond(self%root, rcond)
+         call strain_rate_rcond_bounds(self%root, rcond, high)
+         if (estimate_needed(rcond, high, self%state%reference_rcond)) then
+            call strain_rate_rcond(self%root, rcond)
+            self%counts%condition_estimates = self%counts%condition_estimates + 1
+         end if
       else if (info == 0) then
          call system_rcond(self%system, rcond, self%counts)
       end if
