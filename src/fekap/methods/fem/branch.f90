@@ -18,20 +18,19 @@ module fekap_fem_branch
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type, dof_rot
    use fekap_assembly_mesh, only: mesh_type, describe_dof
+   use fekap_stepping_jump, only: jump_ratio, jump_bound_ratio
    implicit none
    private
 
-   public :: branch_check_type, new_branch_check, drive_increment, branch_verdict, jump_bound_ratio
+   public :: branch_check_type, new_branch_check, drive_increment, branch_verdict
+   ! The magnitude rule (fekap_stepping_jump), for this module's users.
+   public :: jump_ratio, jump_bound_ratio
 
    !> Verdicts of branch_verdict: accept the step; reject it (cut it); accept
    !> it pending verification by two half steps; reject it for good (a step
    !> halved max_verify_depth times is still suspect: cutting cannot help).
    integer, parameter, public :: branch_accept = 0, branch_reject = 1, branch_verify = 2, branch_unverifiable = 3
 
-   !> A step is rejected when some rotation over the step exceeds this many
-   !> times what the rates at either end of the step, or the drive increment,
-   !> can explain (the FEM and the classical methods alike).
-   real(dp), parameter, public :: jump_ratio = 2.0_dp
    !> Relative angles within this many pi of a multiple of pi at either end
    !> of a step do not count as crossing it (links that start or end collinear).
    real(dp), parameter :: hinge_margin = 1.0e-9_dp
@@ -94,27 +93,6 @@ contains
       end do
    end subroutine drive_increment
 
-   !> The ratio of the change of a coordinate over a step to what explains it:
-   !> max(|dq_old|, |dq_new|, floor), the linear responses to the drive
-   !> increment at the two ends of the step and the increment itself (huge
-   !> for a change that nothing explains).
-   elemental real(dp) function jump_bound_ratio(change, dq_old, dq_new, floor_) result(ratio)
-      real(dp), intent(in) :: change, dq_old, dq_new, floor_
-      ratio = bound_ratio(change, dq_old, dq_new, floor_)
-   end function jump_bound_ratio
-
-   !> jump_bound_ratio, private so that branch_verdict's loop inlines it.
-   elemental real(dp) function bound_ratio(change, dq_old, dq_new, floor_) result(ratio)
-      real(dp), intent(in) :: change, dq_old, dq_new, floor_
-      real(dp) :: bound
-      bound = max(floor_, abs(dq_new), abs(dq_old))
-      if (bound > 0) then
-         ratio = abs(change)/bound
-      else
-         ratio = merge(0.0_dp, huge(1.0_dp), abs(change) <= 0)
-      end if
-   end function bound_ratio
-
    !> The verdict on the step at time t from q to qt, given the linear
    !> responses dq_old and dq_new to its drive increment (of size floor_) at
    !> the two ends (zero where not known). smooth: q_predicted was a smooth
@@ -143,7 +121,7 @@ contains
       worst_dof = 0
       do i = 1, mesh%ndof
          if (mesh%dof_kind(i) /= dof_rot) cycle
-         ratio = bound_ratio(qt(i) - q(i), dq_old(i), dq_new(i), floor_)
+         ratio = jump_bound_ratio(qt(i) - q(i), dq_old(i), dq_new(i), floor_)
          if (ratio > worst) then
             worst = ratio
             worst_dof = i

@@ -5,7 +5,8 @@
 !> (change_verdict), solves the next output time from the last regular state
 !> as one double step, and fills the skipped row for output only from its two
 !> regular neighbours (hermite_fill), its positions then corrected in the
-!> range of the tangent (correct_fill). docs/hard-cases.md (Change points)
+!> range of the tangent (correct_fill). The thresholds and the fill are
+!> fekap_stepping_change_point's (shared with the spatial stepper). docs/hard-cases.md (Change points)
 !> has the measurements behind the thresholds. The stepper's change-point
 !> record (change_record_type) is this module's: whether a step checks its
 !> predictor, what the check found, and the regular states on either side of
@@ -14,6 +15,8 @@
 !> reading without a copy; test/app/test_layers.py checks the assignments).
 module fekap_fem_change_point
    use fekap_kinds, only: dp
+   use fekap_stepping_change_point, only: change_verdict, response_trusted, hermite_fill, fill_order, change_drop, &
+      & rates_drop, response_drop, change_regular, change_near_singular, fill_shift, fill_iterations
    use fekap_fem_accepted, only: fem_state_type
    use fekap_model_work, only: work_counts_type
    use fekap_assembly_mesh, only: mesh_type
@@ -22,28 +25,11 @@ module fekap_fem_change_point
    implicit none
    private
 
-   public :: change_verdict, response_trusted, estimate_needed, hermite_fill, correct_fill, fill_order, &
-      & change_record_type
+   public :: correct_fill, change_record_type, estimate_needed
+   ! The thresholds and the fill shared with the spatial stepper, for this module's users.
+   public :: change_verdict, response_trusted, hermite_fill, fill_order, change_drop, rates_drop, response_drop, &
+      & change_regular, change_near_singular, fill_shift, fill_iterations
 
-   !> A tangent whose reciprocal condition number is below change_drop times
-   !> the largest of the run's accepted configurations is near singular.
-   !> The threshold lies in the wide gap that docs/hard-cases.md measured at
-   !> the predictors between the steps landing on a change point and every
-   !> other step (lambda_min of K goes like the square of the distance to the
-   !> change point, so the gap is wide).
-   real(dp), parameter, public :: change_drop = 1.0e-4_dp
-   !> A filled row whose tangent's reciprocal condition number is below
-   !> rates_drop times the run's best is singular: its rates are left out.
-   !> Above it (a row near, not on, a change point) they are solved there.
-   real(dp), parameter, public :: rates_drop = 1.0e-10_dp
-   !> The branch-jump check trusts the drive response of a factor whose
-   !> reciprocal condition number is at least response_drop times the run's
-   !> best: the square of the 1e-3 that the study found on B, since lambda_min
-   !> of K goes like sigma_min(B)**2. Below it (at and next to a change point)
-   !> the response's size and signs are arbitrary. Smaller than change_drop:
-   !> one step from a collinear configuration the response is still right
-   !> though the step is near singular (docs/hard-cases.md, the double crank).
-   real(dp), parameter, public :: response_drop = 1.0e-6_dp
    !> A predictor's condition estimate may be left out only when the bounds
    !> on it (strain_rate_rcond_bounds) keep it at least skip_margin times
    !> change_drop times the run's best (see estimate_needed): a margin for
@@ -51,15 +37,6 @@ module fekap_fem_change_point
    !> gives a lower bound of ||B^-1|| that is rarely more than a few times
    !> short, squared on the tangent's scale).
    real(dp), parameter, public :: skip_margin = 100
-   !> Verdicts of change_verdict.
-   integer, parameter, public :: change_regular = 0, change_near_singular = 1
-   !> Shift of the filled row's position correction, relative to the largest
-   !> diagonal entry of the tangent (Levenberg-Marquardt): the residual has
-   !> no component in the tangent's kernel, so the shift leaves the range
-   !> correction exact, and makes the singular tangent factorable.
-   real(dp), parameter, public :: fill_shift = 1.0e-8_dp
-   !> Corrections of a filled row's positions at most.
-   integer, parameter, public :: fill_iterations = 4
 
    !> The FEM stepper's change-point record (see fekap_fem's step_over).
    type :: change_record_type
@@ -161,20 +138,6 @@ contains
       self%has_ahead = .false.
    end subroutine record_take_ahead
 
-   !> Whether a tangent with reciprocal condition number rcond is near
-   !> singular against the largest of the run so far, reference (a run
-   !> without a reference yet has nothing to compare with: regular, unless
-   !> the factor failed, rcond = 0).
-   pure integer function change_verdict(rcond, reference) result(verdict)
-      real(dp), intent(in) :: rcond, reference
-      verdict = change_regular
-      if (.not. rcond > 0) then
-         verdict = change_near_singular
-      else if (rcond < change_drop*reference) then
-         verdict = change_near_singular
-      end if
-   end function change_verdict
-
    !> Whether a predictor's condition estimate must be made, given bounds
    !> low <= rcond <= high on it (strain_rate_rcond_bounds) and the run's
    !> best so far, reference: unless the bounds show it regular by
@@ -185,50 +148,6 @@ contains
       real(dp), intent(in) :: low, high, reference
       needed = .not. (reference > 0 .and. low >= skip_margin*change_drop*reference .and. high <= reference)
    end function estimate_needed
-
-   !> Whether the drive response of a factor with reciprocal condition number
-   !> rcond is trusted against the run's best so far, reference.
-   pure logical function response_trusted(rcond, reference) result(trusted)
-      real(dp), intent(in) :: rcond, reference
-      trusted = rcond > 0 .and. rcond >= response_drop*reference
-   end function response_trusted
-
-   !> The order of the two-sided interpolation that the neighbours' data
-   !> allow: 5 (quintic Hermite) with velocities and accelerations at both,
-   !> 3 (cubic Hermite) with velocities, else 1 (linear).
-   pure integer function fill_order(velocities, accelerations) result(order)
-      logical, intent(in) :: velocities, accelerations
-      order = 1
-      if (velocities) order = 3
-      if (velocities .and. accelerations) order = 5
-   end function fill_order
-
-   !> q(t) by two-sided Hermite interpolation between (t0, q0, v0, a0) and
-   !> (t1, q1, v1, a1), t0 < t < t1, of the given order (fill_order): exact for
-   !> polynomials of that degree. Rates unused by the order may be anything.
-   pure subroutine hermite_fill(order, t0, q0, v0, a0, t1, q1, v1, a1, t, q)
-      integer, intent(in) :: order
-      real(dp), intent(in) :: t0, t1, t
-      real(dp), contiguous, intent(in) :: q0(:), v0(:), a0(:), q1(:), v1(:), a1(:)
-      real(dp), contiguous, intent(out) :: q(:)
-      real(dp) :: h, s, s2, s3, s4, s5
-      h = t1 - t0
-      s = (t - t0)/h
-      s2 = s*s
-      s3 = s2*s
-      s4 = s3*s
-      s5 = s4*s
-      select case (order)
-      case (5)
-         q = (1 - 10*s3 + 15*s4 - 6*s5)*q0 + (10*s3 - 15*s4 + 6*s5)*q1 &
-            & + h*((s - 6*s3 + 8*s4 - 3*s5)*v0 + (-4*s3 + 7*s4 - 3*s5)*v1) &
-            & + h*h*((s2 - 3*s3 + 3*s4 - s5)/2*a0 + (s3 - 2*s4 + s5)/2*a1)
-      case (3)
-         q = (2*s3 - 3*s2 + 1)*q0 + (3*s2 - 2*s3)*q1 + h*((s3 - 2*s2 + s)*v0 + (s3 - s2)*v1)
-      case default
-         q = (1 - s)*q0 + s*q1
-      end select
-   end subroutine hermite_fill
 
    !> Correct the filled positions q at time t (driven and fixed dofs already
    !> set) onto the mechanism's configurations by Newton with the shifted

@@ -13,6 +13,7 @@ module fekap_fem_fill
    use fekap_stepping_predictor, only: predictor_margin
    use fekap_fem_rates, only: solve_velocities, solve_accelerations
    use fekap_assembly_strain_rate, only: strain_rate_rcond, strain_rate_rcond_bounds
+   use fekap_stepping_change_point, only: uniform_next_time => next_output_time
    use fekap_fem_change_point, only: hermite_fill, correct_fill, fill_order, &
       & rates_drop, fill_shift, estimate_needed
    use fekap_fem_state, only: fem_state_type, fem_core_type
@@ -179,23 +180,8 @@ contains
    real(dp) function next_output_time(self, t) result(t_next)
       class(fem_core_type), intent(in) :: self
       real(dp), intent(in) :: t
-      real(dp) :: span
-      integer :: n, nsteps
-      t_next = t + (t - self%state%t)
       associate (an => self%model%analysis)
-         if (.not. an%dt > 0) return
-         span = an%t_end - an%t_start
-         nsteps = nint(span/an%dt)
-         if (abs(nsteps*an%dt - span) > 1.0e-9_dp*an%dt) nsteps = ceiling(span/an%dt)
-         nsteps = max(nsteps, 1)
-         n = nint((t - an%t_start)/an%dt)
-         if (n + 1 > nsteps .or. n < 0) return
-         if (abs(an%t_start + n*an%dt - t) > 1.0e-9_dp*an%dt .and. t /= an%t_end) return
-         if (n + 1 == nsteps) then
-            t_next = an%t_end
-         else
-            t_next = an%t_start + (n + 1)*an%dt
-         end if
+         t_next = uniform_next_time(an%t_start, an%t_end, an%dt, self%state%t, t)
       end associate
    end function next_output_time
 

@@ -13,18 +13,36 @@
 !> assembly. A step's iterations count the corrections that needed another
 !> assembly and factorisation after them, as the planar method counts its
 !> check "with the tangent factored at the converged configuration" as no
-!> iteration. A step whose Newton fails is cut in halves.
+!> iteration. A step whose Newton fails, or whose configuration the
+!> branch-jump check rejects (a joint angle or a free frame turned by more
+!> than jump_ratio times what the drive increment explains:
+!> fekap_spatial_change_point's rotation_jump, the planar FEM's magnitude
+!> rule), is cut in halves. A run's step whose predictor's tangent is near
+!> singular against the run's best (a change point: the planar FEM's
+!> detection, fekap_stepping_change_point) is stepped over: the next output
+!> time is solved from the last regular state as one double step, kept for
+!> the next advance, and the row at the change point is filled from both
+!> sides (fill_state) and corrected onto the mechanism (correct_state); at a
+!> singular configuration its rates are left out (docs/hard-cases.md, 3b).
+!> The module is over 600 lines because the step loop, the step over a
+!> change point and the predictor's rates all change the stepper's accepted
+!> state, which stays private to it; the checks that need none of it are
+!> fekap_spatial_change_point's.
 module fekap_spatial_stepper
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type
-   use fekap_model_results, only: step_result_type
+   use fekap_model_results, only: step_result_type, note_length
    use fekap_stepping_stepper, only: stepper_type
+   use fekap_stepping_change_point, only: change_verdict, change_regular, response_trusted, next_output_time, &
+      & fill_order, fill_shift, rates_drop
+   use fekap_stepping_jump, only: jump_ratio
    use fekap_spatial_mechanism, only: spatial_mechanism_type
    use fekap_spatial_kinematics, only: spatial_state_type, new_spatial_state, spatial_configuration_type, &
       & configure, assemble_spatial, set_drives, update_state, free_dofs, spatial_rates_factored, point_rate, &
-      & tangent_for
+      & spatial_rates, tangent_for
    use fekap_spatial_tangent, only: spatial_tangent_type
+   use fekap_spatial_change_point, only: drive_response, rotation_jump, fill_state, correct_state, shortest_element
    use fekap_spatial_build, only: spatial_map_type, build_spatial_mechanism
    use fekap_spatial_link_motion, only: link_motion_type, new_link_motion, fill_link_motion
    implicit none
@@ -42,6 +60,24 @@ module fekap_spatial_stepper
    !> the tolerance accepts above this is applied and the next iterate,
    !> whatever its correction below the tolerance, gives the rates.
    real(dp), parameter :: rate_tol = 1.0e-14_dp
+   !> A correction within this many units in the last place of the largest
+   !> dof value (relative, as the corrections) is round-off, whatever the
+   !> length tolerance and rate_tol say: a revolute angle driven 1,000 turns
+   !> is 6,283 rad, whose last place (9e-13) the other dofs' corrections
+   !> inherit, and another iteration cannot reduce it.
+   real(dp), parameter :: roundoff_places = 4
+
+   !> What the stepper keeps of an accepted configuration: to try a step from
+   !> it again, and the two regular states on either side of a change point.
+   type :: accepted_type
+      type(spatial_state_type) :: s
+      real(dp) :: t = 0
+      real(dp), allocatable :: v(:), a(:), jerk(:), snap(:), jerk1(:), jerk2(:)
+      real(dp) :: t1 = 0, t2 = 0, residual = 0, reference_rcond = 0
+      integer :: jerks = 0
+      real(dp), allocatable :: response(:, :)
+      logical :: has_response = .false.
+   end type accepted_type
 
    type, extends(stepper_type) :: spatial_stepper_type
       type(spatial_mechanism_type) :: m
@@ -64,10 +100,38 @@ module fekap_spatial_stepper
       integer, allocatable :: fdof(:)
       !> The tangent's band storage and its factor at the last iterate.
       type(spatial_tangent_type) :: kt
+      !> Whether the rates are output (else a converged correction above
+      !> rate_tol needs no refining iteration: the rates feed the predictor only).
+      logical :: refine_rates = .true.
+      !> The least reciprocal condition number of the tangents of the last
+      !> solve that watched them (a failed factor 0).
+      real(dp) :: least_rcond = 0
       !> The norm of the free dofs' residual at the last converged configuration.
       real(dp) :: residual = 0
       !> The links' rotations of the last step (links.csv).
       type(link_motion_type) :: links
+      !> The linear response of every dof to unit drive changes at the accepted
+      !> configuration (one column a drive), whether it is trusted (its
+      !> tangent regular against the run's best), and the one at the last
+      !> converged try; the reciprocal condition numbers of the tangent at that
+      !> try's predictor and solution, and the run's best.
+      real(dp), allocatable :: response(:, :), try_response(:, :)
+      logical :: has_response = .false.
+      real(dp) :: predictor_rcond = 0, try_rcond = 0, reference_rcond = 0
+      !> The unit of stroke drives in the branch check (the shortest element).
+      real(dp) :: shortest = 1
+      !> The run's uniform steps, for the time after a change point.
+      real(dp) :: t_start = 0, t_end = 1, dt = 0
+      !> A change point stepped over: the regular states on either side, the
+      !> one ahead with its iterations and cuts (the next advance's), and
+      !> whether it is kept.
+      type(accepted_type) :: before, ahead
+      logical :: has_ahead = .false.
+      integer :: ahead_iterations = 0, ahead_cuts = 0
+      !> Whether the accepted state's rates are known (not at a change point's
+      !> singular row), and the note of its row.
+      logical :: rates_known = .true.
+      character(len=note_length) :: note = ''
    contains
       procedure :: start => spatial_start
       procedure :: advance => spatial_advance
@@ -90,6 +154,11 @@ contains
       self%fdof = free_dofs(self%m)
       call tangent_for(self%m, self%kt)
       self%difference_step = model%analysis%dt/4
+      self%t_start = model%analysis%t_start
+      self%t_end = model%analysis%t_end
+      self%dt = model%analysis%dt
+      self%shortest = shortest_element(self%m)
+      self%refine_rates = model%analysis%velocities
       call new_link_motion(self%links, model, self%m, self%map%node_frame, self%map%node_point)
       allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%jerk(self%m%ndof), self%snap(self%m%ndof), &
          & self%jerk1(self%m%ndof), self%jerk2(self%m%ndof), source=0.0_dp)
@@ -102,56 +171,137 @@ contains
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
       integer :: iterations
-      logical :: converged
+      logical :: converged, found
       character(:), allocatable :: why
-      call solve(self, self%t, iterations, converged, why)
+      call solve(self, self%t, .false., .false., iterations, converged, found, why)
       if (.not. converged) then
          call analysis_error(error, 'the start configuration does not assemble: '//why)
          return
       end if
+      ! The start's tangent is the run's first reference, its response trusted.
+      self%reference_rcond = self%try_rcond
+      call move_alloc(self%try_response, self%response)
+      self%has_response = self%try_rcond > 0
       result%t = self%t
       result%iterations = iterations
       call fill_result(self, result)
    end subroutine spatial_start
 
-   !> Advance to time t, cutting the step in halves while Newton fails.
+   !> Advance to time t: the state ahead of a change point if it is this
+   !> time's; else a step of the run (step_to, whose first try looks for a
+   !> change point at its predictor), or the step over a change point found there.
    subroutine spatial_advance(self, t, result, error)
       class(spatial_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
-      type(spatial_state_type) :: saved
-      real(dp), allocatable :: v0(:), a0(:), j0(:), k0(:)
-      real(dp) :: h, t_try, t0
-      integer :: cuts, iterations, total
+      integer :: cuts, iterations
+      logical :: found
+      self%rates_known = .true.
+      self%note = ''
+      if (self%has_ahead) then
+         self%has_ahead = .false.
+         if (t == self%ahead%t) then
+            ! The step over a change point solved this time already (with its rates).
+            call restore(self, self%ahead)
+            self%counts%steps = self%counts%steps + 1
+            result%t = t
+            result%iterations = self%ahead_iterations
+            result%cuts = self%ahead_cuts
+            call fill_result(self, result)
+            return
+         end if
+         ! Another time: from the regular state before the change point.
+         call restore(self, self%before)
+      end if
+      call step_to(self, t, .true., iterations, cuts, found, error)
+      if (allocated(error)) return
+      if (found) then
+         call step_over(self, t, result, error)
+         return
+      end if
+      self%counts%steps = self%counts%steps + 1
+      result%t = t
+      result%iterations = iterations
+      result%cuts = cuts
+      call fill_result(self, result)
+   end subroutine spatial_advance
+
+   !> Advance the accepted state to time t, cutting the step in halves while
+   !> Newton fails or the branch check rejects its configuration. With
+   !> `detect`, the first try checks its predictor's tangent: near singular
+   !> against the run's best (change_verdict), it ends the advance at once
+   !> (found; the state is the one before).
+   subroutine step_to(self, t, detect, iterations, cuts, found, error)
+      type(spatial_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      logical, intent(in) :: detect
+      integer, intent(out) :: iterations, cuts
+      logical, intent(out) :: found
+      type(error_type), allocatable, intent(out) :: error
+      type(accepted_type) :: saved
+      real(dp) :: h, t_try
+      integer :: its
       logical :: converged
       character(:), allocatable :: why
       character(len=160) :: text
       h = t - self%t
       cuts = 0
-      total = 0
+      iterations = 0
+      found = .false.
       do while (self%t < t)
          t_try = min(self%t + h, t)
          if (t - t_try < 1.0e-9_dp*h) t_try = t
-         saved = self%s
-         v0 = self%v
-         a0 = self%a
-         j0 = self%jerk
-         k0 = self%snap
-         t0 = self%t
-         call predict(self, t_try - self%t)
-         call solve(self, t_try, iterations, converged, why)
-         total = total + iterations
+         saved = snapshot(self)
+         call predict(self, t_try - self%t, .true.)
+         call solve(self, t_try, detect .and. cuts == 0, .false., its, converged, found, why)
+         iterations = iterations + its
+         if (found) then
+            call restore(self, saved)
+            return
+         end if
+         if (converged) call check_jump(self, saved, t_try, converged, why)
+         if (.not. converged .and. .not. found) then
+            ! Once more from the predictor to the second rate (see predict),
+            ! watching the tangents: Newton that fails on the run's step
+            ! among near-singular tangents is at a change point too.
+            call restore(self, saved)
+            call predict(self, t_try - self%t, .false.)
+            call solve(self, t_try, .false., .true., its, converged, found, why)
+            iterations = iterations + its
+            if (converged) call check_jump(self, saved, t_try, converged, why)
+            if (.not. converged .and. detect .and. cuts == 0) then
+               found = change_verdict(self%least_rcond, self%reference_rcond) /= change_regular
+               if (found) then
+                  self%predictor_rcond = self%least_rcond
+                  call restore(self, saved)
+                  return
+               end if
+            end if
+         end if
+         if (converged .and. detect .and. cuts == 0) then
+            ! A predictor far from a change point (j and k off) may still
+            ! converge onto it, slowly: a run's step whose configuration has a
+            ! near-singular tangent is stepped over as well.
+            found = change_verdict(self%try_rcond, self%reference_rcond) /= change_regular
+            if (found) then
+               self%predictor_rcond = self%try_rcond
+               call restore(self, saved)
+               return
+            end if
+         end if
          if (converged) then
             self%t = t_try
+            self%has_response = response_trusted(self%try_rcond, self%reference_rcond)
+            if (self%has_response) then
+               call move_alloc(self%try_response, self%response)
+            else
+               self%response = 0
+            end if
+            self%reference_rcond = max(self%reference_rcond, self%try_rcond)
             cycle
          end if
-         self%s = saved
-         self%v = v0
-         self%a = a0
-         self%jerk = j0
-         self%snap = k0
-         self%t = t0
+         call restore(self, saved)
          cuts = cuts + 1
          if (cuts > max_cuts) then
             write (text, '(a,i0,a)') 'Newton failed even with the step cut ', max_cuts, ' times ('
@@ -161,19 +311,193 @@ contains
          end if
          h = h/2
       end do
+   end subroutine step_to
+
+   !> The branch-jump check of a converged try from the accepted state `saved`
+   !> to time t (the magnitude rule: rotation_jump): every joint angle and free
+   !> frame turns by at most jump_ratio times what the linear responses to the
+   !> drive increment at either end (where trusted), or the increment itself
+   !> (strokes in lengths of the shortest element), explain.
+   subroutine check_jump(self, saved, t, accepted, why)
+      type(spatial_stepper_type), intent(in) :: self
+      type(accepted_type), intent(in) :: saved
+      real(dp), intent(in) :: t
+      logical, intent(out) :: accepted
+      character(:), allocatable, intent(inout) :: why
+      real(dp), allocatable :: dd(:), dq_old(:), dq_new(:)
+      real(dp) :: floor_, worst, turn
+      integer :: j, worst_dof
+      character(len=200) :: text
+      accepted = .true.
+      ! Without drives nothing explains a rotation, and nothing is to move.
+      if (size(self%response, 2) == 0) return
+      allocate (dd(size(self%response, 2)), source=0.0_dp)
+      floor_ = 0
+      do j = 1, size(dd)
+         associate (dof => self%m%drives(j)%dof)
+            dd(j) = self%s%q(dof) - saved%s%q(dof)
+            floor_ = max(floor_, abs(dd(j))/merge(self%shortest, 1.0_dp, self%m%is_length(dof)))
+         end associate
+      end do
+      allocate (dq_old(self%m%ndof), dq_new(self%m%ndof), source=0.0_dp)
+      if (saved%has_response) dq_old = matmul(saved%response, dd)
+      if (response_trusted(self%try_rcond, self%reference_rcond)) dq_new = matmul(self%try_response, dd)
+      call rotation_jump(self%m, saved%s, self%s, dq_old, dq_new, floor_, worst, worst_dof, turn)
+      if (worst > jump_ratio) then
+         accepted = .false.
+         write (text, '(a,es12.5,a,f9.4,a,es9.2,a,i0)') 't = ', t, ': assembly-mode jump rejected (rotation ', turn, &
+            & ' rad over the step, ', worst, ' times what the drive increment explains) at dof ', worst_dof
+         why = trim(text)
+      end if
+   end subroutine check_jump
+
+   !> The step onto time t found its predictor's tangent near singular (a
+   !> change point): instead of iterating there, solve the next output time
+   !> from the last regular state as one double step (kept for the next
+   !> advance) and fill the row at t from both sides: the quintic Hermite
+   !> interpolant through the two regular states (fill_state), corrected onto
+   !> the mechanism with the shifted tangent (correct_state). Its rates are
+   !> left out where the tangent there is singular against the run's best
+   !> (rates_drop); where it is regular enough (near, not on, a change point)
+   !> the row is solved as without the detection, from the state before,
+   !> and if that fails the fill is finished by plain Newton and gets rates.
+   !> If the double step fails, the row is solved as without the detection.
+   subroutine step_over(self, t, result, error)
+      type(spatial_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      type(step_result_type), intent(inout) :: result
+      type(error_type), allocatable, intent(out) :: error
+      type(error_type), allocatable :: over_error, near_error
+      type(spatial_state_type) :: filled
+      real(dp) :: t_next, residual, rcond, predictor_rcond
+      integer :: iterations, cuts, its, order
+      logical :: found, singular
+      character(len=note_length) :: text
+      character(:), allocatable :: what
+      predictor_rcond = self%predictor_rcond
+      self%before = snapshot(self)
+      t_next = next_output_time(self%t_start, self%t_end, self%dt, self%t, t)
+      call step_to(self, t_next, .false., iterations, cuts, found, over_error)
+      if (allocated(over_error)) then
+         ! The double step failed: solve at t itself, as without the detection.
+         call restore(self, self%before)
+         call step_to(self, t, .false., iterations, cuts, found, error)
+         if (allocated(error)) return
+         self%counts%steps = self%counts%steps + 1
+         result%t = t
+         result%iterations = iterations
+         result%cuts = cuts
+         call fill_result(self, result)
+         return
+      end if
+      self%ahead = snapshot(self)
+      self%ahead_iterations = iterations
+      self%ahead_cuts = cuts
+      self%has_ahead = .true.
+      associate (bf => self%before, n => self%ahead)
+         order = fill_order(.true., .true.)
+         filled = fill_state(self%m, order, bf%t, bf%s, bf%v, bf%a, n%t, n%s, n%v, n%a, t)
+         call correct_state(self%m, self%fdof, t, self%tol, fill_shift, filled, its, residual, rcond)
+         singular = rcond < rates_drop*bf%reference_rcond
+         if (.not. singular) then
+            ! Near, not on, a change point: solve the row itself as without the
+            ! detection, from the state before it; the state ahead stays.
+            call restore(self, bf)
+            call step_to(self, t, .false., iterations, cuts, found, near_error)
+            if (.not. allocated(near_error)) then
+               self%counts%steps = self%counts%steps + 1
+               result%t = t
+               result%iterations = iterations
+               result%cuts = cuts
+               call fill_result(self, result)
+               return
+            end if
+            call restore(self, bf)
+            call correct_state(self%m, self%fdof, t, self%tol, 0.0_dp, filled, iterations, residual, rcond)
+            its = its + iterations
+         end if
+         self%s = filled
+         self%t = t
+         self%residual = residual
+         self%rates_known = .not. singular
+         if (self%rates_known) call spatial_rates(self%m, t, self%s, self%v, self%a, near_error)
+         if (allocated(near_error)) self%rates_known = .false.
+         what = ': near a change point ('
+         if (singular) what = ': singular configuration (a change point: '
+         write (text, '(a,es12.5,a,es9.2,a,es9.2,a,es12.5,a,es12.5,a,i0,a,es9.2,a)') 't = ', t, &
+            & what//'the tangent''s condition ', predictor_rcond/max(bf%reference_rcond, tiny(1.0_dp)), &
+            & ' at the predictor, ', rcond/max(bf%reference_rcond, tiny(1.0_dp)), &
+            & ' at the configuration, of the run''s best): stepped over from t = ', bf%t, ' to ', n%t, &
+            & '; positions interpolated from both sides (order ', order, ') and corrected (residual ', residual, ')'
+         if (self%rates_known) then
+            self%note = trim(text)//': velocities and accelerations are ill-conditioned'
+         else
+            self%note = trim(text)//': velocities and accelerations are left out of this step'
+         end if
+      end associate
       self%counts%steps = self%counts%steps + 1
       result%t = t
-      result%iterations = total
-      result%cuts = cuts
+      result%iterations = its
+      result%cuts = 0
       call fill_result(self, result)
-   end subroutine spatial_advance
+   end subroutine step_over
+
+   !> The accepted configuration, its rates and its predictor's history.
+   function snapshot(self) result(x)
+      type(spatial_stepper_type), intent(in) :: self
+      type(accepted_type) :: x
+      x%s = self%s
+      x%t = self%t
+      x%v = self%v
+      x%a = self%a
+      x%jerk = self%jerk
+      x%snap = self%snap
+      x%jerk1 = self%jerk1
+      x%jerk2 = self%jerk2
+      x%t1 = self%t1
+      x%t2 = self%t2
+      x%jerks = self%jerks
+      x%residual = self%residual
+      x%reference_rcond = self%reference_rcond
+      x%response = self%response
+      x%has_response = self%has_response
+   end function snapshot
+
+   !> Make x the accepted configuration again.
+   subroutine restore(self, x)
+      type(spatial_stepper_type), intent(inout) :: self
+      type(accepted_type), intent(in) :: x
+      self%s = x%s
+      self%t = x%t
+      self%v = x%v
+      self%a = x%a
+      self%jerk = x%jerk
+      self%snap = x%snap
+      self%jerk1 = x%jerk1
+      self%jerk2 = x%jerk2
+      self%t1 = x%t1
+      self%t2 = x%t2
+      self%jerks = x%jerks
+      self%residual = x%residual
+      self%reference_rcond = x%reference_rcond
+      self%response = x%response
+      self%has_response = x%has_response
+   end subroutine restore
 
    !> The predictor: s (+) (h v + h^2/2 a + h^3/6 j + h^4/24 k), the Taylor
-   !> series of the motion to its fourth rate (an O(h^5) error).
-   subroutine predict(self, h)
+   !> series of the motion to its fourth rate (an O(h^5) error), or without
+   !> its last two terms (`full` false: an O(h^3) error, for the retry of a
+   !> step whose j and k, from solves with an ill-conditioned tangent, may be
+   !> far off).
+   subroutine predict(self, h, full)
       type(spatial_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: h
-      call update_state(self%m, self%s, h*self%v + h**2/2*self%a + h**3/6*self%jerk + h**4/24*self%snap)
+      logical, intent(in) :: full
+      if (full) then
+         call update_state(self%m, self%s, h*self%v + h**2/2*self%a + h**3/6*self%jerk + h**4/24*self%snap)
+      else
+         call update_state(self%m, self%s, h*self%v + h**2/2*self%a)
+      end if
    end subroutine predict
 
    !> The third and fourth rates (jerk j and snap k) of the motion at the
@@ -250,22 +574,30 @@ contains
    end subroutine curve_rates
 
    !> Newton from the current state at time t (the drives set exactly); on
-   !> convergence the rates at the solution. `why` says why it failed.
-   subroutine solve(self, t, iterations, converged, why)
+   !> convergence the rates at the solution and the drive response there
+   !> (try_response, with the tangent's condition try_rcond). With `detect`,
+   !> the tangent at the predictor (the first iteration's) is checked for a
+   !> change point: near singular against the run's best, Newton stops there
+   !> (found). `why` says why it failed.
+   subroutine solve(self, t, detect, watch, iterations, converged, found, why)
       type(spatial_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
+      !> Check the predictor for a change point; keep the least condition
+      !> estimate of the iterates' tangents (least_rcond).
+      logical, intent(in) :: detect, watch
       integer, intent(out) :: iterations
-      logical, intent(out) :: converged
+      logical, intent(out) :: converged, found
       character(:), allocatable, intent(out) :: why
       type(spatial_configuration_type) :: c
       real(dp) :: res(self%m%ndof), ad(self%m%ndof), dq(self%m%ndof)
-      real(dp) :: scale(self%m%ndof), correction, last
+      real(dp) :: scale(self%m%ndof), correction, last, roundoff, rcond
       real(dp), allocatable :: rhs(:)
       integer :: info, it
       character(len=80) :: text
       logical :: refining
       refining = .false.
       converged = .false.
+      found = .false.
       iterations = 0
       why = ''
       call set_drives(self%m, t, self%s, self%v, ad)
@@ -281,6 +613,21 @@ contains
          else
             self%counts%cholesky_factorisations = self%counts%cholesky_factorisations + 1
          end if
+         rcond = 0
+         if ((watch .or. (it == 0 .and. detect)) .and. info == 0) call self%kt%rcond(rcond)
+         if (watch) then
+            if (it == 0) self%least_rcond = huge(1.0_dp)
+            self%least_rcond = min(self%least_rcond, rcond)
+         end if
+         if (it == 0 .and. detect) then
+            ! The change-point test of the predictor (a failed factor counts as 0).
+            self%predictor_rcond = rcond
+            if (change_verdict(self%predictor_rcond, self%reference_rcond) /= change_regular) then
+               found = .true.
+               why = 'a change point at the predictor'
+               return
+            end if
+         end if
          if (info /= 0) then
             write (text, '(a,i0)') 'singular tangent at dof ', info
             why = trim(text)
@@ -295,20 +642,28 @@ contains
             why = 'the correction is not a finite number'
             return
          end if
-         if (correction < self%tol .and. (correction < rate_tol .or. refining)) then
+         ! The dofs are coupled: the round-off of the largest value (at least
+         ! a rotation of 1 rad or the mechanism's length) bounds every
+         ! correction that another iteration could make (see roundoff_places).
+         roundoff = roundoff_places*maxval(spacing(max(abs(self%s%q), 1/scale))*scale)
+         if (correction < max(self%tol, roundoff) .and. (correction < max(rate_tol, roundoff) .or. refining .or. &
+            & .not. self%refine_rates)) then
             ! Converged at this iterate, which is the solution to round-off:
-            ! its factored tangent gives the rates.
+            ! its factored tangent gives the rates, the drive response and
+            ! the condition estimate.
             self%residual = norm2(res(self%fdof))
             call spatial_rates_factored(self%m, self%s, c, self%kt, self%v, ad, self%a)
             self%counts%velocity_solves = self%counts%velocity_solves + 1
             self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+            self%try_response = drive_response(self%m, self%kt)
+            call self%kt%rcond(self%try_rcond)
             call update_state(self%m, self%s, dq)
             call curve_rates(self, t)
             converged = .true.
             return
          end if
          ! Converged, but the rates want the next iterate (once: round-off may keep it above rate_tol).
-         if (correction < self%tol) refining = .true.
+         if (correction < max(self%tol, roundoff)) refining = .true.
          if (it >= 2 .and. correction > last .and. .not. refining) then
             write (text, '(a,i0,a)') 'the correction grew at iteration ', it + 1, ''
             why = trim(text)
@@ -360,9 +715,10 @@ contains
       end do
       call fill_link_motion(self%links, self%m, self%s, c, self%v, self%a, result%link_rotation, result%link_omega, &
          & result%link_alpha)
-      result%has_velocity = .true.
-      result%has_acceleration = .true.
+      result%has_velocity = self%rates_known
+      result%has_acceleration = self%rates_known
       result%residual = self%residual
+      result%note = self%note
    end subroutine fill_result
 
    !> The listing's plan line: the mechanism's size.

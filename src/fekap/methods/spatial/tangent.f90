@@ -36,6 +36,7 @@ module fekap_spatial_tangent
       procedure :: solve => tangent_solve
       procedure :: product => tangent_product
       procedure :: is_lu => tangent_is_lu
+      procedure :: rcond => tangent_rcond
    end type spatial_tangent_type
 
 contains
@@ -163,5 +164,14 @@ contains
       class(spatial_tangent_type), intent(in) :: self
       tangent_is_lu = self%kff%is_lu
    end function tangent_is_lu
+
+   !> The reciprocal condition number of the factored K_ff in the 1-norm
+   !> (fekap_linalg_band's estimate: a few solves with the factor; 0 where
+   !> the factor failed).
+   subroutine tangent_rcond(self, rcond)
+      class(spatial_tangent_type), intent(inout) :: self
+      real(dp), intent(out) :: rcond
+      call self%kff%rcond(rcond)
+   end subroutine tangent_rcond
 
 end module fekap_spatial_tangent

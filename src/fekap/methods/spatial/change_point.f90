@@ -1,0 +1,259 @@
+!> The spatial stepper's checks of a step (fekap_spatial_stepper), with the
+!> rules the planar FEM uses (fekap_stepping_jump, fekap_stepping_change_point;
+!> docs/hard-cases.md, sections 1 and 3b):
+!>
+!> * the condition estimate of a dense LU, for the filled row's tangent
+!>   (correct_state; the stepper's iterates use the band tangent's,
+!>   fekap_spatial_tangent);
+!> * the linear response of the dofs to the drives, R = -K_ff^-1 K_fd, and
+!>   the magnitude rule of the branch-jump check on the rotation unknowns:
+!>   joint angles (additive) and free frames (the angle of R_old^T R_new
+!>   against the norms of their responses);
+!> * the row of a change point stepped over: its state by two-sided Hermite
+!>   interpolation (free frames along their body rotation vector from the
+!>   state before), corrected onto the mechanism by Newton with the tangent
+!>   shifted by fill_shift.
+module fekap_spatial_change_point
+   use fekap_kinds, only: dp
+   use fekap_linalg_lapack, only: dense_lu_factor, dense_lu_solve, dgetrs, dlacn2
+   use fekap_element_se3, only: so3_exp, so3_log
+   use fekap_stepping_change_point, only: hermite_fill, fill_iterations
+   use fekap_stepping_jump, only: jump_bound_ratio
+   use fekap_spatial_mechanism, only: spatial_mechanism_type, frame_free
+   use fekap_spatial_tangent, only: spatial_tangent_type
+   use fekap_spatial_kinematics, only: spatial_state_type, spatial_configuration_type, configure, assemble_spatial, &
+      & update_state, set_drives
+   implicit none
+   private
+
+   public :: one_norm, dense_rcond, drive_response, rotation_jump, fill_state, correct_state, shortest_element
+
+contains
+
+   !> The 1-norm of a (the largest column sum), before it is factored.
+   pure real(dp) function one_norm(a)
+      real(dp), contiguous, intent(in) :: a(:, :)
+      integer :: j
+      one_norm = 0
+      do j = 1, size(a, 2)
+         one_norm = max(one_norm, sum(abs(a(:, j))))
+      end do
+   end function one_norm
+
+   !> The reciprocal condition number 1 / (||A||_1 ||A^-1||_1) of a matrix
+   !> of 1-norm anorm factored by dense_lu_factor, ||A^-1||_1 estimated by
+   !> LAPACK's dlacn2 from solves with the factor (the estimator of dgecon;
+   !> the planar band_rcond's). 0 for a matrix of norm 0.
+   real(dp) function dense_rcond(anorm, lu, ipiv) result(rcond)
+      real(dp), intent(in) :: anorm
+      real(dp), contiguous, intent(in) :: lu(:, :)
+      integer, contiguous, intent(in) :: ipiv(:)
+      real(dp) :: x(size(lu, 1)), v(size(lu, 1)), est
+      integer :: isgn(size(lu, 1)), kase, isave(3), n, info
+      n = size(lu, 1)
+      rcond = 0
+      if (n == 0) then
+         rcond = 1
+         return
+      end if
+      if (.not. anorm > 0) return
+      est = 0
+      kase = 0
+      do
+         call dlacn2(n, v, x, isgn, est, kase, isave)
+         if (kase == 0) exit
+         if (kase == 1) then
+            call dense_lu_solve(lu, ipiv, x, info)
+         else
+            call dgetrs('T', n, 1, lu, n, ipiv, x, n, info)
+         end if
+      end do
+      if (est > 0) rcond = (1/anorm)/est
+   end function dense_rcond
+
+   !> The linear response of every dof to unit changes of the drives, one
+   !> column a drive: R(free, j) = -K_ff^-1 K_f,d_j (kt the assembled tangent
+   !> with K_ff factored), R(d_j, j) = 1.
+   function drive_response(m, kt) result(r)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_tangent_type), intent(in) :: kt
+      real(dp), allocatable :: r(:, :)
+      real(dp) :: unit(m%ndof)
+      real(dp), allocatable :: rhs(:)
+      integer :: j, nd
+      nd = 0
+      if (allocated(m%drives)) nd = size(m%drives)
+      allocate (r(m%ndof, nd), source=0.0_dp)
+      do j = 1, nd
+         unit = 0
+         unit(m%drives(j)%dof) = 1
+         rhs = -kt%product(unit)
+         call kt%solve(rhs)
+         r(kt%fdof, j) = rhs
+         r(m%drives(j)%dof, j) = 1
+      end do
+   end function drive_response
+
+   !> The magnitude rule of the branch-jump check on the step from s0 to s1
+   !> (fekap_stepping_jump): the largest ratio of a rotation over the step to
+   !> what explains it, max(|dq_old|, |dq_new|, floor), dq_old and dq_new
+   !> the linear responses to the drive increment at the two ends (zero
+   !> where not known), floor the increment's size. A joint angle is one
+   !> unknown; a free frame's rotation is the angle of R0^T R1 against the
+   !> norms of its responses (frame-independent). Also which dof (the first of
+   !> a free frame) has the largest ratio, and its rotation.
+   pure subroutine rotation_jump(m, s0, s1, dq_old, dq_new, floor_, worst, worst_dof, turn)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_state_type), intent(in) :: s0, s1
+      real(dp), intent(in) :: dq_old(:), dq_new(:), floor_
+      real(dp), intent(out) :: worst, turn
+      integer, intent(out) :: worst_dof
+      logical :: frame_dof(m%ndof)
+      real(dp) :: ratio, change
+      integer :: i, d
+      worst = 0
+      worst_dof = 0
+      turn = 0
+      frame_dof = .false.
+      do i = 1, size(s0%r, 3)
+         if (m%frames(i)%kind /= frame_free) cycle
+         d = m%frames(i)%dof
+         frame_dof(d:d + 2) = .true.
+         change = norm2(so3_log(matmul(transpose(s0%r(:, :, i)), s1%r(:, :, i))))
+         ratio = jump_bound_ratio(change, norm2(dq_old(d:d + 2)), norm2(dq_new(d:d + 2)), floor_)
+         if (ratio > worst) then
+            worst = ratio
+            worst_dof = d
+            turn = change
+         end if
+      end do
+      do i = 1, m%ndof
+         if (m%is_length(i) .or. frame_dof(i)) cycle
+         change = s1%q(i) - s0%q(i)
+         ratio = jump_bound_ratio(change, dq_old(i), dq_new(i), floor_)
+         if (ratio > worst) then
+            worst = ratio
+            worst_dof = i
+            turn = change
+         end if
+      end do
+   end subroutine rotation_jump
+
+   !> The state at time t, t0 < t < t1, by two-sided Hermite interpolation of
+   !> the given order (fill_order) between the states s0 and s1 with their
+   !> dof rates (v, a: body rates for free frames). The additive dofs are
+   !> interpolated as they are; a free frame turns from R0 by the
+   !> interpolant of its body rotation vector, from 0 at t0 to log(R0^T R1)
+   !> at t1, its rates at t1 taken into R0's axes (exact for rotations about
+   !> one axis; otherwise the correction makes up the rest).
+   pure function fill_state(m, order, t0, s0, v0, a0, t1, s1, v1, a1, t) result(s)
+      type(spatial_mechanism_type), intent(in) :: m
+      integer, intent(in) :: order
+      real(dp), intent(in) :: t0, t1, t
+      type(spatial_state_type), intent(in) :: s0, s1
+      real(dp), intent(in) :: v0(:), a0(:), v1(:), a1(:)
+      type(spatial_state_type) :: s
+      real(dp) :: q(m%ndof), q0(m%ndof), q1(m%ndof), vv1(m%ndof), aa1(m%ndof), rel(3, 3)
+      integer :: i, d
+      q0 = s0%q
+      q1 = s1%q
+      vv1 = v1
+      aa1 = a1
+      do i = 1, size(s0%r, 3)
+         if (m%frames(i)%kind /= frame_free) cycle
+         d = m%frames(i)%dof
+         rel = matmul(transpose(s0%r(:, :, i)), s1%r(:, :, i))
+         q0(d:d + 2) = 0
+         q1(d:d + 2) = so3_log(rel)
+         vv1(d:d + 2) = matmul(rel, v1(d:d + 2))
+         aa1(d:d + 2) = matmul(rel, a1(d:d + 2))
+      end do
+      call hermite_fill(order, t0, q0, v0, a0, t1, q1, vv1, aa1, t, q)
+      s = s0
+      s%q = q
+      do i = 1, size(s0%r, 3)
+         if (m%frames(i)%kind /= frame_free) cycle
+         d = m%frames(i)%dof
+         s%r(:, :, i) = matmul(s0%r(:, :, i), so3_exp(q(d:d + 2)))
+         s%q(d:d + 2) = 0
+      end do
+   end function fill_state
+
+   !> Correct the state s at time t (its drives set exactly) onto the
+   !> mechanism's configurations by Newton with the shifted tangent K_ff +
+   !> mu I, mu = shift max diag K_ff (shift = fill_shift on a singular
+   !> tangent: the residual has no component in its kernel, so the shift
+   !> leaves the range correction exact; 0, plain Newton, where it is
+   !> regular): at most fill_iterations corrections, until one is below tol
+   !> (lengths relative to the mechanism's length). Returns the corrections
+   !> taken, the residual of the free dofs at the corrected state and the
+   !> reciprocal condition number of the (unshifted) tangent there.
+   subroutine correct_state(m, fdof, t, tol, shift, s, iterations, residual, rcond)
+      type(spatial_mechanism_type), intent(in) :: m
+      integer, intent(in) :: fdof(:)
+      real(dp), intent(in) :: t, tol, shift
+      type(spatial_state_type), intent(inout) :: s
+      integer, intent(out) :: iterations
+      real(dp), intent(out) :: residual, rcond
+      type(spatial_configuration_type) :: c
+      real(dp) :: res(m%ndof), k(m%ndof, m%ndof), vd(m%ndof), ad(m%ndof), dq(m%ndof), scale(m%ndof), mu, anorm
+      real(dp), allocatable :: kff(:, :), rhs(:)
+      integer, allocatable :: ipiv(:)
+      integer :: info, i
+      call set_drives(m, t, s, vd, ad)
+      scale = merge(1/m%length, 1.0_dp, m%is_length)
+      allocate (ipiv(size(fdof)))
+      iterations = 0
+      do while (iterations < fill_iterations)
+         call configure(m, s, c)
+         call assemble_spatial(m, c, res, k)
+         kff = k(fdof, fdof)
+         if (size(kff, 1) == 0) exit
+         mu = 0
+         do i = 1, size(kff, 1)
+            mu = max(mu, kff(i, i))
+         end do
+         mu = shift*mu
+         do i = 1, size(kff, 1)
+            kff(i, i) = kff(i, i) + mu
+         end do
+         call dense_lu_factor(kff, ipiv, info)
+         if (info /= 0) exit
+         rhs = -res(fdof)
+         call dense_lu_solve(kff, ipiv, rhs, info)
+         dq = 0
+         dq(fdof) = rhs
+         call update_state(m, s, dq)
+         iterations = iterations + 1
+         if (maxval(abs(dq*scale)) <= tol) exit
+      end do
+      call configure(m, s, c)
+      call assemble_spatial(m, c, res, k)
+      residual = norm2(res(fdof))
+      kff = k(fdof, fdof)
+      anorm = one_norm(kff)
+      call dense_lu_factor(kff, ipiv, info)
+      rcond = 0
+      if (info == 0) rcond = dense_rcond(anorm, kff, ipiv)
+   end subroutine correct_state
+
+   !> The length of the shortest beam or truss: the unit of stroke drives in
+   !> the branch-jump check's floor (as the planar check's shortest link).
+   pure real(dp) function shortest_element(m) result(length)
+      type(spatial_mechanism_type), intent(in) :: m
+      integer :: i
+      length = huge(1.0_dp)
+      if (allocated(m%beams)) then
+         do i = 1, size(m%beams)
+            length = min(length, m%beams(i)%element%length)
+         end do
+      end if
+      if (allocated(m%trusses)) then
+         do i = 1, size(m%trusses)
+            length = min(length, m%trusses(i)%element%length)
+         end do
+      end if
+      if (length == huge(1.0_dp)) length = m%length
+   end function shortest_element
+
+end module fekap_spatial_change_point
