@@ -16,20 +16,23 @@ module fekap_assembly_assemble
    implicit none
    private
 
-   public :: assemble_residual, assemble_residual_sections, assemble_tangent, assemble_drive_block
+   public :: assemble_residual, assemble_tangent, assemble_drive_block
    public :: assemble_second_derivative, max_strain
    public :: gather, scatter, scatter_element, subtract
 
 contains
 
    !> r = R(q) over all dofs (reactions at fixed and driven dofs included).
-   !> seg(i) is the master segment slideline i is on.
-   pure subroutine assemble_residual(mesh, q, t, seg, r)
+   !> seg(i) is the master segment slideline i is on. With `section`, each
+   !> element's sections at q are kept (as assemble_tangent's): the
+   !> square-root form's B at the same q takes their cosines and sines.
+   pure subroutine assemble_residual(mesh, q, t, seg, r, section)
       type(mesh_type), intent(in) :: mesh
       !> The configuration and the time (of the loads).
       real(dp), intent(in) :: q(:), t
       integer, intent(in) :: seg(:)
       real(dp), intent(out) :: r(:)
+      real(dp), intent(out), optional :: section(section_values, max_gauss, size(mesh%elements))
       real(dp) :: pe(6), xe(6)
       integer :: e, i
       call mesh%loads%at(t, r)
@@ -38,39 +41,17 @@ contains
          do i = 1, 6
             xe(i) = q(mesh%edof(i, e))
          end do
-         call beam_residual(mesh%elements(e), xe, pe)
+         if (present(section)) then
+            call beam_residual(mesh%elements(e), xe, pe, section=section(:, :, e))
+         else
+            call beam_residual(mesh%elements(e), xe, pe)
+         end if
          do i = 1, 6
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do
       end do
       call add_contact(mesh, q, seg, r)
    end subroutine assemble_residual
-
-   !> assemble_residual, keeping each element's sections at q in `section`
-   !> (as assemble_tangent's): the square-root form's B at the same q takes
-   !> their cosines and sines. A routine of its own, so that
-   !> assemble_residual (the dynamics' Newton) has no branch for it.
-   pure subroutine assemble_residual_sections(mesh, q, t, seg, r, section)
-      type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), t
-      integer, intent(in) :: seg(:)
-      real(dp), intent(out) :: r(:)
-      real(dp), intent(out) :: section(section_values, max_gauss, size(mesh%elements))
-      real(dp) :: pe(6), xe(6)
-      integer :: e, i
-      call mesh%loads%at(t, r)
-      r = -r
-      do e = 1, size(mesh%elements)
-         do i = 1, 6
-            xe(i) = q(mesh%edof(i, e))
-         end do
-         call beam_residual(mesh%elements(e), xe, pe, section=section(:, :, e))
-         do i = 1, 6
-            r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
-         end do
-      end do
-      call add_contact(mesh, q, seg, r)
-   end subroutine assemble_residual_sections
 
    !> Residual as assemble_residual, and the tangent dR/dq: free-free part into
    !> the band matrix (equation order), free-driven part into kfd(eq, drive).

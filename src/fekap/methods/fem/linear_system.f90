@@ -9,7 +9,7 @@ module fekap_fem_linear_system
    use fekap_model_work, only: work_counts_type
    use fekap_assembly_mesh, only: mesh_type
    use fekap_linalg_band, only: band_matrix_type, new_band_matrix
-   use fekap_assembly_assemble, only: assemble_residual, assemble_residual_sections, assemble_tangent, &
+   use fekap_assembly_assemble, only: assemble_residual, assemble_tangent, &
       & assemble_drive_block, assemble_second_derivative
    use fekap_element_beam, only: max_gauss, section_values
    use fekap_stepping_stepper, only: clock_seconds
@@ -126,7 +126,7 @@ contains
       keep = .false.
       if (present(sections)) keep = sections
       if (keep) then
-         call assemble_residual_sections(mesh, q, t, seg, self%r, self%residual_section)
+         call assemble_residual(mesh, q, t, seg, self%r, self%residual_section)
       else
          call assemble_residual(mesh, q, t, seg, self%r)
       end if
