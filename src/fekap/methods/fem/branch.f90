@@ -18,34 +18,21 @@ module fekap_fem_branch
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type, dof_rot
    use fekap_assembly_mesh, only: mesh_type, describe_dof
-   use fekap_stepping_jump, only: jump_ratio, jump_bound_ratio
+   use fekap_stepping_jump, only: jump_ratio, jump_bound_ratio, collinear_crossing, crossing_none, crossing_against, &
+      & verify_turn, max_verify_depth, verify_predicted
    implicit none
    private
 
    public :: branch_check_type, new_branch_check, drive_increment, branch_verdict
    ! The magnitude rule (fekap_stepping_jump), for this module's users.
    public :: jump_ratio, jump_bound_ratio
+   ! The verification's depth (fekap_stepping_jump), for fekap_fem_verification.
+   public :: max_verify_depth
 
    !> Verdicts of branch_verdict: accept the step; reject it (cut it); accept
    !> it pending verification by two half steps; reject it for good (a step
    !> halved max_verify_depth times is still suspect: cutting cannot help).
    integer, parameter, public :: branch_accept = 0, branch_reject = 1, branch_verify = 2, branch_unverifiable = 3
-
-   !> Relative angles within this many pi of a multiple of pi at either end
-   !> of a step do not count as crossing it (links that start or end collinear).
-   real(dp), parameter :: hinge_margin = 1.0e-9_dp
-   !> Least share of a collinear crossing that the response at the new
-   !> configuration must explain in the crossing sense.
-   real(dp), parameter :: hinge_response = 1.0e-3_dp
-   !> Step-doubling verification: a step in which a hinged pair crosses
-   !> collinear turning by more than verify_turn radians is to be solved again
-   !> as two half steps (themselves verified, at most max_verify_depth
-   !> halvings deep).
-   real(dp), parameter :: verify_turn = 0.1_dp
-   integer, parameter, public :: max_verify_depth = 10
-   !> A crossing step needs no verification when Newton moved every rotation
-   !> less than this share of the crossing turn away from a smooth predictor.
-   real(dp), parameter :: verify_predicted = 1.0e-3_dp
 
    !> What the check knows of the mechanism, found once.
    type :: branch_check_type
@@ -198,9 +185,8 @@ contains
       integer, intent(out) :: flip_link(2), flip_node
       real(dp), intent(out) :: turn
       integer, intent(out) :: crossing(3)
-      integer :: k, l1, l2, e1, e2, r1, r2
-      real(dp) :: psi0, psi1, lo, hi, sense, pi
-      pi = acos(-1.0_dp)
+      integer :: k, l1, l2, e1, e2, r1, r2, outcome
+      real(dp) :: psi0, psi1
       flip_link = 0
       flip_node = 0
       turn = 0
@@ -215,16 +201,9 @@ contains
             r2 = mesh%link_rot(e2, l2)
             psi0 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + q(r1) - q(r2)
             psi1 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + qt(r1) - qt(r2)
-            lo = min(psi0, psi1)/pi
-            hi = max(psi0, psi1)/pi
-            ! A multiple of pi strictly inside (lo, hi): the links passed through collinear.
-            if (floor(hi - hinge_margin) < ceiling(lo + hinge_margin)) cycle
-            sense = sign(1.0_dp, psi1 - psi0)
-            ! The response at the new configuration must carry psi through in the crossing
-            ! sense (a response of zero there is the closest approach of a near-toggle, not a
-            ! crossing); at the last one it must not oppose it (unknown on the first step).
-            if (sense*(dq_old(r1) - dq_old(r2)) < 0 .or. &
-               & sense*(dq_new(r1) - dq_new(r2)) <= hinge_response*abs(psi1 - psi0)) then
+            outcome = collinear_crossing(psi0, psi1, dq_old(r1) - dq_old(r2), dq_new(r1) - dq_new(r2))
+            if (outcome == crossing_none) cycle
+            if (outcome == crossing_against) then
                flip_link = [l1, l2]
                flip_node = links(l1)%node(e1)
                return

@@ -9,6 +9,12 @@
 !>   the magnitude rule of the branch-jump check on the rotation unknowns:
 !>   joint angles (additive) and free frames (the angle of R_old^T R_new
 !>   against the norms of their responses);
+!> * the orientation rule of the branch-jump check (collinear_crossing)
+!>   on the hinges: pairs of beam ends at one point whose frames turn
+!>   relative to each other about one axis (revolute joints about parallel
+!>   axes), their relative angle an additive sum of joint angle dofs; and
+!>   what the step-doubling verification of a crossing step compares (the
+!>   distance of two states in model sizes, whether a step was predicted);
 !> * the row of a change point stepped over: its state by two-sided Hermite
 !>   interpolation (free frames along their body rotation vector from the
 !>   state before), corrected onto the mechanism by Newton with the tangent
@@ -18,8 +24,9 @@ module fekap_spatial_change_point
    use fekap_linalg_lapack, only: dense_lu_factor, dense_lu_solve, dgetrs, dlacn2
    use fekap_element_se3, only: so3_exp, so3_log
    use fekap_stepping_change_point, only: hermite_fill, fill_iterations
-   use fekap_stepping_jump, only: jump_bound_ratio
-   use fekap_spatial_mechanism, only: spatial_mechanism_type, frame_free
+   use fekap_vectors, only: cross
+   use fekap_stepping_jump, only: jump_bound_ratio, collinear_crossing, crossing_against, crossing_along
+   use fekap_spatial_mechanism, only: spatial_mechanism_type, frame_free, frame_fixed, frame_revolute
    use fekap_spatial_tangent, only: spatial_tangent_type
    use fekap_spatial_kinematics, only: spatial_state_type, spatial_configuration_type, configure, assemble_spatial, &
       & update_state, set_drives
@@ -27,6 +34,28 @@ module fekap_spatial_change_point
    private
 
    public :: one_norm, dense_rcond, drive_response, rotation_jump, fill_state, correct_state, shortest_element
+   public :: find_hinges, hinge_angle, hinge_check, state_distance, predicted_step
+
+   !> Axes of two revolute joints closer to parallel than this (the norm of
+   !> the cross product of the unit axes) turn about one axis.
+   real(dp), parameter :: parallel_tolerance = 1.0e-9_dp
+
+   !> Two beam ends at one point whose frames turn relative to each other
+   !> about one axis n: the frame of the second is the first's turned by
+   !> psi - psi_ref about n, psi = psi_ref + sum(signs * q(dofs)) the angle
+   !> from the first beam's chord to the second's about n (their projections
+   !> on the plane normal to n), unwrapped; psi_ref its value at the deck's
+   !> configuration (where every frame is I). The links are collinear where
+   !> psi is a multiple of pi.
+   type, public :: spatial_hinge_type
+      !> The two beams and their common point.
+      integer :: beams(2) = 0, point = 0
+      real(dp) :: psi_ref = 0
+      integer, allocatable :: dofs(:)
+      real(dp), allocatable :: signs(:)
+      !> What the listing calls the pair (set by the stepper, which knows the names).
+      character(:), allocatable :: label
+   end type spatial_hinge_type
 
 contains
 
@@ -255,5 +284,232 @@ contains
       end if
       if (length == huge(1.0_dp)) length = m%length
    end function shortest_element
+
+   !> The hinges of m: every pair of beam ends at one point with frames of
+   !> their own that the frame tree relates through revolute joints about
+   !> one axis only (and fixed frames): up from each frame to their common
+   !> ancestor, every frame revolute about +-n in its parent's axes (a turn
+   !> about n leaves n in place, so n is one vector in all of them). A pair
+   !> related through a free or universal frame, or whose chord lies along
+   !> the axis, has no such angle and is left out.
+   function find_hinges(m) result(hinges)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_hinge_type), allocatable :: hinges(:)
+      type(spatial_hinge_type) :: h
+      integer :: nb, i, j, bi, bj, ni, nj, fi, fj
+      real(dp) :: n(3), c1(3), c2(3)
+      logical :: related
+      allocate (hinges(0))
+      nb = 0
+      if (allocated(m%beams)) nb = size(m%beams)
+      ! Beam ends as 2 (b - 1) + e.
+      do i = 1, 2*nb
+         bi = (i + 1)/2
+         ni = m%beams(bi)%nodes(i - 2*(bi - 1))
+         fi = m%nodes(ni)%frame
+         do j = i + 1, 2*nb
+            bj = (j + 1)/2
+            nj = m%beams(bj)%nodes(j - 2*(bj - 1))
+            if (bj == bi .or. m%nodes(ni)%point /= m%nodes(nj)%point) cycle
+            fj = m%nodes(nj)%frame
+            if (fi == fj .or. fi == 0 .or. fj == 0) cycle
+            call frame_path(m, fi, fj, n, h%dofs, h%signs, related)
+            if (.not. related) cycle
+            c1 = across(chord(bi), n)
+            c2 = across(chord(bj), n)
+            if (.not. (norm2(c1) > parallel_tolerance*norm2(chord(bi)) .and. &
+               & norm2(c2) > parallel_tolerance*norm2(chord(bj)))) cycle
+            h%beams = [bi, bj]
+            h%point = m%nodes(ni)%point
+            h%psi_ref = atan2(dot_product(n, cross(c1, c2)), dot_product(c1, c2))
+            hinges = [hinges, h]
+         end do
+      end do
+   contains
+      !> The chord of beam b at the deck's configuration.
+      pure function chord(b) result(c)
+         integer, intent(in) :: b
+         real(dp) :: c(3)
+         c = m%points(m%nodes(m%beams(b)%nodes(2))%point)%x0 - m%points(m%nodes(m%beams(b)%nodes(1))%point)%x0
+      end function chord
+
+      !> The part of c normal to the unit vector n.
+      pure function across(c, n_) result(p)
+         real(dp), intent(in) :: c(3), n_(3)
+         real(dp) :: p(3)
+         p = c - dot_product(c, n_)*n_
+      end function across
+   end function find_hinges
+
+   !> Whether frame fb is frame fa turned about one axis n (unit, in fa's
+   !> axes) by an angle that is a sum of revolute angle dofs with signs:
+   !> R_a^T R_b = exp((sum signs q(dofs)) n^).
+   subroutine frame_path(m, fa, fb, n, dofs, signs, related)
+      type(spatial_mechanism_type), intent(in) :: m
+      integer, intent(in) :: fa, fb
+      real(dp), intent(out) :: n(3)
+      integer, allocatable, intent(out) :: dofs(:)
+      real(dp), allocatable, intent(out) :: signs(:)
+      logical, intent(out) :: related
+      integer :: up_a(0:size(m%frames)), up_b(0:size(m%frames)), na, nb, common, k
+      logical :: has_axis, ok
+      call chain(fa, up_a, na)
+      call chain(fb, up_b, nb)
+      ! The common ancestor (0: the ground): the first of a's chain in b's.
+      common = 0
+      do k = 0, na
+         if (any(up_b(0:nb) == up_a(k))) then
+            common = up_a(k)
+            exit
+         end if
+      end do
+      allocate (dofs(0), signs(0))
+      n = 0
+      has_axis = .false.
+      related = .false.
+      ! R_a = R_common exp(theta_a n^): a's angle enters with a minus sign.
+      do k = 0, na
+         if (up_a(k) == common) exit
+         call add_turn(up_a(k), -1.0_dp, ok)
+         if (.not. ok) return
+      end do
+      do k = 0, nb
+         if (up_b(k) == common) exit
+         call add_turn(up_b(k), 1.0_dp, ok)
+         if (.not. ok) return
+      end do
+      related = has_axis
+   contains
+      !> The frames from f up to the ground (0), in up(0:), and the index of the last.
+      pure subroutine chain(f, up, last)
+         integer, intent(in) :: f
+         integer, intent(out) :: up(0:), last
+         integer :: g
+         last = 0
+         up(0) = f
+         g = f
+         do while (g /= 0)
+            g = m%frames(g)%parent
+            last = last + 1
+            up(last) = g
+         end do
+      end subroutine chain
+
+      !> Add frame f's angle to the sum (with the side's sign, and of the
+      !> first revolute frame's axis n): not ok unless it is fixed or
+      !> revolute about +-n.
+      subroutine add_turn(f, side, ok)
+         integer, intent(in) :: f
+         real(dp), intent(in) :: side
+         logical, intent(out) :: ok
+         ok = .true.
+         select case (m%frames(f)%kind)
+         case (frame_fixed)
+         case (frame_revolute)
+            if (.not. has_axis) then
+               n = m%frames(f)%axis
+               has_axis = .true.
+            end if
+            ok = norm2(cross(m%frames(f)%axis, n)) <= parallel_tolerance
+            if (.not. ok) return
+            dofs = [dofs, m%frames(f)%dof]
+            signs = [signs, side*sign(1.0_dp, dot_product(m%frames(f)%axis, n))]
+         case default
+            ok = .false.
+         end select
+      end subroutine add_turn
+   end subroutine frame_path
+
+   !> The hinge's relative angle at dofs q (unwrapped).
+   pure real(dp) function hinge_angle(h, q) result(psi)
+      type(spatial_hinge_type), intent(in) :: h
+      real(dp), intent(in) :: q(:)
+      psi = h%psi_ref + sum(h%signs*q(h%dofs))
+   end function hinge_angle
+
+   !> The orientation rule of the branch-jump check (fekap_stepping_jump's
+   !> collinear_crossing) over the hinges on the step from q0 to q1, with the
+   !> linear responses of the dofs to the step's drive increment at either
+   !> end (zero where not known): the first hinge that passes through
+   !> collinear against them (0 if none), and the largest turn |psi1 - psi0|
+   !> of a hinge that passes through collinear in their sense (0 if none),
+   !> with that hinge.
+   pure subroutine hinge_check(hinges, q0, q1, dq_old, dq_new, flipped, turn, crossing)
+      type(spatial_hinge_type), intent(in) :: hinges(:)
+      real(dp), intent(in) :: q0(:), q1(:), dq_old(:), dq_new(:)
+      integer, intent(out) :: flipped, crossing
+      real(dp), intent(out) :: turn
+      real(dp) :: psi0, psi1
+      integer :: k, outcome
+      flipped = 0
+      crossing = 0
+      turn = 0
+      do k = 1, size(hinges)
+         associate (h => hinges(k))
+            psi0 = hinge_angle(h, q0)
+            psi1 = hinge_angle(h, q1)
+            outcome = collinear_crossing(psi0, psi1, sum(h%signs*dq_old(h%dofs)), sum(h%signs*dq_new(h%dofs)))
+         end associate
+         if (outcome == crossing_against) then
+            flipped = k
+            return
+         end if
+         if (outcome == crossing_along .and. abs(psi1 - psi0) > turn) then
+            turn = abs(psi1 - psi0)
+            crossing = k
+         end if
+      end do
+   end subroutine hinge_check
+
+   !> How far apart two states of m are, in model sizes (m%length): the
+   !> largest distance of a point, and of a frame's rotation (the angle of
+   !> R_a^T R_b, or of an angle dof's difference) times the shortest
+   !> element's length (the displacement it gives that element's end).
+   pure real(dp) function state_distance(m, sa, sb) result(distance)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_state_type), intent(in) :: sa, sb
+      type(spatial_configuration_type) :: ca, cb
+      real(dp) :: arm
+      integer :: i
+      call configure(m, sa, ca)
+      call configure(m, sb, cb)
+      arm = shortest_element(m)/m%length
+      distance = 0
+      do i = 1, size(ca%x, 2)
+         distance = max(distance, norm2(ca%x(:, i) - cb%x(:, i))/m%length)
+      end do
+      do i = 1, size(ca%r, 3)
+         distance = max(distance, arm*norm2(so3_log(matmul(transpose(ca%r(:, :, i)), cb%r(:, :, i)))))
+      end do
+      do i = 1, m%ndof
+         if (.not. m%is_length(i)) distance = max(distance, arm*abs(sa%q(i) - sb%q(i)))
+      end do
+   end function state_distance
+
+   !> Whether the converged state s lies within `share` of `turn` of the
+   !> predictor's state p in every rotation: every angle dof and every free
+   !> frame (the angle of R_p^T R). The step then continues the extrapolated
+   !> path; landing on the mirror branch would need an extrapolation error of
+   !> twice the closest approach to collinear.
+   pure logical function predicted_step(m, p, s, share, turn) result(predicted)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_state_type), intent(in) :: p, s
+      real(dp), intent(in) :: share, turn
+      logical :: frame_dof(m%ndof)
+      integer :: i, d
+      predicted = .false.
+      frame_dof = .false.
+      do i = 1, size(s%r, 3)
+         if (m%frames(i)%kind /= frame_free) cycle
+         d = m%frames(i)%dof
+         frame_dof(d:d + 2) = .true.
+         if (norm2(so3_log(matmul(transpose(p%r(:, :, i)), s%r(:, :, i)))) > share*turn) return
+      end do
+      do i = 1, m%ndof
+         if (m%is_length(i) .or. frame_dof(i)) cycle
+         if (abs(s%q(i) - p%q(i)) > share*turn) return
+      end do
+      predicted = .true.
+   end function predicted_step
 
 end module fekap_spatial_change_point

@@ -17,7 +17,10 @@
 !> branch-jump check rejects (a joint angle or a free frame turned by more
 !> than jump_ratio times what the drive increment explains:
 !> fekap_spatial_change_point's rotation_jump, the planar FEM's magnitude
-!> rule), is cut in halves. A run's step whose predictor's tangent is near
+!> rule; a hinge passing through collinear against the responses: its
+!> hinge_check, the planar orientation rule), is cut in halves; a step in
+!> which a hinge crosses collinear with a large turn is verified by two
+!> half steps (verify_step, the planar step doubling). A run's step whose predictor's tangent is near
 !> singular against the run's best (a change point: the planar FEM's
 !> detection, fekap_stepping_change_point) is stepped over: the next output
 !> time is solved from the last regular state as one double step, kept for
@@ -35,14 +38,15 @@ module fekap_spatial_stepper
    use fekap_model_results, only: step_result_type, note_length
    use fekap_stepping_stepper, only: stepper_type
    use fekap_stepping_change_point, only: change_verdict, change_regular, response_trusted, next_output_time, &
-      & fill_order, fill_shift, rates_drop
-   use fekap_stepping_jump, only: jump_ratio
+      & fill_order, fill_shift, rates_drop, change_drop
+   use fekap_stepping_jump, only: jump_ratio, verify_turn, max_verify_depth
    use fekap_spatial_mechanism, only: spatial_mechanism_type
    use fekap_spatial_kinematics, only: spatial_state_type, new_spatial_state, spatial_configuration_type, &
       & configure, assemble_spatial, set_drives, update_state, free_dofs, spatial_rates_factored, point_rate, &
       & spatial_rates, tangent_for
    use fekap_spatial_tangent, only: spatial_tangent_type
-   use fekap_spatial_change_point, only: drive_response, rotation_jump, fill_state, correct_state, shortest_element
+   use fekap_spatial_change_point, only: drive_response, rotation_jump, fill_state, correct_state, shortest_element, &
+      & spatial_hinge_type, find_hinges, hinge_check, state_distance, predicted_step
    use fekap_spatial_build, only: spatial_map_type, build_spatial_mechanism
    use fekap_spatial_link_motion, only: link_motion_type, new_link_motion, fill_link_motion
    implicit none
@@ -66,6 +70,28 @@ module fekap_spatial_stepper
    !> is 6,283 rad, whose last place (9e-13) the other dofs' corrections
    !> inherit, and another iteration cannot reduce it.
    real(dp), parameter :: roundoff_places = 4
+   !> A verifying pair of half steps contradicts its step when their results
+   !> differ by more than this many model sizes (the planar FEM's; see verify_step).
+   real(dp), parameter :: verify_agreement = 1.0e-6_dp
+   !> The branch check's verdicts on a converged try (check_jump): accept it;
+   !> reject it (cut it); accept it pending its verification by two half
+   !> steps; reject it for good (a step halved max_verify_depth times is
+   !> still suspect: cutting cannot help).
+   integer, parameter :: jump_accept = 0, jump_reject = 1, jump_verify = 2, jump_unverifiable = 3
+   !> Outcomes of verify_step: the half steps confirm the step; they
+   !> contradict it and replace it; they could not be solved.
+   integer, parameter :: verify_confirmed = 0, verify_replaced = 1, verify_failed = 2
+   !> A crossing step needs no verification when Newton moved every rotation
+   !> less than this share of the crossing turn away from the full
+   !> predictor. A jump over a near-toggle lands about the turn away from
+   !> the true path, so a step within this share of the predictor jumped
+   !> only if the predictor itself missed the path by nearly the whole turn.
+   !> Ten times the planar FEM's share (fekap_stepping_jump's
+   !> verify_predicted, for its Hermite extrapolation): the Taylor predictor
+   !> of Example 1 at dt = 0.025 misses its crossing near theta = 0 by 1.5e-3
+   !> of the turn, which would verify that step in every one of
+   !> fourbar-1000-turns' turns.
+   real(dp), parameter :: verify_predicted = 1.0e-2_dp
 
    !> What the stepper keeps of an accepted configuration: to try a step from
    !> it again, and the two regular states on either side of a change point.
@@ -73,10 +99,10 @@ module fekap_spatial_stepper
       type(spatial_state_type) :: s
       real(dp) :: t = 0
       real(dp), allocatable :: v(:), a(:), jerk(:), snap(:), jerk1(:), jerk2(:)
-      real(dp) :: t1 = 0, t2 = 0, residual = 0, reference_rcond = 0
+      real(dp) :: t1 = 0, t2 = 0, residual = 0, reference_rcond = 0, rcond = 0
       integer :: jerks = 0
       real(dp), allocatable :: response(:, :)
-      logical :: has_response = .false.
+      logical :: has_response = .false., response_signs = .false.
    end type accepted_type
 
    type, extends(stepper_type) :: spatial_stepper_type
@@ -111,15 +137,21 @@ module fekap_spatial_stepper
       !> The links' rotations of the last step (links.csv).
       type(link_motion_type) :: links
       !> The linear response of every dof to unit drive changes at the accepted
-      !> configuration (one column a drive), whether it is trusted (its
-      !> tangent regular against the run's best), and the one at the last
-      !> converged try; the reciprocal condition numbers of the tangent at that
-      !> try's predictor and solution, and the run's best.
+      !> configuration (one column a drive), whether its size is trusted (its
+      !> tangent regular against the run's best: response_trusted) and whether
+      !> its signs are (signs_trusted), and the one at the last converged try;
+      !> the reciprocal condition numbers of the tangent at that try's
+      !> predictor and solution, and the run's best.
       real(dp), allocatable :: response(:, :), try_response(:, :)
-      logical :: has_response = .false.
+      logical :: has_response = .false., response_signs = .false.
       real(dp) :: predictor_rcond = 0, try_rcond = 0, reference_rcond = 0
+      !> The reciprocal condition number of the tangent at the accepted
+      !> configuration (0 where not known: a change point's filled row).
+      real(dp) :: rcond = 0
       !> The unit of stroke drives in the branch check (the shortest element).
       real(dp) :: shortest = 1
+      !> The hinges of the branch check's orientation rule.
+      type(spatial_hinge_type), allocatable :: hinges(:)
       !> The run's uniform steps, for the time after a change point.
       real(dp) :: t_start = 0, t_end = 1, dt = 0
       !> A change point stepped over: the regular states on either side, the
@@ -158,11 +190,31 @@ contains
       self%t_end = model%analysis%t_end
       self%dt = model%analysis%dt
       self%shortest = shortest_element(self%m)
+      call name_hinges(self, model)
       self%refine_rates = model%analysis%velocities
       call new_link_motion(self%links, model, self%m, self%map%node_frame, self%map%node_point)
       allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%jerk(self%m%ndof), self%snap(self%m%ndof), &
          & self%jerk1(self%m%ndof), self%jerk2(self%m%ndof), source=0.0_dp)
    end subroutine new_spatial_stepper
+
+   !> The mechanism's hinges (find_hinges), named by the model's links and
+   !> nodes: beams are made one a link that is not a truss, in the links'
+   !> order; a point is named by the first node on it.
+   subroutine name_hinges(self, model)
+      type(spatial_stepper_type), intent(inout) :: self
+      type(model_type), intent(in) :: model
+      integer, allocatable :: beam_link(:)
+      integer :: k, node
+      beam_link = pack([(k, k=1, size(model%links))], .not. model%spatial%truss)
+      self%hinges = find_hinges(self%m)
+      do k = 1, size(self%hinges)
+         associate (h => self%hinges(k))
+            node = findloc(self%map%node_point, h%point, 1)
+            h%label = 'links '//model%links(beam_link(h%beams(1)))%name//' and '// &
+               & model%links(beam_link(h%beams(2)))%name//' at node '//model%nodes(node)%name
+         end associate
+      end do
+   end subroutine name_hinges
 
    !> The deck's configuration at the start time, solved (it is stress free:
    !> Newton's first correction is at round-off) with its rates.
@@ -180,8 +232,10 @@ contains
       end if
       ! The start's tangent is the run's first reference, its response trusted.
       self%reference_rcond = self%try_rcond
+      self%rcond = self%try_rcond
       call move_alloc(self%try_response, self%response)
       self%has_response = self%try_rcond > 0
+      self%response_signs = self%has_response
       result%t = self%t
       result%iterations = iterations
       call fill_result(self, result)
@@ -214,7 +268,7 @@ contains
          ! Another time: from the regular state before the change point.
          call restore(self, self%before)
       end if
-      call step_to(self, t, .true., iterations, cuts, found, error)
+      call step_to(self, t, .true., .true., 0, iterations, cuts, found, error)
       if (allocated(error)) return
       if (found) then
          call step_over(self, t, result, error)
@@ -231,17 +285,27 @@ contains
    !> Newton fails or the branch check rejects its configuration. With
    !> `detect`, the first try checks its predictor's tangent: near singular
    !> against the run's best (change_verdict), it ends the advance at once
-   !> (found; the state is the one before).
-   subroutine step_to(self, t, detect, iterations, cuts, found, error)
+   !> (found; the state is the one before). A converged step that the branch
+   !> check finds suspect (a hinge crossed collinear with a large turn) is
+   !> verified by two half steps (verify_step, which calls step_to one level
+   !> deeper: depth, 0 for a step of the run); a verification that cannot be
+   !> completed below the run's step ends every level above it at once
+   !> (error), and the run's step is cut. Without `verify`, the step over a
+   !> change point (step_over) is not verified: its half steps would land on
+   !> the change point, where Newton has no unique solution; the branch rules
+   !> at its two ends, regular, still hold.
+   recursive subroutine step_to(self, t, detect, verify, depth, iterations, cuts, found, error)
       type(spatial_stepper_type), intent(inout) :: self
       real(dp), intent(in) :: t
-      logical, intent(in) :: detect
+      logical, intent(in) :: detect, verify
+      integer, intent(in) :: depth
       integer, intent(out) :: iterations, cuts
       logical, intent(out) :: found
       type(error_type), allocatable, intent(out) :: error
       type(accepted_type) :: saved
-      real(dp) :: h, t_try
-      integer :: its
+      type(spatial_state_type) :: predicted
+      real(dp) :: h, t_try, turn
+      integer :: its, verdict, crossing, outcome
       logical :: converged
       character(:), allocatable :: why
       character(len=160) :: text
@@ -254,14 +318,17 @@ contains
          if (t - t_try < 1.0e-9_dp*h) t_try = t
          saved = snapshot(self)
          call predict(self, t_try - self%t, .true.)
+         predicted = self%s
          call solve(self, t_try, detect .and. cuts == 0, .false., its, converged, found, why)
          iterations = iterations + its
          if (found) then
             call restore(self, saved)
             return
          end if
-         if (converged) call check_jump(self, saved, t_try, converged, why)
-         if (.not. converged .and. .not. found) then
+         verdict = jump_accept
+         if (converged) call check_jump(self, saved, t_try, predicted, .true., verify, depth, verdict, why, crossing, turn)
+         converged = converged .and. verdict /= jump_reject .and. verdict /= jump_unverifiable
+         if (.not. converged .and. verdict /= jump_unverifiable) then
             ! Once more from the predictor to the second rate (see predict),
             ! watching the tangents: Newton that fails on the run's step
             ! among near-singular tangents is at a change point too.
@@ -269,7 +336,8 @@ contains
             call predict(self, t_try - self%t, .false.)
             call solve(self, t_try, .false., .true., its, converged, found, why)
             iterations = iterations + its
-            if (converged) call check_jump(self, saved, t_try, converged, why)
+            if (converged) call check_jump(self, saved, t_try, predicted, .false., verify, depth, verdict, why, crossing, turn)
+            converged = converged .and. verdict /= jump_reject .and. verdict /= jump_unverifiable
             if (.not. converged .and. detect .and. cuts == 0) then
                found = change_verdict(self%least_rcond, self%reference_rcond) /= change_regular
                if (found) then
@@ -278,6 +346,12 @@ contains
                   return
                end if
             end if
+         end if
+         if (verdict == jump_unverifiable) then
+            ! Halving cannot help: this verification ends (see verify_step).
+            call restore(self, saved)
+            call analysis_error(error, why, t=t_try)
+            return
          end if
          if (converged .and. detect .and. cuts == 0) then
             ! A predictor far from a change point (j and k off) may still
@@ -293,13 +367,28 @@ contains
          if (converged) then
             self%t = t_try
             self%has_response = response_trusted(self%try_rcond, self%reference_rcond)
-            if (self%has_response) then
+            self%response_signs = signs_trusted(self%try_rcond, self%reference_rcond)
+            if (self%response_signs) then
                call move_alloc(self%try_response, self%response)
             else
                self%response = 0
             end if
             self%reference_rcond = max(self%reference_rcond, self%try_rcond)
-            cycle
+            self%rcond = self%try_rcond
+            if (verdict /= jump_verify) cycle
+            call verify_step(self, saved, t_try, depth, self%hinges(crossing)%label, turn, its, outcome, why)
+            iterations = iterations + its
+            if (outcome == verify_confirmed) cycle
+            if (outcome == verify_replaced) then
+               ! The half steps replaced a jump: a cut step.
+               cuts = cuts + 1
+               cycle
+            end if
+            ! The half steps could not be solved (verify_step restored the state before).
+            if (depth > 0) then
+               call analysis_error(error, why, t=t_try)
+               return
+            end if
          end if
          call restore(self, saved)
          cuts = cuts + 1
@@ -314,21 +403,37 @@ contains
    end subroutine step_to
 
    !> The branch-jump check of a converged try from the accepted state `saved`
-   !> to time t (the magnitude rule: rotation_jump): every joint angle and free
-   !> frame turns by at most jump_ratio times what the linear responses to the
-   !> drive increment at either end (where trusted), or the increment itself
-   !> (strokes in lengths of the shortest element), explain.
-   subroutine check_jump(self, saved, t, accepted, why)
+   !> to time t (docs/hard-cases.md, section 1, in the spatial stepper's
+   !> terms), with the linear responses to the drive increment at either end
+   !> (where trusted):
+   !> * magnitude (rotation_jump): every joint angle and free frame turns by
+   !>   at most jump_ratio times what the responses, or the increment itself
+   !>   (strokes in lengths of the shortest element), explain;
+   !> * orientation (hinge_check): a hinge whose relative angle passes
+   !>   through collinear does so in the sense of the responses;
+   !> * a hinge that crosses collinear turning by more than verify_turn,
+   !>   where Newton moved some rotation more than verify_predicted of that
+   !>   turn away from the full predictor (`smooth`), asks for the step's
+   !>   verification by two half steps (jump_verify; jump_unverifiable at
+   !>   max_verify_depth), unless the step is not to be verified (`verify`
+   !>   false); crossing is that hinge.
+   subroutine check_jump(self, saved, t, predicted, smooth, verify, depth, verdict, why, crossing, turn)
       type(spatial_stepper_type), intent(in) :: self
       type(accepted_type), intent(in) :: saved
       real(dp), intent(in) :: t
-      logical, intent(out) :: accepted
+      type(spatial_state_type), intent(in) :: predicted
+      logical, intent(in) :: smooth, verify
+      integer, intent(in) :: depth
+      integer, intent(out) :: verdict, crossing
       character(:), allocatable, intent(inout) :: why
+      real(dp), intent(out) :: turn
       real(dp), allocatable :: dd(:), dq_old(:), dq_new(:)
-      real(dp) :: floor_, worst, turn
-      integer :: j, worst_dof
+      real(dp) :: floor_, worst, rotation
+      integer :: j, worst_dof, flipped
       character(len=200) :: text
-      accepted = .true.
+      verdict = jump_accept
+      crossing = 0
+      turn = 0
       ! Without drives nothing explains a rotation, and nothing is to move.
       if (size(self%response, 2) == 0) return
       allocate (dd(size(self%response, 2)), source=0.0_dp)
@@ -342,14 +447,107 @@ contains
       allocate (dq_old(self%m%ndof), dq_new(self%m%ndof), source=0.0_dp)
       if (saved%has_response) dq_old = matmul(saved%response, dd)
       if (response_trusted(self%try_rcond, self%reference_rcond)) dq_new = matmul(self%try_response, dd)
-      call rotation_jump(self%m, saved%s, self%s, dq_old, dq_new, floor_, worst, worst_dof, turn)
+      call rotation_jump(self%m, saved%s, self%s, dq_old, dq_new, floor_, worst, worst_dof, rotation)
       if (worst > jump_ratio) then
-         accepted = .false.
-         write (text, '(a,es12.5,a,f9.4,a,es9.2,a,i0)') 't = ', t, ': assembly-mode jump rejected (rotation ', turn, &
-            & ' rad over the step, ', worst, ' times what the drive increment explains) at dof ', worst_dof
+         verdict = jump_reject
+         write (text, '(a,es12.5,a,f9.4,a,es9.2,a,i0)') 't = ', t, ': assembly-mode jump rejected (rotation ', &
+            & rotation, ' rad over the step, ', worst, ' times what the drive increment explains) at dof ', worst_dof
+         why = trim(text)
+         return
+      end if
+      ! The orientation rule needs the responses' signs only: those of the
+      ! tangents whose rates the run reports (signs_trusted).
+      if (saved%response_signs) dq_old = matmul(saved%response, dd)
+      if (signs_trusted(self%try_rcond, self%reference_rcond)) dq_new = matmul(self%try_response, dd)
+      call hinge_check(self%hinges, saved%s%q, self%s%q, dq_old, dq_new, flipped, turn, crossing)
+      if (flipped > 0) then
+         verdict = jump_reject
+         write (text, '(a,es12.5,a)') 't = ', t, ': assembly-mode jump rejected ('
+         why = trim(text)//self%hinges(flipped)%label//' passed through collinear against the drive increment''s sense)'
+         return
+      end if
+      if (turn <= verify_turn .or. .not. verify) return
+      if (smooth) then
+         if (predicted_step(self%m, predicted, self%s, verify_predicted, turn)) return
+      end if
+      verdict = jump_verify
+      if (depth >= max_verify_depth) then
+         verdict = jump_unverifiable
+         write (text, '(a,es12.5,a,f7.4,a,i0,a)') 't = ', t, ': assembly-mode jump rejected ('// &
+            & self%hinges(crossing)%label//' crossed collinear turning ', turn, ' rad in a step halved ', &
+            & max_verify_depth, ' times)'
          why = trim(text)
       end if
    end subroutine check_jump
+
+   !> Step-doubling verification of the step from `saved` to time t, accepted
+   !> but suspect (the hinge `pair` crossed collinear turning by `turn`): the
+   !> same interval is solved again from `saved` as two half steps (step_to
+   !> one level deeper: cut if they fail, verified if suspect) and the results
+   !> compared. Endpoint data cannot tell a crossing from a jump over a
+   !> near-toggle onto the mirror branch; a jump turns the pair by its
+   !> distances from collinear at both ends, so it stays suspect however
+   !> often it is halved, while a real crossing turns less with every
+   !> halving. Confirmed (within verify_agreement model sizes), the step's own
+   !> state stays; contradicted, the half steps' state replaces it (`why`
+   !> says so); if the half steps cannot be solved, the state before the step
+   !> is restored (verify_failed, `why` says why). A first half step whose
+   !> predictor or solution is near singular (change_verdict: the step
+   !> crosses a change point, the double crank's collinear configuration at
+   !> its middle) cannot verify anything: Newton has no unique solution
+   !> there. Such a step stands on the branch rules at its two regular ends,
+   !> as the step over a change point does (step_over).
+   recursive subroutine verify_step(self, saved, t, depth, pair, turn, iterations, outcome, why)
+      type(spatial_stepper_type), intent(inout) :: self
+      type(accepted_type), intent(in) :: saved
+      real(dp), intent(in) :: t, turn
+      integer, intent(in) :: depth
+      character(*), intent(in) :: pair
+      integer, intent(out) :: iterations, outcome
+      character(:), allocatable, intent(inout) :: why
+      type(accepted_type) :: whole
+      type(error_type), allocatable :: half_error
+      real(dp) :: t_half(2), distance
+      integer :: half, its, cuts
+      logical :: found
+      character(len=200) :: text
+      whole = snapshot(self)
+      call restore(self, saved)
+      t_half = [saved%t + (t - saved%t)/2, t]
+      iterations = 0
+      do half = 1, 2
+         call step_to(self, t_half(half), half == 1, .true., depth + 1, its, cuts, found, half_error)
+         iterations = iterations + its
+         if (found) then
+            outcome = verify_confirmed
+            call restore(self, whole)
+            return
+         end if
+         if (allocated(half_error)) exit
+      end do
+      if (allocated(half_error)) then
+         call restore(self, saved)
+         outcome = verify_failed
+         if (depth > 0) then
+            why = half_error%message
+         else
+            write (text, '(a,es12.5,a,f7.4,a)') 't = ', t, ': possible assembly-mode jump rejected ('//pair// &
+               & ' crossed collinear turning ', turn, ' rad; two half steps could not confirm it: '
+            why = trim(text)//' '//half_error%message//')'
+         end if
+         return
+      end if
+      distance = state_distance(self%m, whole%s, self%s)
+      if (distance > verify_agreement) then
+         outcome = verify_replaced
+         write (text, '(a,es12.5,a,es9.2,a)') 't = ', t, ': assembly-mode jump rejected (the step ends ', distance, &
+            & ' model sizes from where two half steps end; '
+         why = trim(text)//pair//' crossed collinear); the half steps replace it'
+         return
+      end if
+      outcome = verify_confirmed
+      call restore(self, whole)
+   end subroutine verify_step
 
    !> The step onto time t found its predictor's tangent near singular (a
    !> change point): instead of iterating there, solve the next output time
@@ -377,11 +575,11 @@ contains
       predictor_rcond = self%predictor_rcond
       self%before = snapshot(self)
       t_next = next_output_time(self%t_start, self%t_end, self%dt, self%t, t)
-      call step_to(self, t_next, .false., iterations, cuts, found, over_error)
+      call step_to(self, t_next, .false., .false., 0, iterations, cuts, found, over_error)
       if (allocated(over_error)) then
          ! The double step failed: solve at t itself, as without the detection.
          call restore(self, self%before)
-         call step_to(self, t, .false., iterations, cuts, found, error)
+         call step_to(self, t, .false., .true., 0, iterations, cuts, found, error)
          if (allocated(error)) return
          self%counts%steps = self%counts%steps + 1
          result%t = t
@@ -403,7 +601,7 @@ contains
             ! Near, not on, a change point: solve the row itself as without the
             ! detection, from the state before it; the state ahead stays.
             call restore(self, bf)
-            call step_to(self, t, .false., iterations, cuts, found, near_error)
+            call step_to(self, t, .false., .true., 0, iterations, cuts, found, near_error)
             if (.not. allocated(near_error)) then
                self%counts%steps = self%counts%steps + 1
                result%t = t
@@ -459,8 +657,10 @@ contains
       x%jerks = self%jerks
       x%residual = self%residual
       x%reference_rcond = self%reference_rcond
+      x%rcond = self%rcond
       x%response = self%response
       x%has_response = self%has_response
+      x%response_signs = self%response_signs
    end function snapshot
 
    !> Make x the accepted configuration again.
@@ -480,8 +680,10 @@ contains
       self%jerks = x%jerks
       self%residual = x%residual
       self%reference_rcond = x%reference_rcond
+      self%rcond = x%rcond
       self%response = x%response
       self%has_response = x%has_response
+      self%response_signs = x%response_signs
    end subroutine restore
 
    !> The predictor: s (+) (h v + h^2/2 a + h^3/6 j + h^4/24 k), the Taylor
@@ -719,7 +921,27 @@ contains
       result%has_acceleration = self%rates_known
       result%residual = self%residual
       result%note = self%note
+      if (len_trim(self%note) == 0) result%note = conditioning_note(self)
    end subroutine fill_result
+
+   !> The listing's note on an accepted configuration near a change point:
+   !> its tangent's reciprocal condition number below change_drop times the
+   !> run's best (the planar FEM's note on a near-stationary configuration,
+   !> with the spatial stepper's measure of it). Its rates, solved with that
+   !> tangent, carry the round-off of the solve amplified by the condition
+   !> number. '' for a regular one.
+   function conditioning_note(self) result(note)
+      type(spatial_stepper_type), intent(in) :: self
+      character(len=note_length) :: note
+      character(len=160) :: text
+      note = ''
+      if (.not. (self%rcond > 0 .and. self%rcond < change_drop*self%reference_rcond)) return
+      write (text, '(a,es12.5,a,es9.2,a)') 't = ', self%t, &
+         & ': near a stationary configuration (the tangent''s condition ', self%rcond/self%reference_rcond, &
+         & ' of the run''s best)'
+      note = text
+      if (self%refine_rates) note = trim(text)//': velocities and accelerations are ill-conditioned'
+   end function conditioning_note
 
    !> The listing's plan line: the mechanism's size.
    function spatial_plan_text(self) result(text)
@@ -736,5 +958,19 @@ contains
          & size(self%fdof), ' free (band, half-bandwidth ', self%kt%kff%kd, ')'
       text = trim(line)
    end function spatial_plan_text
+
+   !> Whether the signs of the drive response of a tangent with reciprocal
+   !> condition number rcond are trusted against the run's best so far,
+   !> reference: where the run reports the rates of a configuration (above
+   !> rates_drop), it reports the signs of this response times the drive's
+   !> rate. Its size is trusted from the higher response_trusted on: nearer
+   !> a change point the round-off error of the response, about eps over the
+   !> tangent's reciprocal condition number relative, still leaves its sign,
+   !> while the response grows without bound (the near-toggle of the flat
+   !> Peaucellier cell: docs/spatial.md).
+   pure logical function signs_trusted(rcond, reference) result(trusted)
+      real(dp), intent(in) :: rcond, reference
+      trusted = rcond > 0 .and. rcond >= rates_drop*reference
+   end function signs_trusted
 
 end module fekap_spatial_stepper
