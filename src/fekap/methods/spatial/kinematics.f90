@@ -32,7 +32,7 @@ module fekap_spatial_kinematics
    private
 
    public :: spatial_state_type, new_spatial_state, spatial_configuration_type, configure, frame_curvature
-   public :: assemble_spatial, set_drives, update_state, spatial_newton, spatial_rates, spatial_report_type
+   public :: assemble_spatial, set_drives, update_state, spatial_rates
    public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular, tangent_for
 
    !> Where a mechanism is: its generalized dofs and its free frames' rotations.
@@ -55,14 +55,6 @@ module fekap_spatial_kinematics
       !> parent's): the other columns of G and W are zero.
       integer, allocatable :: point_start(:), point_dofs(:), frame_start(:), frame_dofs(:)
    end type spatial_configuration_type
-
-   !> The outcome of one Newton solve.
-   type :: spatial_report_type
-      integer :: iterations = 0
-      !> The last correction, lengths divided by the mechanism's length.
-      real(dp) :: correction = 0
-      logical :: converged = .false.
-   end type spatial_report_type
 
    !> Refinement steps of each rate solve (spatial_rates_factored): one takes
    !> the normal equations' error, of order kappa(K) eps = kappa(k^1/2 B)^2 eps,
@@ -560,47 +552,6 @@ contains
          s%q(m%frames(i)%dof:m%frames(i)%dof + 2) = 0
       end do
    end subroutine update_state
-
-   !> Newton-Raphson on the free dofs at time t (drives set first) until the
-   !> correction is below tol (lengths relative to the mechanism's length).
-   subroutine spatial_newton(m, t, s, tol, max_iterations, report, error)
-      type(spatial_mechanism_type), intent(in) :: m
-      real(dp), intent(in) :: t, tol
-      type(spatial_state_type), intent(inout) :: s
-      integer, intent(in) :: max_iterations
-      type(spatial_report_type), intent(out) :: report
-      type(error_type), allocatable, intent(out) :: error
-      type(spatial_configuration_type) :: c
-      type(spatial_tangent_type) :: kt
-      real(dp) :: res(m%ndof), vd(m%ndof), ad(m%ndof), dq(m%ndof), scale(m%ndof)
-      real(dp), allocatable :: rhs(:)
-      integer :: it, info
-      call tangent_for(m, kt)
-      call set_drives(m, t, s, vd, ad)
-      scale = merge(1/m%length, 1.0_dp, m%is_length)
-      do it = 1, max_iterations
-         call configure(m, s, c)
-         call assemble_spatial(m, c, res, sparse=kt)
-         call kt%factor(info)
-         if (info /= 0) then
-            call singular(error, info, t)
-            return
-         end if
-         rhs = -res(kt%fdof)
-         call kt%solve(rhs)
-         dq = 0
-         dq(kt%fdof) = rhs
-         call update_state(m, s, dq)
-         report%iterations = it
-         report%correction = maxval(abs(dq*scale))
-         if (report%correction < tol) then
-            report%converged = .true.
-            return
-         end if
-      end do
-      call analysis_error(error, 'Newton did not converge in the spatial kinematics: '// &
-         & 'a dead point or a configuration that does not assemble; drive another joint or take smaller steps')
-   end subroutine spatial_newton
 
    !> Velocities v and accelerations a of every dof at state s, time t.
    subroutine spatial_rates(m, t, s, v, a, error)

@@ -4,13 +4,14 @@
 !> h^4/24 k), j and k the third and fourth rates of the motion at the last
 !> configuration (see curve_rates), then runs
 !> Newton-Raphson on the free dofs with the material tangent (exact at the
-!> stress-free solution). Every Newton iteration assembles and factors the
-!> tangent at its iterate; the iteration whose correction is below the
-!> length tolerance (lengths relative to the longest element), and below
-!> rate_tol, ends Newton: its factored tangent, at the converged
-!> configuration, gives the velocities and accelerations (Eischen, Sun &
-!> Marler eqs. (47)-(53)), and its correction is applied without a further
-!> assembly. A step's iterations count the corrections that needed another
+!> stress-free solution): the one Newton driver (newton_solve) on
+!> fekap_spatial_newton's system under its contract. Every Newton iteration
+!> assembles and factors the tangent at its iterate; the iteration whose
+!> correction is below the length tolerance (lengths relative to the
+!> longest element), and below rate_tol, ends Newton: its factored tangent,
+!> at the converged configuration, gives the velocities and accelerations
+!> (Eischen, Sun & Marler eqs. (47)-(53)), and its correction is applied
+!> without a further assembly. A step's iterations count the corrections that needed another
 !> assembly and factorisation after them, as the planar method counts its
 !> check "with the tangent factored at the converged configuration" as no
 !> iteration. A step whose Newton fails, or whose configuration the
@@ -49,6 +50,9 @@ module fekap_spatial_stepper
       & spatial_hinge_type, find_hinges, hinge_check, state_distance, predicted_step
    use fekap_spatial_build, only: spatial_map_type, build_spatial_mechanism
    use fekap_spatial_link_motion, only: link_motion_type, new_link_motion, fill_link_motion
+   use fekap_spatial_newton, only: spatial_newton_type, spatial_contract, spatial_force_scale
+   use fekap_stepping_newton, only: newton_contract_type, newton_report_type, newton_solve, always_refactor_type, &
+      & stop_interrupted
    implicit none
    private
 
@@ -56,20 +60,6 @@ module fekap_spatial_stepper
 
    !> Halvings of one step before it is given up (as the planar step control's).
    integer, parameter :: max_cuts = 8
-   !> The last correction (relative to the longest element) below which the
-   !> iterate's tangent gives the rates: the rates at an iterate differ from
-   !> those at the solution by about d(rates)/dq times the correction (an
-   !> acceleration omega^2 times it), so a correction at the length
-   !> tolerance's 1e-12 would cost the accelerations two digits; one that
-   !> the tolerance accepts above this is applied and the next iterate,
-   !> whatever its correction below the tolerance, gives the rates.
-   real(dp), parameter :: rate_tol = 1.0e-14_dp
-   !> A correction within this many units in the last place of the largest
-   !> dof value (relative, as the corrections) is round-off, whatever the
-   !> length tolerance and rate_tol say: a revolute angle driven 1,000 turns
-   !> is 6,283 rad, whose last place (9e-13) the other dofs' corrections
-   !> inherit, and another iteration cannot reduce it.
-   real(dp), parameter :: roundoff_places = 4
    !> A verifying pair of half steps contradicts its step when their results
    !> differ by more than this many model sizes (the planar FEM's; see verify_step).
    real(dp), parameter :: verify_agreement = 1.0e-6_dp
@@ -120,9 +110,11 @@ module fekap_spatial_stepper
       integer :: jerks = 0
       !> The parameter step of the differences that give them (a quarter of the deck's step).
       real(dp) :: difference_step = 0
-      !> Newton: length tolerance of the correction, most iterations.
+      !> Newton: length tolerance of the correction, most iterations (those
+      !> followed by another assembly), and the contract (spatial_contract).
       real(dp) :: tol = 1.0e-12_dp
       integer :: max_iter = 25
+      type(newton_contract_type) :: contract
       integer, allocatable :: fdof(:)
       !> The tangent's band storage and its factor at the last iterate.
       type(spatial_tangent_type) :: kt
@@ -177,6 +169,7 @@ contains
       type(spatial_stepper_type), intent(out) :: self
       type(model_type), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
+      real(dp) :: force_scale, floor
       call build_spatial_mechanism(model, self%m, self%map, error)
       if (allocated(error)) return
       self%s = new_spatial_state(self%m)
@@ -192,6 +185,11 @@ contains
       self%shortest = shortest_element(self%m)
       call name_hinges(self, model)
       self%refine_rates = model%analysis%velocities
+      call spatial_force_scale(self%m, self%kt, self%shortest, force_scale, floor)
+      ! The deck's iterations count the corrections followed by another
+      ! assembly: the last correction is one more.
+      self%contract = spatial_contract(model%analysis%tol, self%tol, self%max_iter + 1, force_scale, floor, &
+         & self%refine_rates)
       call new_link_motion(self%links, model, self%m, self%map%node_frame, self%map%node_point)
       allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%jerk(self%m%ndof), self%snap(self%m%ndof), &
          & self%jerk1(self%m%ndof), self%jerk2(self%m%ndof), source=0.0_dp)
@@ -225,7 +223,8 @@ contains
       integer :: iterations
       logical :: converged, found
       character(:), allocatable :: why
-      call solve(self, self%t, .false., .false., iterations, converged, found, why)
+      call solve(self, self%t, .false., .false., iterations, converged, found, why, error)
+      if (allocated(error)) return
       if (.not. converged) then
          call analysis_error(error, 'the start configuration does not assemble: '//why)
          return
@@ -319,7 +318,11 @@ contains
          saved = snapshot(self)
          call predict(self, t_try - self%t, .true.)
          predicted = self%s
-         call solve(self, t_try, detect .and. cuts == 0, .false., its, converged, found, why)
+         call solve(self, t_try, detect .and. cuts == 0, .false., its, converged, found, why, error)
+         if (allocated(error)) then
+            call restore(self, saved)
+            return
+         end if
          iterations = iterations + its
          if (found) then
             call restore(self, saved)
@@ -334,7 +337,11 @@ contains
             ! among near-singular tangents is at a change point too.
             call restore(self, saved)
             call predict(self, t_try - self%t, .false.)
-            call solve(self, t_try, .false., .true., its, converged, found, why)
+            call solve(self, t_try, .false., .true., its, converged, found, why, error)
+            if (allocated(error)) then
+               call restore(self, saved)
+               return
+            end if
             iterations = iterations + its
             if (converged) call check_jump(self, saved, t_try, predicted, .false., verify, depth, verdict, why, crossing, turn)
             converged = converged .and. verdict /= jump_reject .and. verdict /= jump_unverifiable
@@ -775,14 +782,18 @@ contains
       end function residual_along
    end subroutine curve_rates
 
-   !> Newton from the current state at time t (the drives set exactly); on
-   !> convergence the rates at the solution and the drive response there
-   !> (try_response, with the tangent's condition try_rcond). With `detect`,
-   !> the tangent at the predictor (the first iteration's) is checked for a
-   !> change point: near singular against the run's best, Newton stops there
-   !> (found). `why` says why it failed.
-   subroutine solve(self, t, detect, watch, iterations, converged, found, why)
-      type(spatial_stepper_type), intent(inout) :: self
+   !> Newton from the current state at time t (the drives set exactly): the
+   !> one Newton driver's newton_solve on fekap_spatial_newton's system, under
+   !> the spatial contract (spatial_contract); on convergence the rates at
+   !> the solution (the iterate the last correction was solved from, whose
+   !> tangent is factored) and the drive response there (try_response, with
+   !> the tangent's condition try_rcond), the last correction applied. With
+   !> `detect`, the tangent at the predictor (the first iteration's) is
+   !> checked for a change point: near singular against the run's best,
+   !> Newton stops there (found). `why` says why it failed; `interrupt`
+   !> is allocated when a signal asked the run to stop.
+   subroutine solve(self, t, detect, watch, iterations, converged, found, why, interrupt)
+      type(spatial_stepper_type), target, intent(inout) :: self
       real(dp), intent(in) :: t
       !> Check the predictor for a change point; keep the least condition
       !> estimate of the iterates' tangents (least_rcond).
@@ -790,94 +801,43 @@ contains
       integer, intent(out) :: iterations
       logical, intent(out) :: converged, found
       character(:), allocatable, intent(out) :: why
-      type(spatial_configuration_type) :: c
-      real(dp) :: res(self%m%ndof), ad(self%m%ndof), dq(self%m%ndof)
-      real(dp) :: scale(self%m%ndof), correction, last, roundoff, rcond
-      real(dp), allocatable :: rhs(:)
-      integer :: info, it
-      character(len=80) :: text
-      logical :: refining
-      refining = .false.
-      converged = .false.
-      found = .false.
-      iterations = 0
+      type(error_type), allocatable, intent(out) :: interrupt
+      type(spatial_newton_type) :: newton
+      type(always_refactor_type) :: full
+      type(newton_report_type) :: report
+      type(error_type), allocatable :: error
+      real(dp) :: ad(self%m%ndof)
       why = ''
-      call set_drives(self%m, t, self%s, self%v, ad)
-      scale = merge(1/self%m%length, 1.0_dp, self%m%is_length)
-      last = huge(1.0_dp)
-      do it = 0, self%max_iter
-         call configure(self%m, self%s, c)
-         call assemble_spatial(self%m, c, res, sparse=self%kt)
-         self%counts%tangent_assemblies = self%counts%tangent_assemblies + 1
-         call self%kt%factor(info)
-         if (self%kt%is_lu()) then
-            self%counts%lu_factorisations = self%counts%lu_factorisations + 1
-         else
-            self%counts%cholesky_factorisations = self%counts%cholesky_factorisations + 1
-         end if
-         rcond = 0
-         if ((watch .or. (it == 0 .and. detect)) .and. info == 0) call self%kt%rcond(rcond)
-         if (watch) then
-            if (it == 0) self%least_rcond = huge(1.0_dp)
-            self%least_rcond = min(self%least_rcond, rcond)
-         end if
-         if (it == 0 .and. detect) then
-            ! The change-point test of the predictor (a failed factor counts as 0).
-            self%predictor_rcond = rcond
-            if (change_verdict(self%predictor_rcond, self%reference_rcond) /= change_regular) then
-               found = .true.
-               why = 'a change point at the predictor'
-               return
-            end if
-         end if
-         if (info /= 0) then
-            write (text, '(a,i0)') 'singular tangent at dof ', info
-            why = trim(text)
+      call newton%begin(self%m, self%kt, self%counts, self%s, t, self%contract, self%tol, self%refine_rates)
+      newton%detect = detect
+      newton%watch = watch
+      newton%reference_rcond = self%reference_rcond
+      call newton_solve(newton, self%contract, full, report, error)
+      iterations = newton%iterations
+      found = newton%found
+      converged = report%converged()
+      if (detect) self%predictor_rcond = newton%predictor_rcond
+      if (watch) self%least_rcond = newton%least_rcond
+      if (.not. converged) then
+         if (report%stopped == stop_interrupted) then
+            call move_alloc(error, interrupt)
             return
          end if
-         rhs = -res(self%fdof)
-         call self%kt%solve(rhs)
-         dq = 0
-         dq(self%fdof) = rhs
-         correction = maxval(abs(dq*scale))
-         if (.not. correction < huge(1.0_dp)) then
-            why = 'the correction is not a finite number'
-            return
-         end if
-         ! The dofs are coupled: the round-off of the largest value (at least
-         ! a rotation of 1 rad or the mechanism's length) bounds every
-         ! correction that another iteration could make (see roundoff_places).
-         roundoff = roundoff_places*maxval(spacing(max(abs(self%s%q), 1/scale))*scale)
-         if (correction < max(self%tol, roundoff) .and. (correction < max(rate_tol, roundoff) .or. refining .or. &
-            & .not. self%refine_rates)) then
-            ! Converged at this iterate, which is the solution to round-off:
-            ! its factored tangent gives the rates, the drive response and
-            ! the condition estimate.
-            self%residual = norm2(res(self%fdof))
-            call spatial_rates_factored(self%m, self%s, c, self%kt, self%v, ad, self%a)
-            self%counts%velocity_solves = self%counts%velocity_solves + 1
-            self%counts%acceleration_solves = self%counts%acceleration_solves + 1
-            self%try_response = drive_response(self%m, self%kt)
-            call self%kt%rcond(self%try_rcond)
-            call update_state(self%m, self%s, dq)
-            call curve_rates(self, t)
-            converged = .true.
-            return
-         end if
-         ! Converged, but the rates want the next iterate (once: round-off may keep it above rate_tol).
-         if (correction < max(self%tol, roundoff)) refining = .true.
-         if (it >= 2 .and. correction > last .and. .not. refining) then
-            write (text, '(a,i0,a)') 'the correction grew at iteration ', it + 1, ''
-            why = trim(text)
-            return
-         end if
-         last = correction
-         call update_state(self%m, self%s, dq)
-         iterations = iterations + 1
-         self%counts%iterations = self%counts%iterations + 1
-      end do
-      write (text, '(a,i0,a)') 'no convergence in ', self%max_iter, ' iterations'
-      why = trim(text)
+         why = newton%why(report, error, self%max_iter)
+         return
+      end if
+      ! Converged at the iterate the last correction was solved from, which is
+      ! the solution to round-off: its factored tangent gives the rates, the
+      ! drive response and the condition estimate.
+      self%residual = newton%residual
+      call set_drives(self%m, t, newton%at, self%v, ad)
+      call spatial_rates_factored(self%m, newton%at, newton%c, self%kt, self%v, ad, self%a)
+      self%counts%velocity_solves = self%counts%velocity_solves + 1
+      self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+      self%try_response = drive_response(self%m, self%kt)
+      call self%kt%rcond(self%try_rcond)
+      self%s = newton%s
+      call curve_rates(self, t)
    end subroutine solve
 
    !> The accepted state's node positions, rates, joint motions and link
