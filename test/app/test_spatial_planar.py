@@ -153,6 +153,23 @@ def test_rates_match_planar(runs, deck):
                 check(err[kind] <= OUT_OF_PLANE_TOL, f"{deck}: {kind} up to {err[kind]:.2e} of the in-plane scale")
 
 
+def test_joint_angles_of_large_steps(runs):
+    """fourbar-quarter-turn (a quarter of a crank turn a step) has, at each of
+    its times, the unwrapped joint angles of fourbar (Example 1 at dt = 0.025),
+    not only its points: a step that turns a joint by 2 pi the wrong way
+    leaves the points right (before the verification of crossing steps the
+    coupler's joint B.BC ended at 0 instead of -2 pi)."""
+    angles = {}
+    for deck in ("decks/fourbar-quarter-turn.deck", "decks/fourbar.deck"):
+        _, spatial, done = runs(deck)
+        check(done.returncode == 0, f"{deck} --spatial: exit {done.returncode}: {done.stderr}")
+        angles[deck] = {(round(float(r["t"]), 9), r["joint"]): float(r["angle"]) for r in read_rows(spatial / "joints.csv")}
+    coarse, fine = angles["decks/fourbar-quarter-turn.deck"], angles["decks/fourbar.deck"]
+    check(len(coarse) == 20 and set(coarse) <= set(fine), f"the quarter-turn run's rows: {sorted(coarse)}")
+    worst = max(abs(angle - fine[key]) for key, angle in coarse.items())
+    check(worst <= 1e-12, f"joint angles {worst:.2e} rad off the run at dt = 0.025")
+
+
 def test_thousand_turns_at_two_iterations(runs):
     """The crank driven 1,000 turns (revolute angles up to 6,283 rad, whose
     round-off the corrections inherit): at most 2 Newton iterations a step,
