@@ -26,7 +26,7 @@ module fekap_spatial_change_point
    use fekap_stepping_change_point, only: hermite_fill, fill_iterations
    use fekap_vectors, only: cross
    use fekap_stepping_jump, only: jump_bound_ratio, collinear_crossing, crossing_against, crossing_along
-   use fekap_spatial_mechanism, only: spatial_mechanism_type, frame_free, frame_fixed, frame_revolute
+   use fekap_spatial_mechanism, only: spatial_mechanism_type, frame_free, frame_fixed, frame_revolute, point_fixed
    use fekap_spatial_tangent, only: spatial_tangent_type
    use fekap_spatial_kinematics, only: spatial_state_type, spatial_configuration_type, configure, assemble_spatial, &
       & update_state, set_drives
@@ -285,7 +285,7 @@ contains
       if (length == huge(1.0_dp)) length = m%length
    end function shortest_element
 
-   !> The hinges of m: every pair of beam ends at one point with frames of
+   !> The hinges of m: every pair of beam ends at one place (same_place) with frames of
    !> their own that the frame tree relates through revolute joints about
    !> one axis only (and fixed frames): up from each frame to their common
    !> ancestor, every frame revolute about +-n in its parent's axes (a turn
@@ -310,7 +310,7 @@ contains
          do j = i + 1, 2*nb
             bj = (j + 1)/2
             nj = m%beams(bj)%nodes(j - 2*(bj - 1))
-            if (bj == bi .or. m%nodes(ni)%point /= m%nodes(nj)%point) cycle
+            if (bj == bi .or. .not. same_place(m%nodes(ni)%point, m%nodes(nj)%point)) cycle
             fj = m%nodes(nj)%frame
             if (fi == fj .or. fi == 0 .or. fj == 0) cycle
             call frame_path(m, fi, fj, n, h%dofs, h%signs, related)
@@ -326,6 +326,17 @@ contains
          end do
       end do
    contains
+      !> Whether points a and b are one place: one point, or two fixed
+      !> points at one position (the nodes of a pin, each held to the ground
+      !> by a joint of its own).
+      pure logical function same_place(a, b)
+         integer, intent(in) :: a, b
+         same_place = a == b
+         if (same_place) return
+         same_place = m%points(a)%kind == point_fixed .and. m%points(b)%kind == point_fixed .and. &
+            & all(m%points(a)%x0 == m%points(b)%x0)
+      end function same_place
+
       !> The chord of beam b at the deck's configuration.
       pure function chord(b) result(c)
          integer, intent(in) :: b
