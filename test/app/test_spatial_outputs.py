@@ -337,3 +337,98 @@ def test_vtk_files_of_a_spatial_run(tmp_path):
         node_names = [n.decode() for n in bytes(got.field_data["node_names"].astype(np.uint8)).split(b"\0")[:-1]]
         check(node_names == names, f"{file}: node_names {node_names}")
         check(float(mesh.field_data["TimeValue"][0]) == time, f"{file}: TimeValue differs from the .pvd")
+
+
+def listing_block(listing: Path, title: str) -> list[list[str]]:
+    """The rows of a listing block (the lines after its title and column
+    header, to the blank line), split into fields."""
+    lines = listing.read_text().splitlines()
+    starts = [k for k, line in enumerate(lines) if line == title or line.startswith(title + " (")]
+    check(len(starts) == 1, f"{listing.name}: {len(starts)} blocks {title}")
+    rows = []
+    for line in lines[starts[0] + 2:]:
+        if not line.strip():
+            break
+        rows.append(line.split())
+    return rows
+
+
+def test_listing_echoes_the_spatial_model(slider_crank):
+    """The listing of a spatial run echoes the model it ran: the nodes with
+    z, the sections' six stiffnesses and orientation vector, the links as
+    beams or trusses with their lengths in 3D (the IFToMM crank 0.08, its rod
+    0.3), the joints with kind, nodes and axes, the drive of a joint angle."""
+    listing = slider_crank / "slider-crank.lis"
+    lines = listing.read_text().splitlines()
+    header = lines[lines.index("NODES") + 1].split()
+    check(header == ["name", "x", "y", "z"], f"NODES header: {header}")
+    nodes = {row[0]: [float(v) for v in row[1:]] for row in listing_block(listing, "NODES")}
+    want = {"A": [0, 0.1, 0.12], "B": [0, 0.1, 0.2], "B2": [0, 0.1, 0.2], "S": [0.2, 0, 0], "S2": [0.2, 0, 0]}
+    check(nodes == want, f"NODES: {nodes}")
+    sections = listing_block(listing, "SECTIONS")
+    check([row[0] for row in sections] == ["rod"], f"SECTIONS: {sections}")
+    check([float(v) for v in sections[0][1:7]] == [1.6e7, 6.0e6, 6.0e6, 1.2e2, 1.0e2, 1.0e2]
+          and sections[0][7:] == ["0", "0", "0"], f"SECTIONS: {sections}")
+    links = {row[0]: row[1:] for row in listing_block(listing, "LINKS")}
+    check(set(links) == {"crank", "rod"}, f"LINKS: {links}")
+    for name, ends, length in (("crank", ["A", "B"], 0.08), ("rod", ["B2", "S2"], 0.3)):
+        row = links[name]
+        check(row[:5] == [*ends, "rod", "1", "beam"] and abs(float(row[5]) - length) < 1e-11, f"{name}: {row}")
+    joints = {row[0]: row[1:] for row in listing_block(listing, "JOINTS")}
+    check({name: row[:3] for name, row in joints.items()} == {
+        "JA": ["revolute", "ground", "A"], "JB": ["spherical", "B", "B2"], "JU": ["universal", "S", "S2"],
+        "JS": ["prismatic", "ground", "S"]}, f"JOINTS: {joints}")
+    # The axes as unit vectors, to the listing's 9 digits; a spherical joint has none.
+    want_axes = {"JA": [1, 0, 0], "JB": [], "JU": [1, 0, 0, 0, -2 / math.sqrt(5), 1 / math.sqrt(5)], "JS": [1, 0, 0]}
+    for name, axes in want_axes.items():
+        got = [float(v.rstrip(",")) for v in joints[name][3:]]
+        check(len(got) == len(axes) and np.allclose(got, axes, rtol=0, atol=1e-9), f"{name} axes: {joints[name]}")
+    check(lines[lines.index("DRIVES") + 1].strip() == "angle of joint JA: angle = (initial angle) + 6*t",
+          f"DRIVES: {lines[lines.index('DRIVES') + 1]}")
+
+
+def test_listing_of_a_truss_a_ground_second_and_a_stroke_drive(bennett, tmp_path):
+    """The RSSR's coupler listed as a truss of length 4 (its ends (1, 0, 0)
+    and (1, 3.5, sqrt(15)/2)) whose section gives EA alone (the others
+    left out as '-'); Bennett's joint R4 `J4 ground` keeps the ground second;
+    a stroke drive is listed as the joint's stroke."""
+    text = (DECKS / "rssr.deck").read_text()
+    old = "  bar  EA=1  GA2=1  GA3=1  GJ=1  EI2=1  EI3=1\n"
+    check(old in text and "  coupler  B2  C2  bar  truss\n" in text, "the RSSR deck's lines changed")
+    deck = tmp_path / "rssr.deck"
+    deck.write_text(text.replace(old, old + "  tie  EA=5\n").replace("  coupler  B2  C2  bar  truss\n",
+                                                                    "  coupler  B2  C2  tie  truss\n"))
+    out = run_deck(deck, tmp_path / "rssr")
+    listing = out / "rssr.lis"
+    links = {row[0]: row[1:] for row in listing_block(listing, "LINKS")}
+    check(links["coupler"][:5] == ["B2", "C2", "tie", "1", "truss"] and abs(float(links["coupler"][5]) - 4) < 1e-11,
+          f"coupler: {links['coupler']}")
+    sections = {row[0]: row[1:] for row in listing_block(listing, "SECTIONS")}
+    check(sections["tie"][:6] == ["5.0000000E+00", "-", "-", "-", "-", "-"], f"tie: {sections['tie']}")
+    r4 = {row[0]: row[1:] for row in listing_block(bennett / "bennett.lis", "JOINTS")}["R4"]
+    check(r4[:3] == ["revolute", "J4", "ground"], f"R4: {r4}")
+    text = (DECKS / "slider-crank.deck").read_text()
+    stroke = tmp_path / "stroke.deck"
+    stroke.write_text(text.replace("  rotation JA rate 6\n", "  stroke JS harmonic 0 0.01 2\n"))
+    lines = (run_deck(stroke, tmp_path / "stroke") / "stroke.lis").read_text().splitlines()
+    check(lines[lines.index("DRIVES") + 1].strip().startswith("stroke of joint JS: stroke = "),
+          f"DRIVES: {lines[lines.index('DRIVES') + 1]}")
+
+
+def test_planar_listing_keeps_its_model_echo(tmp_path):
+    """A planar run's listing keeps its planar echo (x and y, kGA, link
+    angles); the same deck with --spatial lists its spatial model: z, the
+    six stiffnesses, every hinge a revolute joint about +z."""
+    deck = ROOT / "decks" / "fourbar.deck"
+    planar = run_deck(deck, tmp_path / "planar") / "fourbar.lis"
+    lines = planar.read_text().splitlines()
+    check(lines[lines.index("NODES") + 1].split() == ["name", "x", "y"], "planar NODES header")
+    check(lines[lines.index("SECTIONS") + 1].split() == ["name", "EA", "kGA", "EI"], "planar SECTIONS header")
+    check("JOINTS (axes in global coordinates)" not in lines, "a planar listing with JOINTS")
+    spatial = run_deck(deck, tmp_path / "spatial", "--spatial") / "fourbar.lis"
+    lines = spatial.read_text().splitlines()
+    check(lines[lines.index("NODES") + 1].split() == ["name", "x", "y", "z"], "--spatial NODES header")
+    check(all(float(row[3]) == 0 for row in listing_block(spatial, "NODES")), "--spatial: z not 0")
+    joints = listing_block(spatial, "JOINTS")
+    check(bool(joints) and all(row[1] == "revolute" and row[-3:] == ["0", "0", "1"] for row in joints),
+          f"--spatial joints: {joints}")

@@ -5,6 +5,8 @@ module fekap_output_listing
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, method_fem, method_cartesian, &
       & predictor_previous, predictor_extrapolate, convergence_paper, joint_prismatic
    use fekap_model_results, only: step_result_type
+   use fekap_model_spatial, only: joint_names, joint_revolute, joint_universal, spatial_prismatic => joint_prismatic, &
+      & joint_cylindrical
    use fekap_model_drive_law, only: law_type, law_rate, law_harmonic, law_polynomial, law_table
    use fekap_model_effects, only: effects_plan_type, plan_effects, effects_name
    use fekap_model_work, only: work_counts_type, phase_seconds
@@ -39,6 +41,10 @@ contains
             & 'given, the plots label lengths "length" and times "time"'
       end if
       if (allocated(model%parameters)) call write_parameters(unit, model)
+      if (model%analysis%spatial) then
+         call write_spatial_model(unit, model)
+         return
+      end if
       write (unit, '(/,a)') 'NODES'
       write (unit, '(2x,a12,2a24)') 'name', 'x', 'y'
       do i = 1, size(model%nodes)
@@ -123,6 +129,107 @@ contains
       end if
       call write_listing_inertia(unit, model)
    end subroutine write_listing_model
+
+   !> A spatial model (ANALysis `type kinematics spatial`, or a planar deck
+   !> run with --spatial): nodes with z, the 3D sections with their
+   !> orientation vectors, links as beams or trusses with their 3D lengths,
+   !> the joints with their kinds, nodes and axes, and the drives.
+   subroutine write_spatial_model(unit, model)
+      integer, intent(in) :: unit
+      type(model_type), intent(in) :: model
+      character(*), parameter :: c_names(6) = [character(len=3) :: 'EA', 'GA2', 'GA3', 'GJ', 'EI2', 'EI3']
+      real(dp) :: d(3)
+      integer :: i, k
+      character(:), allocatable :: line, second
+      associate (sp => model%spatial)
+         write (unit, '(/,a)') 'NODES'
+         write (unit, '(2x,a12,3a24)') 'name', 'x', 'y', 'z'
+         do i = 1, size(model%nodes)
+            write (unit, '(2x,a12,3a)') model%nodes(i)%name, fast_es_text(model%nodes(i)%x(1), 24, 15), &
+               & fast_es_text(model%nodes(i)%x(2), 24, 15), fast_es_text(sp%z(i), 24, 15)
+         end do
+         write (unit, '(/,a)') 'SECTIONS (the orientation vector v gives axis 2; 0 0 0: not given)'
+         write (unit, '(2x,a12,6a16,2x,a)') 'name', (trim(c_names(k)), k=1, 6), 'v'
+         do i = 1, size(model%sections)
+            line = ''
+            do k = 1, 6
+               if (sp%sections(i)%given(k) .or. .not. any(sp%sections(i)%given)) then
+                  line = line//fast_es_text(sp%sections(i)%c(k), 16, 7)
+               else
+                  line = line//repeat(' ', 15)//'-'
+               end if
+            end do
+            write (unit, '(2x,a12,a,2x,a)') model%sections(i)%name, line, short_text(sp%sections(i)%orientation(1))// &
+               & ' '//short_text(sp%sections(i)%orientation(2))//' '//short_text(sp%sections(i)%orientation(3))
+         end do
+         write (unit, '(/,a)') 'LINKS'
+         write (unit, '(2x,a12,2a8,a12,a9,a7,a20)') 'name', 'first', 'second', 'section', 'elements', 'kind', 'length'
+         do i = 1, size(model%links)
+            associate (l => model%links(i))
+               d = [model%nodes(l%node(2))%x - model%nodes(l%node(1))%x, sp%z(l%node(2)) - sp%z(l%node(1))]
+               write (unit, '(2x,a12,2a8,a12,i9,a7,a)') l%name, model%nodes(l%node(1))%name, &
+                  & model%nodes(l%node(2))%name, model%sections(l%section)%name, l%nelem, &
+                  & trim(merge('truss', ' beam', sp%truss(i))), fast_es_text(norm2(d), 20, 11)
+            end associate
+         end do
+         if (allocated(sp%joints)) then
+            write (unit, '(/,a)') 'JOINTS (axes in global coordinates)'
+            write (unit, '(2x,a12,a12,2a8,2x,a)') 'name', 'kind', 'first', 'second', 'axes'
+            do i = 1, size(sp%joints)
+               associate (j => sp%joints(i))
+                  second = 'ground'
+                  if (j%node(2) > 0) second = model%nodes(j%node(2))%name
+                  line = ''
+                  select case (j%kind)
+                  case (joint_revolute, spatial_prismatic, joint_cylindrical)
+                     line = vector_text(j%axis)
+                  case (joint_universal)
+                     line = vector_text(j%axis)//', '//vector_text(j%axis2)
+                  end select
+                  if (len(line) > 0) line = '  '//line
+                  if (j%ground_first) then
+                     write (unit, '(2x,a12,a12,2a8,a)') j%name, kind_name(j%kind), second, &
+                        & model%nodes(j%node(1))%name, line
+                  else
+                     write (unit, '(2x,a12,a12,2a8,a)') j%name, kind_name(j%kind), model%nodes(j%node(1))%name, &
+                        & second, line
+                  end if
+               end associate
+            end do
+         end if
+         if (allocated(sp%drives)) then
+            write (unit, '(/,a)') 'DRIVES'
+            do i = 1, size(sp%drives)
+               associate (dr => sp%drives(i))
+                  if (dr%stroke) then
+                     write (unit, '(2x,a)') 'stroke of joint '//sp%joints(dr%joint)%name//': '//law_text(dr%law, 'stroke')
+                  else
+                     write (unit, '(2x,a)') 'angle of joint '//sp%joints(dr%joint)%name//': '//law_text(dr%law, 'angle')
+                  end if
+               end associate
+            end do
+         end if
+      end associate
+   contains
+      !> The deck's name of a joint kind (joint_names, the kind-th word).
+      function kind_name(kind) result(name)
+         integer, intent(in) :: kind
+         character(:), allocatable :: name
+         integer :: first, k
+         first = 1
+         do k = 1, kind - 1
+            first = first + index(joint_names(first:), ' ')
+         end do
+         name = joint_names(first:)
+         if (index(name, ' ') > 0) name = name(:index(name, ' ') - 1)
+      end function kind_name
+
+      function vector_text(v) result(text)
+         real(dp), intent(in) :: v(3)
+         character(:), allocatable :: text
+         text = short_text(v(1))//' '//short_text(v(2))//' '//short_text(v(3))
+      end function vector_text
+   end subroutine write_spatial_model
 
    !> es_text(x, width, decimals), the same characters: esW.D from
    !> fekap_output_format's exact digits (append_es) where that writes an E

@@ -15,7 +15,7 @@
 !> dofs q: translations of free points (absolute, global axes), strokes of
 !> line points, joint angles (additive), and body rotation increments of free
 !> frames (their rotation matrices are the state, updated multiplicatively).
-!> The module is over 600 lines because the configuration (positions, dof
+!> The module is near 800 lines because the configuration (positions, dof
 !> maps and the dofs each depends on), its assembly element by element and
 !> the solves that use them are one concept around one configuration type.
 module fekap_spatial_kinematics
@@ -34,6 +34,7 @@ module fekap_spatial_kinematics
    public :: spatial_state_type, new_spatial_state, spatial_configuration_type, configure, frame_curvature
    public :: assemble_spatial, set_drives, update_state, spatial_rates
    public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular, tangent_for
+   public :: strain_operator_type, convective_strains, operator_load
 
    !> Where a mechanism is: its generalized dofs and its free frames' rotations.
    type :: spatial_state_type
@@ -56,10 +57,29 @@ module fekap_spatial_kinematics
       integer, allocatable :: point_start(:), point_dofs(:), frame_start(:), frame_dofs(:)
    end type spatial_configuration_type
 
-   !> Refinement steps of each rate solve (spatial_rates_factored): one takes
-   !> the normal equations' error, of order kappa(K) eps = kappa(k^1/2 B)^2 eps,
-   !> to kappa(k^1/2 B) eps plus its square.
-   integer, parameter :: rate_refinements = 1
+   !> One element's part of the square-root form of the tangent: its strain
+   !> rate a x(dofs) (a = B G on its own dofs: a beam's 6 strains, a truss's
+   !> elongation, a slide's gap), its stiffness w (K = sum a^T w a) and its
+   !> convective strain acceleration c (zero until convective_strains).
+   type :: element_rate_type
+      integer, allocatable :: dofs(:)
+      real(dp), allocatable :: a(:, :), w(:, :), c(:)
+   end type element_rate_type
+
+   !> The strain-rate operator of a configuration, element by element
+   !> (assemble_spatial's `operator`): the rate solves' residuals
+   !> sum a^T w (a x + c) come from it without another assembly.
+   type :: strain_operator_type
+      type(element_rate_type), allocatable :: element(:)
+   end type strain_operator_type
+
+   !> At most this many refinements of a rate solve (rates_solve): each
+   !> multiplies the error by about kappa(K) eps, and with EA/EI spreads up
+   !> to 1e12 a few are needed; more than this means kappa(K) eps near 1.
+   integer, parameter :: max_refinements = 8
+   !> A refinement whose correction is within this many units of round-off
+   !> of the largest rate ends the refinements.
+   real(dp), parameter :: refinement_floor = 8*epsilon(1.0_dp)
 
 contains
 
@@ -359,39 +379,30 @@ contains
 
    !> The residual r = sum G^T f and, if asked, the material tangent
    !> K = sum G^T B^T k B G at state s, as a full array (tangent) or in the
-   !> band storage of tangent_for (sparse). With v (and kappa, from
-   !> frame_curvature), conv = sum G^T B^T k c, the convective load. With
-   !> rate, rate_load = sum G^T B^T k (B (G rate)), K rate computed element
-   !> by element from each element's strain rate B (G rate) (the square-root
-   !> form's residual: no cancellation of a global product K rate, whose
-   !> rounding would carry the squared condition number into the rates).
-   !> With conv as well, rate_load = sum G^T B^T k (B (G rate) + c): K rate +
-   !> conv with each element's strain acceleration summed before k scales
-   !> it, the accelerations' residual in the same form.
+   !> band storage of tangent_for (sparse), and the strain-rate operator
+   !> (operator): each element's a = B G on its own dofs and its stiffness,
+   !> K's square-root form, for the rate solves (spatial_rates_factored).
    !> Each element works on its own dofs only (element_dofs).
-   pure subroutine assemble_spatial(m, c, residual, tangent, v, kappa, conv, rate, rate_load, sparse)
+   pure subroutine assemble_spatial(m, c, residual, tangent, sparse, operator)
       type(spatial_mechanism_type), intent(in) :: m
       type(spatial_configuration_type), intent(in) :: c
       real(dp), intent(out) :: residual(:)
       real(dp), intent(out), optional :: tangent(:, :)
-      real(dp), intent(in), optional :: v(:), kappa(:, :)
-      real(dp), intent(out), optional :: conv(:)
-      real(dp), intent(in), optional :: rate(:)
-      real(dp), intent(out), optional :: rate_load(:)
       type(spatial_tangent_type), intent(inout), optional :: sparse
-      real(dp) :: x(3, 2), r(3, 3, 2), f(12), ke(12, 12), b(6, 12), ce(6)
-      real(dp) :: nv(3, 2), nw(3, 2), na(3, 2), ft(6), kt(6, 6), et, u(3)
-      real(dp) :: ra(3, 3), gap(3), ns(3, 10), omega(3), ka(3), cs(3)
+      type(strain_operator_type), intent(out), optional :: operator
+      real(dp) :: x(3, 2), r(3, 3, 2), f(12), ke(12, 12), b(6, 12)
+      real(dp) :: ft(6), kt(6, 6), u(3)
+      real(dp) :: ra(3, 3), gap(3), ns(3, 10)
       real(dp), allocatable :: ge(:, :), gt(:, :), gs(:, :), ng(:, :), kes(:, :)
       integer, allocatable :: dofs(:)
-      integer :: i, n, p, fr
+      integer :: i, n, p, fr, e
       logical :: with_tangent
       with_tangent = present(tangent) .or. present(sparse)
       residual = 0
       if (present(tangent)) tangent = 0
       if (present(sparse)) call sparse%zero()
-      if (present(conv)) conv = 0
-      if (present(rate_load)) rate_load = 0
+      if (present(operator)) allocate (operator%element(element_count(m)))
+      e = 0
       if (allocated(m%beams)) then
          do i = 1, size(m%beams)
             dofs = beam_dofs(m, c, i)
@@ -404,11 +415,6 @@ contains
                r(:, :, n) = c%r(:, :, fr)
                ge(6*n - 5:6*n - 3, :) = c%g(:, dofs, p)
                ge(6*n - 2:6*n, :) = c%w(:, dofs, fr)
-               if (present(conv)) then
-                  nv(:, n) = matmul(ge(6*n - 5:6*n - 3, :), v(dofs))
-                  nw(:, n) = matmul(ge(6*n - 2:6*n, :), v(dofs))
-                  na(:, n) = kappa(:, fr)
-               end if
             end do
             if (with_tangent) then
                call se3_beam_residual(m%beams(i)%element, x, r, f, ke, material_only=.true., compatibility=b)
@@ -419,15 +425,9 @@ contains
                call se3_beam_residual(m%beams(i)%element, x, r, f, compatibility=b)
             end if
             residual(dofs) = residual(dofs) + matmul(f, ge)
-            ce = 0
-            if (present(conv)) then
-               ce = se3_beam_convective(x, r, nv, nw, na)
-               conv(dofs) = conv(dofs) + matmul(matmul(matmul(m%beams(i)%element%k, ce), b), ge)
-            end if
-            if (present(rate_load)) then
-               ce = ce + matmul(b, matmul(ge, rate(dofs)))
-               rate_load(dofs) = rate_load(dofs) + matmul(matmul(matmul(m%beams(i)%element%k, ce), b), ge)
-            end if
+            e = e + 1
+            if (present(operator)) operator%element(e) = element_rate_type(dofs, matmul(b, ge), &
+               & m%beams(i)%element%k, zeros(6))
          end do
       end if
       if (allocated(m%trusses)) then
@@ -439,7 +439,6 @@ contains
                p = m%trusses(i)%points(n)
                x(:, n) = c%x(:, p)
                gt(3*n - 2:3*n, :) = c%g(:, dofs, p)
-               if (present(conv)) nv(:, n) = matmul(gt(3*n - 2:3*n, :), v(dofs))
             end do
             if (with_tangent) then
                call truss_residual(m%trusses(i)%element, x, ft, kt)
@@ -450,17 +449,12 @@ contains
                call truss_residual(m%trusses(i)%element, x, ft)
             end if
             residual(dofs) = residual(dofs) + matmul(ft, gt)
-            u = (x(:, 2) - x(:, 1))/norm2(x(:, 2) - x(:, 1))
-            et = 0
-            if (present(conv)) then
-               ! B = (-u, u), k = EA/L.
-               et = truss_convective(x, nv)
-               conv(dofs) = conv(dofs) + et*m%trusses(i)%element%ea/m%trusses(i)%element%length*matmul([-u, u], gt)
-            end if
-            if (present(rate_load)) then
-               et = et + dot_product(u, matmul(gt(4:6, :) - gt(1:3, :), rate(dofs)))
-               rate_load(dofs) = rate_load(dofs) + et*m%trusses(i)%element%ea/m%trusses(i)%element%length* &
-                  & matmul([-u, u], gt)
+            e = e + 1
+            if (present(operator)) then
+               ! B = (-u, u), k = EA/L: the elongation's rate.
+               u = (x(:, 2) - x(:, 1))/norm2(x(:, 2) - x(:, 1))
+               operator%element(e) = element_rate_type(dofs, reshape(matmul([-u, u], gt), [1, size(dofs)]), &
+                  & reshape([m%trusses(i)%element%ea/m%trusses(i)%element%length], [1, 1]), zeros(1))
             end if
          end do
       end if
@@ -488,22 +482,104 @@ contains
                   if (present(tangent)) tangent(dofs, dofs) = tangent(dofs, dofs) + kes
                   if (present(sparse)) call sparse%add_element(dofs, kes)
                end if
-               cs = 0
-               if (present(conv)) then
-                  omega = 0
-                  ka = 0
-                  if (sl%frame_a > 0) then
-                     omega = matmul(gs(7:9, :), v(dofs))
-                     ka = kappa(:, sl%frame_a)
-                  end if
-                  cs = slide_convective(ra, c%q(sl%dof), sl%offset, sl%axis, omega, ka, v(sl%dof))
-                  conv(dofs) = conv(dofs) + sl%kp*matmul(cs, ng)
-               end if
-               if (present(rate_load)) rate_load(dofs) = rate_load(dofs) + sl%kp*matmul(cs + matmul(ng, rate(dofs)), ng)
+               e = e + 1
+               if (present(operator)) operator%element(e) = element_rate_type(dofs, ng, sl%kp*identity(), zeros(3))
             end associate
          end do
       end if
    end subroutine assemble_spatial
+
+   !> The number of elements: beams, trusses and slides.
+   pure integer function element_count(m) result(ne)
+      type(spatial_mechanism_type), intent(in) :: m
+      ne = 0
+      if (allocated(m%beams)) ne = ne + size(m%beams)
+      if (allocated(m%trusses)) ne = ne + size(m%trusses)
+      if (allocated(m%slides)) ne = ne + size(m%slides)
+   end function element_count
+
+   pure function zeros(n) result(z)
+      integer, intent(in) :: n
+      real(dp) :: z(n)
+      z = 0
+   end function zeros
+
+   !> Each element's convective strain acceleration c (the second derivative
+   !> of its strains along q (+) s v, with the frames' curvature kappa from
+   !> frame_curvature) into op, built by assemble_spatial at configuration c
+   !> (the elements in its order: beams, trusses, slides).
+   pure subroutine convective_strains(m, c, v, kappa, op)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_configuration_type), intent(in) :: c
+      real(dp), intent(in) :: v(:), kappa(:, :)
+      type(strain_operator_type), intent(inout) :: op
+      real(dp) :: x(3, 2), r(3, 3, 2), nv(3, 2), nw(3, 2), na(3, 2), ra(3, 3), omega(3), ka(3)
+      integer :: i, n, p, fr, e
+      e = 0
+      if (allocated(m%beams)) then
+         do i = 1, size(m%beams)
+            e = e + 1
+            associate (dofs => op%element(e)%dofs)
+               do n = 1, 2
+                  p = m%nodes(m%beams(i)%nodes(n))%point
+                  fr = m%nodes(m%beams(i)%nodes(n))%frame
+                  x(:, n) = c%x(:, p)
+                  r(:, :, n) = c%r(:, :, fr)
+                  nv(:, n) = matmul(c%g(:, dofs, p), v(dofs))
+                  nw(:, n) = matmul(c%w(:, dofs, fr), v(dofs))
+                  na(:, n) = kappa(:, fr)
+               end do
+            end associate
+            op%element(e)%c = se3_beam_convective(x, r, nv, nw, na)
+         end do
+      end if
+      if (allocated(m%trusses)) then
+         do i = 1, size(m%trusses)
+            e = e + 1
+            associate (dofs => op%element(e)%dofs)
+               do n = 1, 2
+                  p = m%trusses(i)%points(n)
+                  x(:, n) = c%x(:, p)
+                  nv(:, n) = matmul(c%g(:, dofs, p), v(dofs))
+               end do
+            end associate
+            op%element(e)%c(1) = truss_convective(x, nv)
+         end do
+      end if
+      if (allocated(m%slides)) then
+         do i = 1, size(m%slides)
+            e = e + 1
+            associate (sl => m%slides(i), dofs => op%element(e)%dofs)
+               ra = identity()
+               omega = 0
+               ka = 0
+               if (sl%frame_a > 0) then
+                  ra = c%r(:, :, sl%frame_a)
+                  omega = matmul(c%w(:, dofs, sl%frame_a), v(dofs))
+                  ka = kappa(:, sl%frame_a)
+               end if
+               op%element(e)%c = slide_convective(ra, c%q(sl%dof), sl%offset, sl%axis, omega, ka, v(sl%dof))
+            end associate
+         end do
+      end if
+   end subroutine convective_strains
+
+   !> sum a^T w (a x + c) over op's elements, every dof's row: K x plus the
+   !> convective load, from each element's strain rate a x + c (the
+   !> square-root form: no global product K x, whose rounding carries the
+   !> squared condition number of k^1/2 B G into the rates).
+   pure function operator_load(op, x) result(y)
+      type(strain_operator_type), intent(in) :: op
+      real(dp), intent(in) :: x(:)
+      real(dp) :: y(size(x))
+      integer :: e
+      y = 0
+      do e = 1, size(op%element)
+         associate (el => op%element(e))
+            y(el%dofs) = y(el%dofs) + matmul(matmul(el%w, matmul(el%a, x(el%dofs)) + el%c), el%a)
+         end associate
+      end do
+   end function operator_load
 
    !> The dofs a slide's gap depends on: its points', its line frame's and its stroke.
    pure function slide_dofs(c, sl) result(dofs)
@@ -580,15 +656,16 @@ contains
 
    !> The rates at state s (configuration c, tangent kt assembled there and
    !> factored) given the drives' rates in v and second rates ad (zero at the
-   !> free dofs): v and a of every dof. Each
-   !> solve of the normal equations K_ff x_f = -K_fd x_d - l is refined once
-   !> with its residual computed in the square-root form, K x + l = sum G^T
-   !> B^T k (B (G x) + c) from each element's strain rate (assemble_spatial's
-   !> rate_load), not as the global product K x: the correction then carries
-   !> the condition number of k^1/2 B G_f, not its square (semi-normal
-   !> equations with a refinement step; the planar FEM's square B_f solve of
-   !> docs/hard-cases.md, section 7, does not apply: the spatial B_f of a
-   !> planar loop has more rows than columns, its redundant constraints).
+   !> free dofs): v and a of every dof. Each solve of the normal equations
+   !> K_ff x_f = -K_fd x_d - l takes its right-hand side and its refinements'
+   !> residuals in the square-root form, K x + l = sum G^T B^T k (B (G x) +
+   !> c) from each element's strain rate (the strain-rate operator of
+   !> assemble_spatial, the convective strains c of convective_strains),
+   !> not as the global product K x: the semi-normal equations with
+   !> refinements, whose error is kappa(k^1/2 B G_f) eps, not its square
+   !> (rates_solve). The planar FEM's square B_f solve of docs/hard-cases.md,
+   !> section 7, does not apply: the spatial B_f of a planar loop has more
+   !> rows than columns, its redundant constraints.
    subroutine spatial_rates_factored(m, s, c, kt, v, ad, a)
       type(spatial_mechanism_type), intent(in) :: m
       type(spatial_state_type), intent(in) :: s
@@ -597,31 +674,48 @@ contains
       real(dp), intent(in) :: ad(:)
       real(dp), intent(inout) :: v(:)
       real(dp), intent(out) :: a(:)
-      real(dp) :: res(m%ndof), conv(m%ndof), load(m%ndof), kappa(3, size(s%r, 3))
-      real(dp), allocatable :: rhs(:)
-      integer :: i
-      rhs = -kt%product(v)
-      call kt%solve(rhs)
-      v(kt%fdof) = rhs
-      do i = 1, rate_refinements
-         call assemble_spatial(m, c, res, rate=v, rate_load=load)
-         rhs = -load(kt%fdof)
-         call kt%solve(rhs)
-         v(kt%fdof) = v(kt%fdof) + rhs
-      end do
-      kappa = frame_curvature(m, s, c, v)
-      call assemble_spatial(m, c, res, v=v, kappa=kappa, conv=conv)
+      type(strain_operator_type) :: op
+      real(dp) :: res(m%ndof), scale(m%ndof)
+      scale = merge(1/m%length, 1.0_dp, m%is_length)
+      call assemble_spatial(m, c, res, operator=op)
+      call rates_solve(op, kt, scale, v)
+      call convective_strains(m, c, v, frame_curvature(m, s, c, v), op)
       a = ad
-      rhs = -kt%product(a) - conv(kt%fdof)
-      call kt%solve(rhs)
-      a(kt%fdof) = rhs
-      do i = 1, rate_refinements
-         call assemble_spatial(m, c, res, v=v, kappa=kappa, conv=conv, rate=a, rate_load=load)
+      call rates_solve(op, kt, scale, a)
+   end subroutine spatial_rates_factored
+
+   !> x_f of K_ff x_f = -(K_fd x_d + l), l the convective load of op (x_d:
+   !> x at the driven dofs; x_f is overwritten): the solve with kt's factor
+   !> of the residual operator_load(op, x) at x_f = 0, then refinements
+   !> x_f <- x_f - K_ff^-1 operator_load(op, x)_f. A solve with the factor
+   !> of K = A^T A (A = k^1/2 B G) errs by about kappa(A)^2 eps, so each
+   !> refinement multiplies the error by that until it reaches the residual's
+   !> own round-off, kappa(A) eps: with stiffnesses spread over k_max/k_min,
+   !> kappa(A)^2 grows with it, and one refinement is not enough beyond about
+   !> 1e9. The refinements stop when a correction is within refinement_floor
+   !> of the largest rate (lengths scaled by scale), when one does not shrink
+   !> (round-off reached: it is not applied), or after max_refinements.
+   pure subroutine rates_solve(op, kt, scale, x)
+      type(strain_operator_type), intent(in) :: op
+      type(spatial_tangent_type), intent(in) :: kt
+      real(dp), intent(in) :: scale(:)
+      real(dp), intent(inout) :: x(:)
+      real(dp), allocatable :: rhs(:)
+      real(dp) :: load(size(x)), size_now, size_last
+      integer :: pass
+      x(kt%fdof) = 0
+      size_last = huge(1.0_dp)
+      do pass = 0, max_refinements
+         load = operator_load(op, x)
          rhs = -load(kt%fdof)
          call kt%solve(rhs)
-         a(kt%fdof) = a(kt%fdof) + rhs
+         size_now = maxval(abs(rhs*scale(kt%fdof)))
+         if (pass > 0 .and. .not. size_now < size_last) return
+         x(kt%fdof) = x(kt%fdof) + rhs
+         if (pass > 0 .and. size_now <= refinement_floor*maxval(abs(x*scale))) return
+         size_last = size_now
       end do
-   end subroutine spatial_rates_factored
+   end subroutine rates_solve
 
    subroutine singular(error, dof, t)
       type(error_type), allocatable, intent(out) :: error
