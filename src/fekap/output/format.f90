@@ -104,7 +104,23 @@ contains
       integer, intent(inout) :: n
       integer, intent(in) :: i
       character(len=12) :: buffer
-      integer :: first, k
+      integer :: first, k, v, p
+      if (i >= 0) then
+         ! Its number of digits, then the digits from the last at their
+         ! places, in 32-bit arithmetic (no buffer and no copy).
+         k = 1
+         do while (k < 10)
+            if (i < power10(k)) exit
+            k = k + 1
+         end do
+         v = i
+         do p = n + k, n + 1, -1
+            line(p:p) = achar(iachar('0') + mod(v, 10))
+            v = v/10
+         end do
+         n = n + k
+         return
+      end if
       call integer_digits(i, buffer, first)
       ! A character at a time: a substring of variable length is a call of
       ! memmove, dearer than the few digits of a step number.
@@ -141,7 +157,27 @@ contains
       integer, intent(inout) :: n
       integer, intent(in) :: i, width
       character(len=12) :: buffer
-      integer :: first
+      integer :: first, v, p
+      ! A count or a step number (0 <= i < 10**8, width >= 8, or a single
+      ! digit): its digits from the field's end in 32-bit arithmetic, then
+      ! the blanks, each a character at a time (the general path makes the
+      ! digits in a buffer and copies them; twice the instructions).
+      if (i >= 0 .and. (i < 10 .and. width >= 1 .or. i < 100000000 .and. width >= 8)) then
+         v = i
+         p = n + width
+         do
+            line(p:p) = achar(iachar('0') + mod(v, 10))
+            v = v/10
+            p = p - 1
+            if (v == 0) exit
+         end do
+         do while (p > n)
+            line(p:p) = ' '
+            p = p - 1
+         end do
+         n = n + width
+         return
+      end if
       call integer_digits(i, buffer, first)
       call pad_and_put(line, n, buffer(first:), width)
    end subroutine append_i

@@ -82,7 +82,10 @@ contains
    !> in column `newest` (private, so that the predictor's loops inline it).
    pure integer function ring_column(newest, k) result(column)
       integer, intent(in) :: newest, k
-      column = modulo(newest - k, history_depth) + 1
+      ! modulo(newest - k, history_depth) + 1 for k = 1 .. history_depth
+      ! (a compare instead of modulo's division and sign correction).
+      column = newest - k + 1
+      if (column < 1) column = column + history_depth
    end function ring_column
 
    !> The extrapolation of the history to time t into qt, and which it was
@@ -142,7 +145,7 @@ contains
       integer :: i, k
       taken = .false.
       if (size(columns) < history_depth) return
-      call adams_weights(self%t, columns, t, beta, drop)
+      call full_adams_weights(self%t, columns, t, beta, drop)
       estimate = 0
       do i = 1, size(qt)
          qt(i) = self%q(i, columns(1))
@@ -261,6 +264,58 @@ contains
          drop(k) = integral/derivative
       end do
    end subroutine adams_weights
+
+   !> adams_weights through history_depth nodes (the only depth the
+   !> prediction takes): the same operations in the same order on arrays of
+   !> fixed size, which the compiler unrolls (adams_weights' loops of
+   !> run-time length cost three times their arithmetic). Each difference
+   !> t_k - t_m is formed once: t_m - t_k is its negative to the bit.
+   pure subroutine full_adams_weights(tk, columns, t, beta, drop)
+      real(dp), intent(in) :: tk(:), t
+      integer, intent(in) :: columns(history_depth)
+      real(dp), intent(out) :: beta(history_depth), drop(history_depth)
+      integer, parameter :: n = history_depth
+      ! Gauss points on [-1, 1] and weights as adams_weights' (3 points: n = 5).
+      real(dp), parameter :: xg(3) = [-sqrt(0.6_dp), 0.0_dp, sqrt(0.6_dp)]
+      real(dp), parameter :: wg(3) = [5.0_dp/9, 8.0_dp/9, 5.0_dp/9]
+      real(dp) :: nodes(n), tau(3), w_all(3), w_drop(3), half, derivative, integral, quadrature, gap(n, n)
+      integer :: k, m, g
+      do k = 1, n
+         nodes(k) = tk(columns(k))
+      end do
+      half = (t - nodes(1))/2
+      do g = 1, 3
+         tau(g) = nodes(1) + half*(1 + xg(g))
+         w_drop(g) = 1
+         do m = 1, n - 1
+            w_drop(g) = w_drop(g)*(tau(g) - nodes(m))
+         end do
+         w_all(g) = w_drop(g)*(tau(g) - nodes(n))
+      end do
+      integral = 0
+      do g = 1, 3
+         integral = integral + wg(g)*w_drop(g)
+      end do
+      integral = half*integral
+      do k = 1, n
+         do m = k + 1, n
+            gap(k, m) = nodes(k) - nodes(m)
+            gap(m, k) = -gap(k, m)
+         end do
+      end do
+      do k = 1, n
+         derivative = 1
+         do m = 1, n
+            if (m /= k) derivative = derivative*gap(k, m)
+         end do
+         quadrature = 0
+         do g = 1, 3
+            quadrature = quadrature + wg(g)*w_all(g)/(tau(g) - nodes(k))
+         end do
+         beta(k) = half*quadrature/derivative
+         drop(k) = integral/derivative
+      end do
+   end subroutine full_adams_weights
 
    !> Weights of the k-th position and velocity in the Hermite polynomial
    !> through the nodes tk(columns), at t: with the Lagrange basis polynomial l_k,

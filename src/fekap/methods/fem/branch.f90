@@ -41,6 +41,8 @@ module fekap_fem_branch
       !> (4, npairs): link ends hinged to each other (link, end, link, end),
       !> for the collinear crossings.
       integer, allocatable :: hinge_pairs(:, :)
+      !> The rotation dofs, in increasing order (the magnitude rule's).
+      integer, allocatable :: rotations(:)
    end type branch_check_type
 
 contains
@@ -57,6 +59,7 @@ contains
             & model%nodes(model%links(i)%node(1))%x))
       end do
       call find_hinge_pairs(model, mesh, self%hinge_pairs)
+      self%rotations = pack([(i, i=1, mesh%ndof)], mesh%dof_kind(1:mesh%ndof) == dof_rot)
    end subroutine new_branch_check
 
    !> The drive increment dd from q to qt (read off the driven dofs), and its
@@ -102,12 +105,12 @@ contains
       integer, intent(out) :: crossing(3)
       real(dp), intent(out) :: turn
       real(dp) :: ratio, worst
-      integer :: i, worst_dof, flip_link(2), flip_node
+      integer :: i, j, worst_dof, flip_link(2), flip_node
       character(len=200) :: msg
       worst = 0
       worst_dof = 0
-      do i = 1, mesh%ndof
-         if (mesh%dof_kind(i) /= dof_rot) cycle
+      do j = 1, size(self%rotations)
+         i = self%rotations(j)
          ratio = jump_bound_ratio(qt(i) - q(i), dq_old(i), dq_new(i), floor_)
          if (ratio > worst) then
             worst = ratio
