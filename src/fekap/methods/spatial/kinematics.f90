@@ -15,7 +15,7 @@
 !> dofs q: translations of free points (absolute, global axes), strokes of
 !> line points, joint angles (additive), and body rotation increments of free
 !> frames (their rotation matrices are the state, updated multiplicatively).
-!> The module is near 800 lines because the configuration (positions, dof
+!> The module is over 600 lines (near 800) because the configuration (positions, dof
 !> maps and the dofs each depends on), its assembly element by element and
 !> the solves that use them are one concept around one configuration type.
 module fekap_spatial_kinematics
