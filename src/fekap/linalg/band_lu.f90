@@ -66,7 +66,7 @@ contains
    !> sub- and ku superdiagonals whose entries can be at the places
    !> `possible` of their band storage ((2 kl + ku + 1, n); rows 1 to kl,
    !> the factor's fill, are ignored). The lists of the factor's places are
-   !> allocated by the first symbolic factorisation, for its counts.
+   !> allocated for the band's full count.
    pure subroutine new_band_lu_nonzeros(nz, kl, ku, possible)
       type(band_lu_nonzeros_type), intent(out) :: nz
       integer, intent(in) :: kl, ku
@@ -88,6 +88,9 @@ contains
       end do
       nz%entry_start(n + 1) = k + 1
       allocate (nz%pivot(n), nz%diagonal(n), nz%lower_start(n + 1), nz%upper_start(n + 1))
+      allocate (nz%lower_at(max(1, n*kl)), nz%lower_column(max(1, n*kl)), nz%lower_row(max(1, n*kl)), &
+         & nz%lower(max(1, n*kl)))
+      allocate (nz%upper_at(max(1, n*(kl + ku))), nz%upper_row(max(1, n*(kl + ku))), nz%upper(max(1, n*(kl + ku))))
    end subroutine new_band_lu_nonzeros
 
    !> The values of the factor in ab with pivots ipiv (dgbtrf's band
@@ -183,21 +186,6 @@ contains
             end if
          end do
       end do
-      ! The lists for these counts (kept while they are long enough).
-      nl = count(place(kv + 2:, :))
-      nu = count(place(1:kv, :))
-      if (.not. allocated(nz%lower)) then
-         allocate (nz%lower_at(0), nz%lower_column(0), nz%lower_row(0), nz%lower(0))
-         allocate (nz%upper_at(0), nz%upper_row(0), nz%upper(0))
-      end if
-      if (size(nz%lower) < nl) then
-         deallocate (nz%lower_at, nz%lower_column, nz%lower_row, nz%lower)
-         allocate (nz%lower_at(nl), nz%lower_column(nl), nz%lower_row(nl), nz%lower(nl))
-      end if
-      if (size(nz%upper) < nu) then
-         deallocate (nz%upper_at, nz%upper_row, nz%upper)
-         allocate (nz%upper_at(nu), nz%upper_row(nu), nz%upper(nu))
-      end if
       nl = 0
       nu = 0
       do j = 1, n
