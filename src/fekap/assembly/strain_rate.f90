@@ -12,7 +12,7 @@
 !> order (sorted by their least equation in the mesh's equation order), so
 !> that B_f is a band matrix with kl sub- and ku superdiagonals; LAPACK's
 !> dgbtrf factors it (its unblocked code dgbtf2 in loops for narrow bands);
-!> its solves are dgbtrs's, in loops.
+!> its solves are dgbtrs's, with the factor's nonzeros (fekap_linalg_band_lu).
 !>
 !> Two forms of B: at the strains of an iterate (the exact Jacobian of the
 !> strains, for Newton), and stress-free (the strains set to zero: it then
@@ -24,8 +24,8 @@
 !> rates' refinement step.
 !>
 !> The module is over 600 lines with one concept: B's assembly (its entries'
-!> destinations found once), its band LU, solves and condition estimate in
-!> loops, and the rates' residuals all work on B's band row order and storage.
+!> destinations found once), its band LU, solves and condition estimate,
+!> and the rates' residuals all work on B's band row order and storage.
 module fekap_assembly_strain_rate
    use, intrinsic :: iso_fortran_env, only: int64
    use fekap_kinds, only: dp
@@ -34,6 +34,8 @@ module fekap_assembly_strain_rate
    use fekap_assembly_tracking, only: slide_position
    use fekap_assembly_assemble, only: gather
    use fekap_linalg_lapack, only: band_lu_factor, band_lu_factor_loops, band_lu_blocked, norm_estimate_step
+   use fekap_linalg_band_lu, only: band_lu_nonzeros_type, new_band_lu_nonzeros, gather_nonzeros, nonzeros_solve, &
+      & nonzeros_solve_transposed
    implicit none
    private
 
@@ -74,6 +76,10 @@ module fekap_assembly_strain_rate
       !> (2 kl + ku + 1, n): B_f as dgbtrf stores it, then its LU factor.
       real(dp), allocatable :: ab(:, :)
       integer, allocatable :: ipiv(:)
+      !> The factor's nonzeros, which the solves take (gathered at each
+      !> factorisation), and the places where B_f can have entries
+      !> (entry_places; its entry_start and entry_at).
+      type(band_lu_nonzeros_type) :: nonzeros
       !> (n, ndriven): the columns of B on the driven dofs (B_d), by rows.
       real(dp), allocatable :: bd(:, :)
       !> (2, nelem): cos and sin of each element's section angle at the last
@@ -103,6 +109,9 @@ module fekap_assembly_strain_rate
       !> made there (0: none yet), for strain_rate_rcond_bounds.
       real(dp), allocatable :: unfactored(:, :), estimated(:, :)
       real(dp) :: inverse_norm = 0
+      !> ||B_f - B_0||_1 of the current factor's matrix B_f from that of the
+      !> last estimate, B_0, found at its factorisation (while unfactored_kept).
+      real(dp) :: distance = 0
       !> Whether unfactored, or estimated, holds the current factor's matrix.
       logical :: unfactored_kept = .false., estimate_current = .false.
    end type strain_rate_type
@@ -188,8 +197,41 @@ contains
          & self%slide_nm(3, nslide), source=0.0_dp)
       allocate (self%slide_dofs(6, nslide), source=0)
       call build_element_map(self, mesh)
+      ! B_f's places, for its factor's nonzeros and its column sizes (the
+      ! nonzeros' record keeps them: entry_start, entry_at).
+      call new_band_lu_nonzeros(self%nonzeros, self%kl, self%ku, entry_places(self))
       self%applies = .true.
    end subroutine new_strain_rate
+
+   !> Where B_f can have entries in its band storage: the elements' places
+   !> (element_map) and every place of a slideline's row in the band (its
+   !> dofs change with its segment). dgbtrf's blocked code, for wide bands,
+   !> is not the loops that fekap_linalg_band_lu's symbolic factorisation
+   !> follows: every place of the band there.
+   pure function entry_places(self) result(possible)
+      type(strain_rate_type), intent(in) :: self
+      logical, allocatable :: possible(:, :)
+      integer :: e, m, i, row, eq
+      allocate (possible(size(self%ab, 1), self%n), source=self%lu_blocked)
+      do e = 1, size(self%element_count, 2)
+         do m = 1, self%element_count(1, e)
+            call mark(possible, size(possible), self%element_map(2, m, e))
+         end do
+      end do
+      do i = 1, size(self%slide_row)
+         row = self%slide_row(i)
+         do eq = max(1, row - self%kl), min(self%n, row + self%ku)
+            possible(self%kl + self%ku + 1 + row - eq, eq) = .true.
+         end do
+      end do
+   contains
+      !> possible taken as one array: its place `at` marked.
+      pure subroutine mark(possible, size_of, at)
+         integer, intent(in) :: size_of, at
+         logical, intent(inout) :: possible(size_of)
+         possible(at) = .true.
+      end subroutine mark
+   end function entry_places
 
    !> The destinations of the elements' entries of B (element_map), from the
    !> band rows of their strains and the dofs' equations, once: the
@@ -387,6 +429,54 @@ contains
       a = 0
    end subroutine zero
 
+   !> b(1:n) = a(1:n) as one block (as zero).
+   pure subroutine copy(a, b, n)
+      integer, intent(in) :: n
+      real(dp), intent(in) :: a(n)
+      real(dp), intent(out) :: b(n)
+      b = a
+   end subroutine copy
+
+   !> The largest magnitude in each column of the band matrix ab (n
+   !> columns, taken as one array) and its 1-norm: each column's magnitudes
+   !> at its places (place_start, place: entry_places') summed from zero in
+   !> row order (the rest of the column is zero: the whole column's maxval
+   !> and sum to the bit); with b, also ||ab - b||_1 the same way (b zero
+   !> elsewhere too).
+   pure subroutine column_sizes(n, place_start, place, nab, ab, column_max, norm1, b, distance)
+      integer, intent(in) :: n, place_start(n + 1), place(place_start(n + 1) - 1), nab
+      real(dp), intent(in) :: ab(nab)
+      real(dp), intent(out) :: column_max(n), norm1
+      real(dp), intent(in), optional :: b(nab)
+      real(dp), intent(out), optional :: distance
+      real(dp) :: largest, total, a, column
+      integer :: j, k
+      norm1 = 0
+      if (present(distance)) distance = 0
+      do j = 1, n
+         largest = 0
+         total = 0
+         column = 0
+         if (present(b)) then
+            do k = place_start(j), place_start(j + 1) - 1
+               a = abs(ab(place(k)))
+               if (a > largest) largest = a
+               total = total + a
+               column = column + abs(ab(place(k)) - b(place(k)))
+            end do
+            if (column > distance) distance = column
+         else
+            do k = place_start(j), place_start(j + 1) - 1
+               a = abs(ab(place(k)))
+               if (a > largest) largest = a
+               total = total + a
+            end do
+         end if
+         column_max(j) = largest
+         if (total > norm1) norm1 = total
+      end do
+   end subroutine column_sizes
+
    !> Add an element's entries of B through its lists of destinations
    !> (element_map): nb into the band storage ab, then nd into B_d, each
    !> array taken in memory order.
@@ -424,23 +514,27 @@ contains
       end do
    end subroutine scatter_row
 
-   !> Band LU of the assembled B_f (dgbtrf), in place; info > 0: the band row
-   !> where U has a zero pivot (B_f singular).
+   !> Band LU of the assembled B_f (dgbtrf), in place, and its nonzeros
+   !> for the solves (gather_nonzeros); info > 0: the band row where U has
+   !> a zero pivot (B_f singular).
    subroutine factor_strain_rate(self, info)
       type(strain_rate_type), intent(inout) :: self
       integer, intent(out) :: info
       integer :: j, diagonal
       diagonal = self%kl + self%ku + 1
-      self%norm1 = 0
-      do j = 1, self%n
-         self%column_max(j) = maxval(abs(self%ab(:, j)))
-         self%norm1 = max(self%norm1, sum(abs(self%ab(:, j))))
-      end do
       ! The matrix kept for strain_rate_rcond_bounds and the next estimate
-      ! (rows 1 to kl are the factor's fill, zero here).
+      ! (rows 1 to kl are the factor's fill, zero here, as is the rest of
+      ! the storage outside the band).
       self%estimate_current = .false.
       self%unfactored_kept = allocated(self%unfactored)
-      if (self%unfactored_kept) self%unfactored(self%kl + 1:, :) = self%ab(self%kl + 1:, :)
+      if (self%unfactored_kept) then
+         call copy(self%ab, self%unfactored, size(self%ab))
+         call column_sizes(self%n, self%nonzeros%entry_start, self%nonzeros%entry_at, size(self%ab), self%ab, &
+            & self%column_max, self%norm1, self%estimated, self%distance)
+      else
+         call column_sizes(self%n, self%nonzeros%entry_start, self%nonzeros%entry_at, size(self%ab), self%ab, &
+            & self%column_max, self%norm1)
+      end if
       if (self%lu_blocked) then
          call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
       else
@@ -449,13 +543,14 @@ contains
       self%factored = info == 0
       self%pivot_ratio = 0
       if (.not. self%factored) return
+      call gather_nonzeros(self%nonzeros, self%ab, self%ipiv)
       self%pivot_ratio = huge(1.0_dp)
       do j = 1, self%n
          if (.not. self%column_max(j) > 0) then
             self%pivot_ratio = 0
             return
          end if
-         self%pivot_ratio = min(self%pivot_ratio, (abs(self%ab(diagonal, j))/self%column_max(j))**2)
+         self%pivot_ratio = min(self%pivot_ratio, (abs(self%nonzeros%diagonal(j))/self%column_max(j))**2)
       end do
    end subroutine factor_strain_rate
 
@@ -481,9 +576,9 @@ contains
             call norm_estimate_step(self%n, x, self%rcond_iwork, est, kase, isave)
             if (kase == 0) exit
             if (kase == 1) then
-               call band_lu_solve_loops(self%ab, self%kl, self%ku, self%ipiv, x)
+               call nonzeros_solve(self%nonzeros, x)
             else
-               call band_lu_solve_transposed_loops(self%ab, self%kl, self%ku, self%ipiv, x)
+               call nonzeros_solve_transposed(self%nonzeros, x)
             end if
          end do
       end associate
@@ -494,7 +589,10 @@ contains
          self%inverse_norm = 0
          if (.not. self%unfactored_kept) then
             ! The first estimate: later factorisations keep their matrices.
-            if (.not. allocated(self%unfactored)) allocate (self%estimated, self%unfactored, mold=self%ab)
+            if (.not. allocated(self%unfactored)) then
+               allocate (self%estimated(size(self%ab, 1), self%n), self%unfactored(size(self%ab, 1), self%n), &
+                  & source=0.0_dp)
+            end if
             return
          end if
          call swap(self%estimated, self%unfactored)
@@ -517,8 +615,7 @@ contains
    pure subroutine strain_rate_rcond_bounds(self, low, high)
       type(strain_rate_type), intent(in) :: self
       real(dp), intent(out) :: low, high
-      real(dp) :: reach, distance, column, limit
-      integer :: i, j
+      real(dp) :: reach, distance, limit
       low = 0
       high = huge(1.0_dp)
       if (.not. self%factored .or. .not. self%inverse_norm > 0 .or. .not. self%norm1 > 0) return
@@ -526,15 +623,9 @@ contains
       distance = 0
       if (.not. self%estimate_current) then
          if (.not. self%unfactored_kept) return
-         do j = 1, self%n
-            column = 0
-            do i = self%kl + 1, size(self%ab, 1)
-               column = column + abs(self%unfactored(i, j) - self%estimated(i, j))
-            end do
-            distance = max(distance, column)
-            ! Too far already: the rest of the matrix is not read.
-            if (distance >= limit) return
-         end do
+         ! Its distance, found at the factorisation; too far: not known.
+         distance = self%distance
+         if (distance >= limit) return
       end if
       reach = self%inverse_norm*distance
       low = ((1 - reach)/(self%norm1*self%inverse_norm))**2
@@ -549,95 +640,13 @@ contains
       call move_alloc(c, b)
    end subroutine swap
 
-   !> Solve B_f x = b with the factor (b by band rows in, x by equations out).
+   !> Solve B_f x = b with the factor's nonzeros (b by band rows in, x by
+   !> equations out): dgbtrs's operations in its order (fekap_linalg_band_lu).
    pure subroutine solve_strain_rate(self, x)
       type(strain_rate_type), intent(in) :: self
       real(dp), contiguous, intent(inout) :: x(:)
-      call band_lu_solve_loops(self%ab, self%kl, self%ku, self%ipiv, x)
+      call nonzeros_solve(self%nonzeros, x)
    end subroutine solve_strain_rate
-
-   !> Solve with the factor of dgbtrf as dgbtrs ('N') does, the same
-   !> operations in the same order (row interchanges and L's multipliers,
-   !> then back substitution with U as dtbsv), in loops: dgbtrs makes a BLAS
-   !> call per column, whose overhead exceeds the arithmetic of a band this
-   !> narrow (kl + ku = 12 for the scissor lift). Its inner loops, and the
-   !> transposed solve's, run a few times each: unrolled or vectorised, their
-   !> set-up would cost more than it saves (the directives below).
-   pure subroutine band_lu_solve_loops(ab, kl, ku, ipiv, b)
-      real(dp), contiguous, intent(in) :: ab(:, :)
-      integer, intent(in) :: kl, ku
-      integer, contiguous, intent(in) :: ipiv(:)
-      real(dp), contiguous, intent(inout) :: b(:)
-      real(dp) :: temp
-      integer :: n, kv, j, l, i
-      n = size(b)
-      kv = kl + ku
-      do j = 1, n - 1
-         l = ipiv(j)
-         temp = b(l)
-         if (l /= j) then
-            b(l) = b(j)
-            b(j) = temp
-         end if
-         !GCC$ unroll 1
-         !GCC$ novector
-         do i = 1, min(kl, n - j)
-            b(j + i) = b(j + i) - temp*ab(kv + 1 + i, j)
-         end do
-      end do
-      do j = n, 1, -1
-         b(j) = b(j)/ab(kv + 1, j)
-         temp = b(j)
-         !GCC$ unroll 1
-         !GCC$ novector
-         do i = j - 1, max(1, j - kv), -1
-            b(i) = b(i) - temp*ab(kv + 1 + i - j, j)
-         end do
-      end do
-   end subroutine band_lu_solve_loops
-
-   !> Solve with the transpose of the factor of dgbtrf as dgbtrs ('T') does,
-   !> the same operations in the same order (back substitution with U^T as
-   !> dtbsv, then L's multipliers as dgemv's dot products, each followed by
-   !> its row interchange), in loops, as band_lu_solve_loops.
-   pure subroutine band_lu_solve_transposed_loops(ab, kl, ku, ipiv, b)
-      real(dp), contiguous, intent(in) :: ab(:, :)
-      integer, intent(in) :: kl, ku
-      integer, contiguous, intent(in) :: ipiv(:)
-      real(dp), contiguous, intent(inout) :: b(:)
-      real(dp) :: temp
-      integer :: n, kv, j, l, i, lm
-      n = size(b)
-      kv = kl + ku
-      do j = 1, n
-         temp = b(j)
-         l = kv + 1 - j
-         !GCC$ unroll 1
-         !GCC$ novector
-         do i = max(1, j - kv), j - 1
-            temp = temp - ab(l + i, j)*b(i)
-         end do
-         b(j) = temp/ab(kv + 1, j)
-      end do
-      do j = n - 1, 1, -1
-         lm = min(kl, n - j)
-         if (lm > 0) then
-            temp = 0
-            !GCC$ unroll 1
-            !GCC$ novector
-            do i = 1, lm
-               temp = temp + b(j + i)*ab(kv + 1 + i, j)
-            end do
-            b(j) = b(j) + (-1.0_dp)*temp
-         end if
-         l = ipiv(j)
-         if (l /= j) then
-            temp = b(l)
-            b(l) = b(j)
-            b(j) = temp
-         end if
-      end do
-   end subroutine band_lu_solve_transposed_loops
 
    !> r = B v by band rows, the strain and gap rates of the velocities v over
    !> all dofs (zero on fixed dofs), with the stress-free B at the section

@@ -1,0 +1,330 @@
+!> The nonzero entries of a band LU factor (dgbtrf's, in its band storage)
+!> and the solves with them: the same operations in the same order as
+!> dgbtrs's ('N' and 'T'), less the products with entries of the factor
+!> that are zero whatever the matrix's values.
+!>
+!> Why: the strain-rate operator B_f of a mechanism has two to six entries
+!> in a row of a band kl + ku + 1 wide (Example 1: 9 equations, kl = ku = 3,
+!> 31 entries in the band's 51 places), and its factor keeps most of the
+!> band's zeros (Example 1: 14 of L's 21 places, 10 of U's 33). A solve in
+!> the band's loops spent most of its instructions on their index
+!> arithmetic and on products with zero; each factor of B_f serves six to
+!> eleven solves (the Newton correction, the drive response, two for each
+!> rate, the condition estimate's).
+!>
+!> Which places of the factor can hold a nonzero follows from the places
+!> of the matrix's entries (`entry_at`, the owner's, fixed for a mesh) and
+!> the pivots: a symbolic factorisation, the band LU's loops on booleans
+!> (symbolic_factor). It is made again only when the pivots change (along
+!> a motion they rarely do); a factorisation with the pivots of the last
+!> then only copies the values from those places (gather_nonzeros).
+!>
+!> What skipping a zero product changes: b - t*0 is b to the bit for every
+!> finite t, except that b = -0 becomes +0 when t*0 is -0 (IEEE 754's sign
+!> of an exact zero sum); a sum started at +0 that skips zero terms is the
+!> same to the bit. So the solutions are those of the band's loops to the
+!> bit, but for the sign of a component that is exactly zero (which
+!> dgbtrs's own BLAS calls, skipping a zero multiplier, do not keep either).
+!> A factor with an infinite or NaN entry is not a factor a solve is asked of.
+module fekap_linalg_band_lu
+   use fekap_kinds, only: dp
+   implicit none
+   private
+
+   public :: band_lu_nonzeros_type, new_band_lu_nonzeros, gather_nonzeros, nonzeros_solve, nonzeros_solve_transposed
+
+   !> The places of an n x n band LU factor that can hold a nonzero, for
+   !> the pivots of its last symbolic factorisation, and their values in
+   !> the last factor gathered.
+   type :: band_lu_nonzeros_type
+      integer :: n = 0, kl = 0, ku = 0
+      !> Where the matrix can have entries: places in its band storage taken
+      !> as one array, column after column (column j's at entry_start(j) to
+      !> entry_start(j + 1) - 1), rows in increasing order (below the fill).
+      integer, allocatable :: entry_start(:), entry_at(:)
+      !> Whether the lists below hold the places for `pivot`.
+      logical :: known = .false.
+      !> (n): the pivots (dgbtrf's ipiv) of the places below, and U's diagonal.
+      integer, allocatable :: pivot(:)
+      real(dp), allocatable :: diagonal(:)
+      !> L's multipliers, column after column (column j's at lower_start(j)
+      !> to lower_start(j + 1) - 1, in increasing row order): the value, its
+      !> place in the band storage taken as one array, its column (the row
+      !> of b it takes) and its row in the order of b after all of the
+      !> factor's row interchanges (see nonzeros_solve).
+      integer, allocatable :: lower_start(:), lower_at(:), lower_column(:), lower_row(:)
+      real(dp), allocatable :: lower(:)
+      !> U's columns above the diagonal the same way (rows in increasing
+      !> order; rows j - kl - ku to j - 1 of column j).
+      integer, allocatable :: upper_start(:), upper_at(:), upper_row(:)
+      real(dp), allocatable :: upper(:)
+   end type band_lu_nonzeros_type
+
+contains
+
+   !> The nonzeros' record of the factors of n x n band matrices with kl
+   !> sub- and ku superdiagonals whose entries can be at the places
+   !> `possible` of their band storage ((2 kl + ku + 1, n); rows 1 to kl,
+   !> the factor's fill, are ignored). The lists of the factor's places are
+   !> allocated for the band's full count.
+   pure subroutine new_band_lu_nonzeros(nz, kl, ku, possible)
+      type(band_lu_nonzeros_type), intent(out) :: nz
+      integer, intent(in) :: kl, ku
+      logical, intent(in) :: possible(:, :)
+      integer :: n, i, j, k
+      n = size(possible, 2)
+      nz%n = n
+      nz%kl = kl
+      nz%ku = ku
+      allocate (nz%entry_start(n + 1), nz%entry_at(count(possible(kl + 1:, :))))
+      k = 0
+      do j = 1, n
+         nz%entry_start(j) = k + 1
+         do i = kl + 1, size(possible, 1)
+            if (.not. possible(i, j)) cycle
+            k = k + 1
+            nz%entry_at(k) = i + (j - 1)*size(possible, 1)
+         end do
+      end do
+      nz%entry_start(n + 1) = k + 1
+      allocate (nz%pivot(n), nz%diagonal(n), nz%lower_start(n + 1), nz%upper_start(n + 1))
+      allocate (nz%lower_at(max(1, n*kl)), nz%lower_column(max(1, n*kl)), nz%lower_row(max(1, n*kl)), &
+         & nz%lower(max(1, n*kl)))
+      allocate (nz%upper_at(max(1, n*(kl + ku))), nz%upper_row(max(1, n*(kl + ku))), nz%upper(max(1, n*(kl + ku))))
+   end subroutine new_band_lu_nonzeros
+
+   !> The values of the factor in ab with pivots ipiv (dgbtrf's band
+   !> storage: A(i, j) at ab(kl + ku + 1 + i - j, j), L's multipliers below
+   !> row kl + ku + 1) at the places that can hold a nonzero, found again
+   !> (symbolic_factor) if the pivots are not those of the last.
+   pure subroutine gather_nonzeros(nz, ab, ipiv)
+      type(band_lu_nonzeros_type), intent(inout) :: nz
+      real(dp), contiguous, intent(in) :: ab(:, :)
+      integer, contiguous, intent(in) :: ipiv(:)
+      integer :: j
+      if (nz%known) then
+         do j = 1, nz%n
+            if (ipiv(j) /= nz%pivot(j)) then
+               nz%known = .false.
+               exit
+            end if
+         end do
+      end if
+      if (.not. nz%known) then
+         call symbolic_factor(nz, ipiv)
+         nz%known = .true.
+      end if
+      call gather_values(nz%n, nz%kl + nz%ku, size(ab, 1), ab, nz%lower_start(nz%n + 1) - 1, nz%lower_at, &
+         & nz%upper_start(nz%n + 1) - 1, nz%upper_at, nz%diagonal, nz%lower, nz%upper)
+   end subroutine gather_nonzeros
+
+   !> The values at the places found (explicit-shape arrays: their
+   !> addresses without a descriptor's arithmetic).
+   pure subroutine gather_values(n, kv, ldab, ab, nl, lower_at, nu, upper_at, diagonal, lower, upper)
+      integer, intent(in) :: n, kv, ldab, nl, lower_at(nl), nu, upper_at(nu)
+      real(dp), intent(in) :: ab(ldab*n)
+      real(dp), intent(out) :: diagonal(n), lower(nl), upper(nu)
+      integer :: j, k
+      do j = 1, n
+         diagonal(j) = ab(kv + 1 + (j - 1)*ldab)
+      end do
+      do k = 1, nl
+         lower(k) = ab(lower_at(k))
+      end do
+      do k = 1, nu
+         upper(k) = ab(upper_at(k))
+      end do
+   end subroutine gather_values
+
+   !> The places of the factor that can hold a nonzero for the pivots ipiv:
+   !> the band LU's loops (fekap_linalg_lapack's band_lu_factor_loops,
+   !> dgbtf2's) on where values can be, with the given pivots: an
+   !> interchange swaps the places of its rows over columns j to ju, and an
+   !> update fills the places of column j + jj below row j where column j
+   !> has a multiplier and row j an entry of U in that column (a superset
+   !> of dgbtf2's, which skips a zero entry of U: every other place of its
+   !> factor is exactly zero). Then the lists, L's rows renumbered: the
+   !> interchange of column j's elimination (rows j and ipiv(j)) comes
+   !> before its multipliers are applied and after column j - 1's, and it
+   !> moves rows below j only after column j's; so with every interchange
+   !> made first, row r of column j's elimination is row final(r) of the
+   !> interchanged b, final being the composition of the interchanges of
+   !> columns j + 1 to n - 1 (row j itself, and the rows above, are not
+   !> moved by them).
+   pure subroutine symbolic_factor(nz, ipiv)
+      type(band_lu_nonzeros_type), intent(inout) :: nz
+      integer, contiguous, intent(in) :: ipiv(:)
+      logical, allocatable :: place(:, :)
+      logical :: swap
+      integer, allocatable :: final(:)
+      integer :: n, kl, ku, kv, ldab, i, j, jj, jp, ju, km, nl, nu, k, moved
+      n = nz%n
+      kl = nz%kl
+      ku = nz%ku
+      kv = kl + ku
+      ldab = 2*kl + ku + 1
+      allocate (place(ldab, n), source=.false.)
+      call mark_entries(size(place), place, nz%entry_at)
+      nz%pivot = ipiv
+      ju = 1
+      do j = 1, n
+         km = min(kl, n - j)
+         jp = ipiv(j) - j + 1
+         ju = max(ju, min(j + ku + jp - 1, n))
+         if (jp /= 1) then
+            do jj = 0, ju - j
+               swap = place(kv + jp - jj, j + jj)
+               place(kv + jp - jj, j + jj) = place(kv + 1 - jj, j + jj)
+               place(kv + 1 - jj, j + jj) = swap
+            end do
+         end if
+         do jj = 1, ju - j
+            if (place(kv + 1 - jj, j + jj)) then
+               do i = 1, km
+                  place(kv + 1 + i - jj, j + jj) = place(kv + 1 + i - jj, j + jj) .or. place(kv + 1 + i, j)
+               end do
+            end if
+         end do
+      end do
+      nl = 0
+      nu = 0
+      do j = 1, n
+         nz%lower_start(j) = nl + 1
+         nz%upper_start(j) = nu + 1
+         do i = max(1, j - kv), j - 1
+            if (place(kv + 1 + i - j, j)) then
+               nu = nu + 1
+               nz%upper_row(nu) = i
+               nz%upper_at(nu) = kv + 1 + i - j + (j - 1)*ldab
+            end if
+         end do
+         do i = 1, min(kl, n - j)
+            if (place(kv + 1 + i, j)) then
+               nl = nl + 1
+               nz%lower_column(nl) = j
+               nz%lower_row(nl) = j + i
+               nz%lower_at(nl) = kv + 1 + i + (j - 1)*ldab
+            end if
+         end do
+      end do
+      nz%lower_start(n + 1) = nl + 1
+      nz%upper_start(n + 1) = nu + 1
+      ! The rows in the order after every interchange, from the last column back.
+      final = [(i, i=1, n)]
+      do j = n - 1, 1, -1
+         do k = nz%lower_start(j), nz%lower_start(j + 1) - 1
+            nz%lower_row(k) = final(nz%lower_row(k))
+         end do
+         if (ipiv(j) /= j) then
+            moved = final(j)
+            final(j) = final(ipiv(j))
+            final(ipiv(j)) = moved
+         end if
+      end do
+   end subroutine symbolic_factor
+
+   !> place (taken as one array) true at the places `at`.
+   pure subroutine mark_entries(size_of, place, at)
+      integer, intent(in) :: size_of, at(:)
+      logical, intent(inout) :: place(size_of)
+      integer :: k
+      do k = 1, size(at)
+         place(at(k)) = .true.
+      end do
+   end subroutine mark_entries
+
+   !> Solve A x = b with the factor's nonzeros as dgbtrs ('N') does: each
+   !> column's row interchange and L's multipliers (all interchanges made
+   !> first, the multipliers then applied to the rows renumbered so:
+   !> symbolic_factor), then back substitution with U column by column
+   !> (dtbsv); b becomes x. The factor's values are those gathered last.
+   pure subroutine nonzeros_solve(nz, b)
+      type(band_lu_nonzeros_type), intent(in) :: nz
+      real(dp), contiguous, intent(inout) :: b(:)
+      call solve_kernel(nz%n, nz%lower_start(nz%n + 1) - 1, nz%upper_start(nz%n + 1) - 1, nz%pivot, nz%lower_column, &
+         & nz%lower_row, nz%lower, nz%upper_start, nz%upper_row, nz%upper, nz%diagonal, b)
+   end subroutine nonzeros_solve
+
+   !> nonzeros_solve on explicit-shape arrays.
+   pure subroutine solve_kernel(n, nl, nu, pivot, lower_column, lower_row, lower, upper_start, upper_row, upper, &
+      & diagonal, b)
+      integer, intent(in) :: n, nl, nu, pivot(n), lower_column(nl), lower_row(nl), upper_start(n + 1), upper_row(nu)
+      real(dp), intent(in) :: lower(nl), upper(nu), diagonal(n)
+      real(dp), intent(inout) :: b(n)
+      real(dp) :: temp
+      integer :: j, l, k
+      do j = 1, n - 1
+         l = pivot(j)
+         if (l /= j) then
+            temp = b(l)
+            b(l) = b(j)
+            b(j) = temp
+         end if
+      end do
+      !GCC$ unroll 1
+      !GCC$ novector
+      do k = 1, nl
+         b(lower_row(k)) = b(lower_row(k)) - b(lower_column(k))*lower(k)
+      end do
+      do j = n, 1, -1
+         b(j) = b(j)/diagonal(j)
+         temp = b(j)
+         !GCC$ unroll 1
+         !GCC$ novector
+         do k = upper_start(j), upper_start(j + 1) - 1
+            b(upper_row(k)) = b(upper_row(k)) - temp*upper(k)
+         end do
+      end do
+   end subroutine solve_kernel
+
+   !> Solve A^T x = b with the factor's nonzeros as dgbtrs ('T') does:
+   !> U^T's substitution (dtbsv's dot products, rows in increasing order),
+   !> then L's multipliers as dgemv's dot products in increasing row order,
+   !> each followed by its row interchange (here all interchanges last, the
+   !> rows read renumbered as in nonzeros_solve); b becomes x.
+   pure subroutine nonzeros_solve_transposed(nz, b)
+      type(band_lu_nonzeros_type), intent(in) :: nz
+      real(dp), contiguous, intent(inout) :: b(:)
+      call solve_transposed_kernel(nz%n, nz%lower_start(nz%n + 1) - 1, nz%upper_start(nz%n + 1) - 1, nz%pivot, &
+         & nz%lower_start, nz%lower_row, nz%lower, nz%upper_start, nz%upper_row, nz%upper, nz%diagonal, b)
+   end subroutine nonzeros_solve_transposed
+
+   !> nonzeros_solve_transposed on explicit-shape arrays.
+   pure subroutine solve_transposed_kernel(n, nl, nu, pivot, lower_start, lower_row, lower, upper_start, upper_row, &
+      & upper, diagonal, b)
+      integer, intent(in) :: n, nl, nu, pivot(n), lower_start(n + 1), lower_row(nl), upper_start(n + 1), upper_row(nu)
+      real(dp), intent(in) :: lower(nl), upper(nu), diagonal(n)
+      real(dp), intent(inout) :: b(n)
+      real(dp) :: temp
+      integer :: j, l, k
+      do j = 1, n
+         temp = b(j)
+         !GCC$ unroll 1
+         !GCC$ novector
+         do k = upper_start(j), upper_start(j + 1) - 1
+            temp = temp - upper(k)*b(upper_row(k))
+         end do
+         b(j) = temp/diagonal(j)
+      end do
+      do j = n - 1, 1, -1
+         if (lower_start(j + 1) > lower_start(j)) then
+            temp = 0
+            !GCC$ unroll 1
+            !GCC$ novector
+            do k = lower_start(j), lower_start(j + 1) - 1
+               temp = temp + b(lower_row(k))*lower(k)
+            end do
+            b(j) = b(j) + (-1.0_dp)*temp
+         end if
+      end do
+      do j = n - 1, 1, -1
+         l = pivot(j)
+         if (l /= j) then
+            temp = b(l)
+            b(l) = b(j)
+            b(j) = temp
+         end if
+      end do
+   end subroutine solve_transposed_kernel
+
+end module fekap_linalg_band_lu
