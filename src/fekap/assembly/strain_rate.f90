@@ -103,11 +103,12 @@ module fekap_assembly_strain_rate
       real(dp) :: norm1 = 0
       real(dp), allocatable :: rcond_work(:)
       integer, allocatable :: rcond_iwork(:)
-      !> B_f as assembled (before its factorisation; its rows from kl + 1)
-      !> at the last factorisation and at the last condition estimate
-      !> (allocated on the first estimate), and the estimate of ||B_f^-1||_1
-      !> made there (0: none yet), for strain_rate_rcond_bounds.
-      real(dp), allocatable :: unfactored(:, :), estimated(:, :)
+      !> B_f as assembled (before its factorisation), at its places only
+      !> (nonzeros' entry_at, in their order: B_f is zero elsewhere), at the
+      !> last factorisation and at the last condition estimate (allocated on
+      !> the first estimate), and the estimate of ||B_f^-1||_1 made there (0:
+      !> none yet), for strain_rate_rcond_bounds.
+      real(dp), allocatable :: unfactored(:), estimated(:)
       real(dp) :: inverse_norm = 0
       !> ||B_f - B_0||_1 of the current factor's matrix B_f from that of the
       !> last estimate, B_0, found at its factorisation (while unfactored_kept).
@@ -430,24 +431,28 @@ contains
    end subroutine zero
 
    !> b(1:n) = a(1:n) as one block (as zero).
-   pure subroutine copy(a, b, n)
-      integer, intent(in) :: n
-      real(dp), intent(in) :: a(n)
-      real(dp), intent(out) :: b(n)
-      b = a
-   end subroutine copy
+   !> b(k) = a(place(k)): the band storage a, taken as one array, at the places.
+   pure subroutine gather_places(nab, a, place, b)
+      integer, intent(in) :: nab, place(:)
+      real(dp), intent(in) :: a(nab)
+      real(dp), intent(out) :: b(size(place))
+      integer :: k
+      do k = 1, size(place)
+         b(k) = a(place(k))
+      end do
+   end subroutine gather_places
 
    !> The largest magnitude in each column of the band matrix ab (n
    !> columns, taken as one array) and its 1-norm: each column's magnitudes
    !> at its places (place_start, place: entry_places') summed from zero in
    !> row order (the rest of the column is zero: the whole column's maxval
-   !> and sum to the bit); with b, also ||ab - b||_1 the same way (b zero
-   !> elsewhere too).
+   !> and sum to the bit); with b, B_0 at the same places (gather_places),
+   !> also ||ab - B_0||_1 the same way (B_0 zero elsewhere too).
    pure subroutine column_sizes(n, place_start, place, nab, ab, column_max, norm1, b, distance)
       integer, intent(in) :: n, place_start(n + 1), place(place_start(n + 1) - 1), nab
       real(dp), intent(in) :: ab(nab)
       real(dp), intent(out) :: column_max(n), norm1
-      real(dp), intent(in), optional :: b(nab)
+      real(dp), intent(in), optional :: b(place_start(n + 1) - 1)
       real(dp), intent(out), optional :: distance
       real(dp) :: largest, total, a, column
       integer :: j, k
@@ -462,7 +467,7 @@ contains
                a = abs(ab(place(k)))
                if (a > largest) largest = a
                total = total + a
-               column = column + abs(ab(place(k)) - b(place(k)))
+               column = column + abs(ab(place(k)) - b(k))
             end do
             if (column > distance) distance = column
          else
@@ -528,7 +533,7 @@ contains
       self%estimate_current = .false.
       self%unfactored_kept = allocated(self%unfactored)
       if (self%unfactored_kept) then
-         call copy(self%ab, self%unfactored, size(self%ab))
+         call gather_places(size(self%ab), self%ab, self%nonzeros%entry_at, self%unfactored)
          call column_sizes(self%n, self%nonzeros%entry_start, self%nonzeros%entry_at, size(self%ab), self%ab, &
             & self%column_max, self%norm1, self%estimated, self%distance)
       else
@@ -590,8 +595,8 @@ contains
          if (.not. self%unfactored_kept) then
             ! The first estimate: later factorisations keep their matrices.
             if (.not. allocated(self%unfactored)) then
-               allocate (self%estimated(size(self%ab, 1), self%n), self%unfactored(size(self%ab, 1), self%n), &
-                  & source=0.0_dp)
+               allocate (self%estimated(size(self%nonzeros%entry_at)), &
+                  & self%unfactored(size(self%nonzeros%entry_at)), source=0.0_dp)
             end if
             return
          end if
@@ -633,8 +638,8 @@ contains
    end subroutine strain_rate_rcond_bounds
 
    pure subroutine swap(a, b)
-      real(dp), allocatable, intent(inout) :: a(:, :), b(:, :)
-      real(dp), allocatable :: c(:, :)
+      real(dp), allocatable, intent(inout) :: a(:), b(:)
+      real(dp), allocatable :: c(:)
       call move_alloc(a, c)
       call move_alloc(b, a)
       call move_alloc(c, b)
