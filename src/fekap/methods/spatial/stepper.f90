@@ -346,12 +346,8 @@ contains
             if (converged) call check_jump(self, saved, t_try, predicted, .false., verify, depth, verdict, why, crossing, turn)
             converged = converged .and. verdict /= jump_reject .and. verdict /= jump_unverifiable
             if (.not. converged .and. detect .and. cuts == 0) then
-               found = change_verdict(self%least_rcond, self%reference_rcond) /= change_regular
-               if (found) then
-                  self%predictor_rcond = self%least_rcond
-                  call restore(self, saved)
-                  return
-               end if
+               call stop_at_change_point(self, saved, self%least_rcond, found)
+               if (found) return
             end if
          end if
          if (verdict == jump_unverifiable) then
@@ -364,12 +360,8 @@ contains
             ! A predictor far from a change point (j and k off) may still
             ! converge onto it, slowly: a run's step whose configuration has a
             ! near-singular tangent is stepped over as well.
-            found = change_verdict(self%try_rcond, self%reference_rcond) /= change_regular
-            if (found) then
-               self%predictor_rcond = self%try_rcond
-               call restore(self, saved)
-               return
-            end if
+            call stop_at_change_point(self, saved, self%try_rcond, found)
+            if (found) return
          end if
          if (converged) then
             self%t = t_try
@@ -671,6 +663,21 @@ contains
    end function snapshot
 
    !> Make x the accepted configuration again.
+   !> Whether a tangent of the step's reciprocal condition rcond marks a
+   !> change point against the run's best (change_verdict); if so, the state
+   !> before the step (saved) is restored and rcond kept as the predictor's,
+   !> for the step over the change point (step_over).
+   subroutine stop_at_change_point(self, saved, rcond, found)
+      type(spatial_stepper_type), intent(inout) :: self
+      type(accepted_type), intent(in) :: saved
+      real(dp), intent(in) :: rcond
+      logical, intent(out) :: found
+      found = change_verdict(rcond, self%reference_rcond) /= change_regular
+      if (.not. found) return
+      self%predictor_rcond = rcond
+      call restore(self, saved)
+   end subroutine stop_at_change_point
+
    subroutine restore(self, x)
       type(spatial_stepper_type), intent(inout) :: self
       type(accepted_type), intent(in) :: x
