@@ -556,6 +556,24 @@ def test_scissor_rates_match_closed_form(cells):
     check("stationary" not in listing(out), f"scissor {cells}: a spurious near-singular note")
 
 
+@pytest.mark.parametrize("cells", (10, 100))
+def test_scissor_factorisations_per_step(cells):
+    """Issue #29: a step of the scissor lift stops on Newton's estimate, and
+    the stop is checked with the stress-free factor of B_f at the converged
+    configuration, which then serves the branch check and the rates: B_f is
+    factored once per Newton iteration and once at each converged
+    configuration (and once at the start), not again for the check (three a
+    step before: 301 for N = 10's 100 steps)."""
+    out, _ = run_case(f"decks/hard/scissor-{cells}.deck")
+    iterations, cuts = work(out)
+    steps = len(read_rows(out / "steps.csv")) - 1
+    found = re.search(r"LU factorisations of B_f\s+(\d+)", listing(out))
+    check(found is not None, f"scissor {cells}: no count of B_f's factorisations in the listing")
+    factorisations = int(found.group(1))
+    check(cuts == 0 and factorisations <= 1 + iterations + steps,
+          f"scissor {cells}: {factorisations} factorisations of B_f for {iterations} iterations in {steps} steps")
+
+
 def test_scissor_deck_is_the_script_output():
     """The committed scissor decks are what python/fekap/models/scissor.py writes (so a
     larger one made by the script is the same mechanism)."""

@@ -41,6 +41,7 @@ module fekap_fem
    use fekap_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
    use fekap_fem_fill, only: interpolate_fill, finish_fill, filled_state, next_output_time
    use fekap_fem_newton, only: fem_newton_type, fem_contract
+   use fekap_fem_rates, only: near_singular_drop
    use fekap_fem_branch, only: branch_accept, branch_verify, branch_unverifiable
    use fekap_fem_determinacy, only: check_free_motion
    use fekap_assembly_strain_rate, only: rate_geometry_at
@@ -411,8 +412,25 @@ contains
             if (self%root_form) then
                ! The estimate is checked by one more correction of B_f; then the
                ! factor of the stress-free B_f at qt serves as K's does below.
+               ! The check is made first with that factor (B_f stress-free at
+               ! qt, eps the residual): where B_f is regular there (its pivot
+               ! ratio not near singular against the run's best), a correction
+               ! within the margin leaves qt as it is, and the factor is the
+               ! rates' (no second assembly and factorisation of B_f).
+               ! Otherwise it is made again with Newton's B_f (the strains'
+               ! exact gradient), whose correction is the one applied: near a
+               ! singular B_f the two corrections can fall on either side of
+               ! the margin.
                root_solved = .false.
-               if (newton%by_estimate) call root_correction(self, qt, .true., correction, root_solved)
+               if (newton%by_estimate) then
+                  call root_correction(self, qt, .true., correction, root_solved, system%section)
+                  if (root_solved .and. correction <= estimate_margin*self%conv%length .and. &
+                     & self%root%pivot_ratio >= near_singular_drop*self%state%reference_pivot) then
+                     info = 0
+                     exit verification
+                  end if
+                  call root_correction(self, qt, .true., correction, root_solved)
+               end if
                if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
                   call factor_root(self, qt, self%seg, info, system%section)
                   exit verification

@@ -72,16 +72,26 @@ contains
    !> B the exact gradient of the strains and gaps eps at qt (assembled here,
    !> or by newton_assembly with eps in root_work), into the system's
    !> right-hand side (as newton_correction), and its length; solved =
-   !> .false. if B_f is singular there (the caller uses K).
-   subroutine root_correction(self, qt, assemble, correction, solved)
+   !> .false. if B_f is singular there (the caller uses K). With `section`
+   !> (assemble only): B_f stress-free instead, with the sections of the
+   !> system's last assembly at qt, so that its factor is factor_root's at
+   !> qt to the bit (the rates' factor) and eps is still the residual.
+   subroutine root_correction(self, qt, assemble, correction, solved, section)
       class(fem_core_type), intent(inout) :: self
       real(dp), contiguous, intent(in) :: qt(:)
       logical, intent(in) :: assemble
       real(dp), intent(out) :: correction
       logical, intent(out) :: solved
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
       integer :: info, k
       correction = 0
-      if (assemble) call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
+      if (assemble) then
+         if (present(section)) then
+            call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .true., self%root_work, section=section)
+         else
+            call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
+         end if
+      end if
       call timed_root_factor(self, info)
       solved = info == 0
       if (.not. solved) return
