@@ -32,7 +32,8 @@ module fekap_spatial_mechanism
    private
 
    public :: spatial_mechanism_type, add_point, add_frame, add_node, add_beam, add_truss, add_drive
-   public :: add_spherical, add_revolute, add_universal, add_slide, add_slide_segment, slide_on_segment
+   public :: add_spherical, add_revolute, add_universal, add_slide, add_slide_segment, slide_on_segment, &
+      & passes_a_segment_end
 
    !> Kinds of point: fixed (no dof), free (3 translations), on a ground line (1).
    integer, parameter, public :: point_fixed = 0, point_free = 1, point_line = 2
@@ -410,11 +411,7 @@ contains
          on = sl
          return
       end if
-      k = size(sl%seg_start)
-      do while (k > 1)
-         if (s >= sl%seg_start(k)) exit
-         k = k - 1
-      end do
+      k = segment_of(sl, s)
       on%point_a = sl%seg_point(k)
       on%frame_a = sl%seg_frame(k)
       on%point_b = sl%point_b
@@ -423,6 +420,36 @@ contains
       on%axis = sl%seg_axis(:, k)
       on%kp = sl%kp
    end function slide_on_segment
+
+   !> The segment of slide sl's line that holds stroke s (1 for a line of one).
+   pure integer function segment_of(sl, s) result(k)
+      type(spatial_slide_type), intent(in) :: sl
+      real(dp), intent(in) :: s
+      k = 1
+      if (.not. allocated(sl%seg_start)) return
+      k = size(sl%seg_start)
+      do while (k > 1)
+         if (s >= sl%seg_start(k)) exit
+         k = k - 1
+      end do
+   end function segment_of
+
+   !> Whether some slide of m is on another segment of its line at the dofs
+   !> q + dq than at q (lines of one segment never are): the slider's path
+   !> has a corner between, where its rates jump.
+   pure logical function passes_a_segment_end(m, q, dq) result(passes)
+      type(spatial_mechanism_type), intent(in) :: m
+      real(dp), intent(in) :: q(:), dq(:)
+      integer :: i
+      passes = .false.
+      if (.not. allocated(m%slides)) return
+      do i = 1, size(m%slides)
+         associate (sl => m%slides(i))
+            if (.not. allocated(sl%seg_start)) cycle
+            if (segment_of(sl, q(sl%dof)) /= segment_of(sl, q(sl%dof) + dq(sl%dof))) passes = .true.
+         end associate
+      end do
+   end function passes_a_segment_end
 
    !> Prescribe dof by a time law (a revolute frame's angle: its frame%dof;
    !> a line point's stroke: its point%dof).
