@@ -281,10 +281,17 @@ END
 """
 
 
+# hard/slider-over-hinge with its line's links meshed (GH 3 elements, HK 2)
+# and HK written from K to H: the line's segments are the elements, in order.
+LINE_MESHED = (ROOT / "decks/hard/slider-over-hinge.deck").read_text().replace(
+    "  GH  G   H   bar ", "  GH  G   H   bar  3").replace("  HK  H   K   bar ", "  HK  K   H   bar  2")
+
+
 @pytest.mark.parametrize("name,text", [("roller", ROLLER), ("prismatic-guide", PRISMATIC_GUIDE),
                                        ("roller-clamp", ROLLER_CLAMP),
                                        ("clamped-meshed", CLAMPED_MESHED),
-                                       ("prismatic-on-link", PRISMATIC_ON_LINK)])
+                                       ("prismatic-on-link", PRISMATIC_ON_LINK),
+                                       ("line-meshed", LINE_MESHED)])
 def test_joints_of_other_decks_match_planar(tmp_path, name, text):
     deck = tmp_path / f"{name}.deck"
     deck.write_text(text)
@@ -298,6 +305,7 @@ def test_joints_of_other_decks_match_planar(tmp_path, name, text):
     check(err["vz"] <= OUT_OF_PLANE_TOL and err["az"] <= OUT_OF_PLANE_TOL, f"{name}: {err}")
     # The motion is not trivial: every tracked point off the ground moves.
     p = table(planar)
+    check(name != "line-meshed" or "bar  3" in text and "K   H   bar  2" in text, "the meshed line's deck")
     for point in set(p["point"]) - ({"A", "D"} if name == "clamped-meshed" else {"O"}):
         rows = p["point"] == point
         check(np.ptp(p["x"][rows]) + np.ptp(p["y"][rows]) > 0.1, f"{name}: {point} does not move")
@@ -455,3 +463,27 @@ def test_prismatic_slider_on_several_links_is_refused(tmp_path):
                                  "only: slideline line ties the angle of link AS"), done.stderr)
     check("make it a pin slider" in done.stderr, done.stderr)
     check(not out.exists(), f"{out} was written")
+
+
+def test_first_master_link_written_towards_the_second(tmp_path, runs):
+    """The planar slideline takes the first link of its line from its end
+    away from the second, however the link is written: hard/slider-over-hinge
+    with GH written from H to G (driven at H by the same angle, turned by pi)
+    gives the deck's points (before, its chain ran from H to G and on from H
+    to K, and the run stopped where S passed H: the slave left its line)."""
+    text = (ROOT / OVER_HINGE).read_text()
+    for old, new in (("  GH  G   H   bar ", "  HG  H   G   bar "), ("on GH HK", "on HG HK"),
+                     ("rotation GH   harmonic 12*deg", "rotation HG   harmonic 192*deg")):
+        check(old in text, f"the deck's line {old!r}")
+        text = text.replace(old, new)
+    deck = tmp_path / "reversed.deck"
+    deck.write_text(text)
+    done = run_fekap("-q", "-o", str(tmp_path / "out"), str(deck))
+    check(done.returncode == 0, f"exit {done.returncode}: {done.stderr}")
+    planar, _, _ = runs(OVER_HINGE)
+    p, r = table(planar), table(tmp_path / "out")
+    check(list(p["point"]) == list(r["point"]) and np.array_equal(p["t"], r["t"]), "other rows")
+    for cols, tol in ((("x", "y"), POSITION_TOL), (("vx", "vy"), RATE_TOL), (("ax", "ay"), RATE_TOL)):
+        scale = max(np.max(np.abs(p[c])) for c in cols)
+        err = max(np.max(np.abs(p[c] - r[c])) for c in cols) / scale
+        check(err <= tol, f"{cols}: {err:.2e} of the largest off the deck's run")
