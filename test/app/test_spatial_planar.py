@@ -7,10 +7,13 @@ redundant constraints (a planar loop of revolute joints about parallel axes
 has three in 3D) included. Besides the decks: a roller with an x drive, a
 prismatic ground guide, a clamp, a meshed link, a prismatic slider on a
 moving link, each against its planar run; and what --spatial refuses
-(kinetostatics, statics, dynamics, a rotation drive at a hinge), each an
-input error that names the deck (and its line) with nothing written. The
-sliders on moving links (quick-return, quick-return-meshed-lever,
-slider-meshed-guide) run as spatial slides (fekap_spatial_slideline)."""
+(kinetostatics, statics, dynamics, a rotation drive at a hinge, a prismatic
+slider on a line of several links), each an input error that names the deck
+(and its line) with nothing written. The sliders on moving links
+(quick-return, quick-return-meshed-lever, slider-meshed-guide) run as
+spatial slides (fekap_spatial_slideline); the slider on a line of two links
+hinged together (hard/slider-over-hinge) as a slide whose line is carried
+segment by segment, both runs checked against the deck's closed form."""
 
 from __future__ import annotations
 
@@ -278,10 +281,17 @@ END
 """
 
 
+# hard/slider-over-hinge with its line's links meshed (GH 3 elements, HK 2)
+# and HK written from K to H: the line's segments are the elements, in order.
+LINE_MESHED = (ROOT / "decks/hard/slider-over-hinge.deck").read_text().replace(
+    "  GH  G   H   bar ", "  GH  G   H   bar  3").replace("  HK  H   K   bar ", "  HK  K   H   bar  2")
+
+
 @pytest.mark.parametrize("name,text", [("roller", ROLLER), ("prismatic-guide", PRISMATIC_GUIDE),
                                        ("roller-clamp", ROLLER_CLAMP),
                                        ("clamped-meshed", CLAMPED_MESHED),
-                                       ("prismatic-on-link", PRISMATIC_ON_LINK)])
+                                       ("prismatic-on-link", PRISMATIC_ON_LINK),
+                                       ("line-meshed", LINE_MESHED)])
 def test_joints_of_other_decks_match_planar(tmp_path, name, text):
     deck = tmp_path / f"{name}.deck"
     deck.write_text(text)
@@ -295,6 +305,7 @@ def test_joints_of_other_decks_match_planar(tmp_path, name, text):
     check(err["vz"] <= OUT_OF_PLANE_TOL and err["az"] <= OUT_OF_PLANE_TOL, f"{name}: {err}")
     # The motion is not trivial: every tracked point off the ground moves.
     p = table(planar)
+    check(name != "line-meshed" or "bar  3" in text and "K   H   bar  2" in text, "the meshed line's deck")
     for point in set(p["point"]) - ({"A", "D"} if name == "clamped-meshed" else {"O"}):
         rows = p["point"] == point
         check(np.ptp(p["x"][rows]) + np.ptp(p["y"][rows]) > 0.1, f"{name}: {point} does not move")
@@ -349,3 +360,130 @@ def test_vtk_files_of_a_spatial_run_of_a_planar_deck(tmp_path):
             got = mesh.points[names.index(name)]
             err = max(np.max(np.abs(got[:2] - nodes[name][k])), abs(got[2]))
             check(err < 1e-12, f"{file}: node {name} at {got}, planar {nodes[name][k]} ({err:.2e})")
+
+
+# decks/hard/slider-over-hinge.deck: a slider S on the line of the links GH and
+# HK, hinged at H, passing from one to the other and back (its header).
+OVER_HINGE = "decks/hard/slider-over-hinge.deck"
+# Closed-form rates from differences of the closed-form positions (five-point
+# stencils of step STENCIL_H): truncation h^4 and round-off eps/h^2 both below
+# 1e-9 of the largest rates, so 1e-8 of them tells a wrong rate.
+STENCIL_H = 1e-3
+DIFFERENCE_TOL = 1e-8
+
+
+def over_hinge_exact(t: float) -> dict[str, tuple[np.ndarray, int, float]]:
+    """The deck's closed form at time t: S, H, K, each with the link of the
+    line S is on (1: GH, 2: HK) and S's arc length along the line from G."""
+    phi = np.deg2rad(12 + 4 * np.cos(2 * np.pi * t))
+    theta = np.pi + 2 * np.pi * t
+    a = np.array([-1 + 0.6 * np.cos(theta), 0.6 * np.sin(theta)])
+    d1, d2 = np.array([np.cos(phi), np.sin(phi)]), np.array([np.cos(phi), -np.sin(phi)])
+    h, k = 4 * d1, np.array([8 * np.cos(phi), 0.0])
+    b = d1 @ a
+    u = b + np.sqrt(b * b - a @ a + 25)
+    if u <= 4:
+        s, on, arc = u * d1, 1, u
+    else:
+        r = a - h
+        b = d2 @ r
+        w = b + np.sqrt(b * b - r @ r + 25)
+        s, on, arc = h + w * d2, 2, 4 + w
+    return {"S": (s, on, arc), "H": (h, on, arc), "K": (k, on, arc)}
+
+
+def over_hinge_rates(t: float, point: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """Velocity and acceleration of the point from five-point differences of
+    the closed-form positions; None where the stencil spans S's passing from
+    one link to the other (there its path has a corner)."""
+    samples = [over_hinge_exact(t + j * STENCIL_H) for j in (-2, -1, 0, 1, 2)]
+    if len({e["S"][1] for e in samples}) > 1:
+        return None
+    x = [e[point][0] for e in samples]
+    h = STENCIL_H
+    v = (x[0] - 8 * x[1] + 8 * x[3] - x[4]) / (12 * h)
+    a = (-x[0] + 16 * x[1] - 30 * x[2] + 16 * x[3] - x[4]) / (12 * h * h)
+    return v, a
+
+
+def test_slider_over_a_hinge_against_its_closed_form(runs):
+    """Both runs of hard/slider-over-hinge against the deck's closed form at
+    every row: positions within 1e-12 of the model size, velocities and
+    accelerations within 1e-8 of the largest of differences of the exact
+    positions (rows whose stencil spans the corner of S's path left out);
+    S passes from GH to HK and back; the spatial run's stroke of the slide
+    (joints.csv, S.line) is S's arc length along the line since the start."""
+    planar, spatial, done = runs(OVER_HINGE)
+    check(done.returncode == 0, f"--spatial: exit {done.returncode}: {done.stderr}")
+    for out in (planar, spatial):
+        p = table(out)
+        size = max(np.max(np.abs(p["x"])), np.max(np.abs(p["y"])))
+        vscale = max(np.max(np.abs(p[c])) for c in ("vx", "vy"))
+        ascale = max(np.max(np.abs(p[c])) for c in ("ax", "ay"))
+        links, worst, compared = set(), {"pos": 0.0, "vel": 0.0, "acc": 0.0}, 0
+        for i, t in enumerate(p["t"]):
+            exact = over_hinge_exact(t)
+            want, on, _ = exact[p["point"][i]]
+            links.add(on)
+            got = np.array([p["x"][i], p["y"][i]])
+            worst["pos"] = max(worst["pos"], np.max(np.abs(got - want)) / size)
+            rates = over_hinge_rates(t, p["point"][i])
+            if rates is None:
+                continue
+            compared += 1
+            worst["vel"] = max(worst["vel"], np.max(np.abs([p["vx"][i], p["vy"][i]] - rates[0])) / vscale)
+            worst["acc"] = max(worst["acc"], np.max(np.abs([p["ax"][i], p["ay"][i]] - rates[1])) / ascale)
+        check(links == {1, 2}, f"{out}: S stays on link {links} of its line")
+        check(compared >= len(p["t"]) - 12, f"{out}: the rates of only {compared} of {len(p['t'])} rows compared")
+        check(worst["pos"] <= POSITION_TOL, f"{out}: positions {worst['pos']:.2e} of the model size off the exact")
+        check(worst["vel"] <= DIFFERENCE_TOL and worst["acc"] <= DIFFERENCE_TOL,
+              f"{out}: rates off the differences of the exact positions: {worst}")
+    rows = [r for r in read_rows(spatial / "joints.csv", numbers=True) if r["joint"] == "S.line"]
+    check(len(rows) == 101, f"{len(rows)} rows of the slide S.line in joints.csv")
+    start = over_hinge_exact(0.0)["S"][2]
+    off = max(abs(r["angle"] - (over_hinge_exact(r["t"])["S"][2] - start)) for r in rows)
+    check(off <= POSITION_TOL * 8, f"the stroke of S.line {off:.2e} off S's arc length along the line")
+
+
+def test_prismatic_slider_on_several_links_is_refused(tmp_path):
+    """A prismatic slider on a line of several links: its planar tie turns
+    the slave link at once by the change of the angle between two links as
+    the slave passes from one to the next, which no spatial joint does."""
+    text = (ROOT / OVER_HINGE).read_text()
+    line = "  line  S  on GH HK  pin\n"
+    check(line in text, "the deck's slideline changed")
+    text = text.replace(line, "  line  S  on GH HK  prismatic AS\n")
+    number = text.splitlines().index("  line  S  on GH HK  prismatic AS") + 1
+    deck = tmp_path / "prismatic.deck"
+    deck.write_text(text)
+    out = tmp_path / "out"
+    done = run_fekap("-q", "--spatial", "-o", str(out), str(deck))
+    check(done.returncode == 2, f"exit {done.returncode}, not 2: {done.stderr}")
+    check(done.stderr.startswith(f"{deck}:{number}:3: error: --spatial takes a prismatic slider on one moving link "
+                                 "only: slideline line ties the angle of link AS"), done.stderr)
+    check("make it a pin slider" in done.stderr, done.stderr)
+    check(not out.exists(), f"{out} was written")
+
+
+def test_first_master_link_written_towards_the_second(tmp_path, runs):
+    """The planar slideline takes the first link of its line from its end
+    away from the second, however the link is written: hard/slider-over-hinge
+    with GH written from H to G (driven at H by the same angle, turned by pi)
+    gives the deck's points (before, its chain ran from H to G and on from H
+    to K, and the run stopped where S passed H: the slave left its line)."""
+    text = (ROOT / OVER_HINGE).read_text()
+    for old, new in (("  GH  G   H   bar ", "  HG  H   G   bar "), ("on GH HK", "on HG HK"),
+                     ("rotation GH   harmonic 12*deg", "rotation HG   harmonic 192*deg")):
+        check(old in text, f"the deck's line {old!r}")
+        text = text.replace(old, new)
+    deck = tmp_path / "reversed.deck"
+    deck.write_text(text)
+    done = run_fekap("-q", "-o", str(tmp_path / "out"), str(deck))
+    check(done.returncode == 0, f"exit {done.returncode}: {done.stderr}")
+    planar, _, _ = runs(OVER_HINGE)
+    p, r = table(planar), table(tmp_path / "out")
+    check(list(p["point"]) == list(r["point"]) and np.array_equal(p["t"], r["t"]), "other rows")
+    for cols, tol in ((("x", "y"), POSITION_TOL), (("vx", "vy"), RATE_TOL), (("ax", "ay"), RATE_TOL)):
+        scale = max(np.max(np.abs(p[c])) for c in cols)
+        err = max(np.max(np.abs(p[c] - r[c])) for c in cols) / scale
+        check(err <= tol, f"{cols}: {err:.2e} of the largest off the deck's run")

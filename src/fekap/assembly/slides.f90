@@ -76,8 +76,12 @@ contains
                   l = ms%master_links(j)
                   m = model%links(l)%nelem
                   pts = [model%links(l)%node(1), (first_interior(l) + e - 1, e=1, m - 1), model%links(l)%node(2)]
-                  ! Continue the chain from where the last link ended.
+                  ! Continue the chain from where the last link ended; the
+                  ! first link from its end away from the second.
                   if (last /= 0 .and. pts(m + 1) == last) pts = pts(m + 1:1:-1)
+                  if (last == 0 .and. size(ms%master_links) > 1) then
+                     if (any(model%links(ms%master_links(2))%node == pts(1))) pts = pts(m + 1:1:-1)
+                  end if
                   do e = 1, m
                      k = k + 1
                      sl%seg(:, k) = pts(e:e + 1)

@@ -35,6 +35,12 @@ module fekap_model_spatial
       integer :: node(2) = 0
       logical :: ground_first = .false.
       real(dp) :: axis(3) = 0, axis2(3) = 0
+      !> A prismatic joint along a line of several segments (`fekap --spatial`
+      !> on a planar slider on a chain of links): the two nodes of each
+      !> segment, in order along the line, the first carrying it (node(1) is
+      !> segments(1, 1)); its second node's point slides along them and its
+      !> rotation is not held. Not allocated: one line, the joint's axis.
+      integer, allocatable :: segments(:, :)
       !> The deck's place of the joint's line, for errors found later.
       character(:), allocatable :: file
       integer :: line = 0, col = 0

@@ -326,7 +326,7 @@ contains
                lambda = dot_product(rs - p1, v)/dot_product(v, v)
                inside = lambda >= 0 .and. lambda <= 1
                dist = norm2(rs - (p1 + max(0.0_dp, min(1.0_dp, lambda))*v))
-               if ((inside .and. .not. best_inside) .or. (inside .eqv. best_inside .and. dist < best_dist)) then
+               if ((inside .and. .not. best_inside) .or. ((inside .eqv. best_inside) .and. dist < best_dist)) then
                   best = k
                   best_dist = dist
                   best_inside = inside

@@ -13,6 +13,10 @@
 !> point stays on the line through that node's start place along the axis,
 !> carried by the first node's frame; the second node's frame is the
 !> first's (prismatic) or its revolute child about the axis (cylindrical).
+!> A prismatic joint along a line of segments (joint%segments, made by
+!> `--spatial` for a planar slider on a chain of links) is a slide whose
+!> line is carried segment by segment, its stroke the arc length along it,
+!> and holds no rotation.
 module fekap_spatial_build
    use fekap_kinds, only: dp
    use fekap_vectors, only: cross
@@ -24,7 +28,8 @@ module fekap_spatial_build
    use fekap_model_spatial, only: spatial_joint_type, reported_joints, joint_spherical, joint_revolute, joint_universal, &
       & joint_prismatic, joint_cylindrical, joint_weld
    use fekap_spatial_mechanism, only: spatial_mechanism_type, add_point, add_frame, add_node, add_beam, &
-      & add_truss, add_drive, add_slide, point_fixed, point_free, point_line, frame_fixed, frame_free, frame_revolute, &
+      & add_truss, add_drive, add_slide, add_slide_segment, point_fixed, point_free, point_line, frame_fixed, &
+      & frame_free, frame_revolute, &
       & frame_universal
    implicit none
    private
@@ -124,7 +129,8 @@ contains
          end do
          frame_set = [(i, i=1, nn)]
          do k = 1, nj
-            if (any(joints(k)%kind == [joint_weld, joint_prismatic]) .and. joints(k)%node(2) > 0) then
+            if (any(joints(k)%kind == [joint_weld, joint_prismatic]) .and. joints(k)%node(2) > 0 .and. &
+               & .not. allocated(joints(k)%segments)) then
                call join(frame_set, joints(k)%node(1), joints(k)%node(2))
             end if
          end do
@@ -284,8 +290,12 @@ contains
                return
             end if
             associate (a => joints(k)%node(1), b => joints(k)%node(2))
-               call add_slide(m, map%node_point(a), class_frame(find_root(frame_set, a)), map%node_point(b), &
-                  & position(b) - position(a), joints(k)%axis, kp, i, error)
+               if (allocated(joints(k)%segments)) then
+                  call add_line_slide(joints(k), i, error)
+               else
+                  call add_slide(m, map%node_point(a), class_frame(find_root(frame_set, a)), map%node_point(b), &
+                     & position(b) - position(a), joints(k)%axis, kp, i, error)
+               end if
                if (allocated(error)) then
                   error%message = joints(k)%name//': '//error%message
                   return
@@ -329,6 +339,60 @@ contains
          x = [model%nodes(node)%x, model%spatial%z(node)]
       end function position
 
+      !> The slide of a joint along a line of segments (joint%segments): its
+      !> stroke the arc length along the line from the second node's start
+      !> place (on the segment it projects into with the smallest distance,
+      !> as the planar slideline's initial_segments), each segment carried by
+      !> its first node's point and frame, from the stroke where it begins.
+      subroutine add_line_slide(joint, id, error)
+         type(spatial_joint_type), intent(in) :: joint
+         integer, intent(out) :: id
+         type(error_type), allocatable, intent(out) :: error
+         real(dp) :: dir(3, size(joint%segments, 2)), start(size(joint%segments, 2)), seg_len(size(joint%segments, 2))
+         real(dp) :: arc, along, gap, best, s0
+         integer :: j, on
+         associate (seg => joint%segments, b => joint%node(2))
+            arc = 0
+            do j = 1, size(seg, 2)
+               dir(:, j) = position(seg(2, j)) - position(seg(1, j))
+               seg_len(j) = norm2(dir(:, j))
+               if (.not. seg_len(j) > 0) then
+                  call joint_error(joint, 'a segment of the line of joint '//joint%name//' has no length', &
+                     & 'give each segment two nodes at different places', error)
+                  return
+               end if
+               dir(:, j) = dir(:, j)/seg_len(j)
+               start(j) = arc
+               arc = arc + seg_len(j)
+            end do
+            on = 0
+            best = huge(1.0_dp)
+            s0 = 0
+            do j = 1, size(seg, 2)
+               along = dot_product(position(b) - position(seg(1, j)), dir(:, j))
+               gap = norm2(position(b) - position(seg(1, j)) - along*dir(:, j))
+               if (along >= -1.0e-9_dp*seg_len(j) .and. along <= (1 + 1.0e-9_dp)*seg_len(j) .and. gap < best) then
+                  best = gap
+                  on = j
+                  s0 = start(j) + along
+               end if
+            end do
+            if (on == 0) then
+               call joint_error(joint, 'node '//model%nodes(b)%name//' of joint '//joint%name// &
+                  & ' is on none of the segments of its line', 'place it on the line', error)
+               return
+            end if
+            call add_slide(m, map%node_point(seg(1, 1)), class_frame(find_root(frame_set, seg(1, 1))), &
+               & map%node_point(b), (s0 - start(1))*dir(:, 1), dir(:, 1), kp, id, error)
+            if (allocated(error)) return
+            do j = 2, size(seg, 2)
+               call add_slide_segment(m, id, map%node_point(seg(1, j)), class_frame(find_root(frame_set, seg(1, j))), &
+                  & (s0 - start(j))*dir(:, j), dir(:, j), start(j) - s0, error)
+               if (allocated(error)) return
+            end do
+         end associate
+      end subroutine add_line_slide
+
    end subroutine build_spatial_mechanism
 
    !> A beam whose two end rotations nothing else holds (no other beam, no
@@ -355,7 +419,8 @@ contains
       end do
       do k = 1, size(model%spatial%joints)
          associate (joint => model%spatial%joints(k))
-            if (joint%kind == joint_spherical) cycle
+            ! A slide along a line of segments holds no rotation (its slider's is free).
+            if (joint%kind == joint_spherical .or. allocated(joint%segments)) cycle
             do i = 1, 2
                if (joint%node(i) == 0) cycle
                associate (c => find_root(frame_set, joint%node(i)))
@@ -419,7 +484,9 @@ contains
             do i = 1, 2
                if (joint%node(i) == 0) cycle
                meets(joint%node(i)) = .true.
-               if (joint%kind /= joint_spherical) held(find_root(body, joint%node(i))) = .true.
+               if (joint%kind /= joint_spherical .and. .not. allocated(joint%segments)) then
+                  held(find_root(body, joint%node(i))) = .true.
+               end if
             end do
          end associate
       end do

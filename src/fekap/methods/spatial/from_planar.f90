@@ -23,6 +23,18 @@
 !>                  that node's rotation: fekap_spatial_slideline), and a
 !>                  revolute joint about +z from it to each group (a weld
 !>                  for a prismatic slideline's slave link);
+!>   slider on a line of several links (SLIDelines `on L1 L2 ...`, pin)
+!>                  a prismatic joint NODE.SLIDELINE from the line's first
+!>                  node to the slave along the links' elements in order,
+!>                  each segment carried by its first node's point and
+!>                  rotation (the links are hinged, so the line bends where
+!>                  they meet): the slide on the segment that holds its
+!>                  stroke, the arc length along the line
+!>                  (fekap_spatial_mechanism's slide_on_segment), as the
+!>                  planar slideline moves its slave on to the next master
+!>                  element; the slave's groups hinged as at any node. A
+!>                  prismatic one is refused (its planar tie turns the slave
+!>                  link at once where the slave passes a hinge);
 !>   meshed link    its elements as links LINK, LINK#2, ... between the
 !>                  interior nodes LINK#1, ... (welded, as links sharing a
 !>                  node are in a spatial model);
@@ -78,6 +90,10 @@ contains
       integer :: nn, nl, k, n, j, e, g, ng, nd, blk, ground_link, slide
       !> Slider blocks on moving links: the block node and its slideline.
       integer, allocatable :: moving_block(:), moving_slide(:)
+      !> Sliders on a line of several links: the slave node and its slideline.
+      integer, allocatable :: line_slave(:), line_slide(:)
+      !> Per original link: the index before its further elements (LINK#2, ...).
+      integer, allocatable :: elem_base(:)
       integer, allocatable :: at_link(:), at_end(:), group(:), group_node(:)
       real(dp) :: axis(3), factor
       character(:), allocatable :: what
@@ -100,12 +116,13 @@ contains
       nl = size(model%links)
       nodes = model%nodes
       links = model%links
-      allocate (joints(0), drives(0), moving_block(0), moving_slide(0))
+      allocate (joints(0), drives(0), moving_block(0), moving_slide(0), line_slave(0), line_slide(0))
 
       ! Meshed links: one link per element, welded at the interior nodes LINK#k.
-      allocate (elem_end(nl, 2), end_joint(nl, 2), source=0)
+      allocate (elem_end(nl, 2), end_joint(nl, 2), elem_base(nl), source=0)
       do k = 1, nl
          elem_end(k, :) = k
+         elem_base(k) = size(links)
          associate (link => model%links(k))
             if (link%nelem <= 1) cycle
             links(k)%nelem = 1
@@ -179,10 +196,13 @@ contains
          end do
          if (slide > 0) then
             associate (s => model%slidelines(slide))
-               if (.not. s%ground .and. size(s%master_links) /= 1) then
-                  call loc_error(s%loc, '--spatial takes a slider on one moving link: slideline '// &
-                     & s%name//' keeps node '//model%nodes(n)%name//' on a line of several links', &
-                     & 'run this deck without --spatial')
+               if (.not. s%ground .and. size(s%master_links) > 1 .and. s%kind == slide_prismatic) then
+                  call loc_error(s%loc, '--spatial takes a prismatic slider on one moving link only: slideline '// &
+                     & s%name//' ties the angle of link '//model%links(s%slave_link)%name//' to a line of '// &
+                     & 'several links, and the planar tie turns that link at once, as node '// &
+                     & model%nodes(n)%name//' passes from one link to the next, by the change of the angle '// &
+                     & 'between them since the start', 'make it a pin slider (leave out prismatic) or run this '// &
+                     & 'deck without --spatial')
                   return
                end if
                if (k > 0) then
@@ -222,6 +242,14 @@ contains
                if (s%ground) then
                   axis = [s%guide(:, 2) - s%guide(:, 1), 0.0_dp]
                   call add_block(model%nodes(n)%name//'.'//s%name, axis, s%loc, ground_link)
+               else if (size(s%master_links) > 1) then
+                  ! A pin on a line of several links: the node's groups hinged
+                  ! as at any node, its point on the line (added below).
+                  do g = 2, ng
+                     call add_joint(joint_revolute, group_node(1), group_node(g), model%nodes(n)%loc, z_axis)
+                  end do
+                  line_slave = [line_slave, n]
+                  line_slide = [line_slide, slide]
                else
                   call add_moving_block(model%nodes(n)%name//'.'//s%name, s%loc, ground_link)
                   moving_slide = [moving_slide, slide]
@@ -242,6 +270,14 @@ contains
          axis = [model%nodes(model%links(k)%node(2))%x - model%nodes(model%links(k)%node(1))%x, 0.0_dp]
          call add_joint(joint_prismatic, links(elem_end(k, 1))%node(1), moving_block(j), &
             & model%slidelines(moving_slide(j))%loc, axis)
+      end do
+
+      ! The slides on lines of several links: a prismatic joint from the
+      ! first segment's first node to the slave, along the line's segments
+      ! (the links' elements in order along it, each from its end nearer
+      ! the line's start), carried each by its first node.
+      do j = 1, size(line_slave)
+         call add_line_joint(line_slave(j), model%slidelines(line_slide(j)))
       end do
 
       ! Drives: a link's rotation is its end's revolute joint to the ground
@@ -399,6 +435,51 @@ contains
             end if
          end do
       end subroutine add_moving_block
+
+      !> The prismatic joint of slideline s's slave (node `slave`, which keeps
+      !> its name) along the segments of its master links, named
+      !> SLAVE.SLIDELINE. The links are listed in order along the line
+      !> (consecutive ones share a node, the deck checks); each is taken from
+      !> its end at the previous one (the first: from its end away from the
+      !> second), its elements in that order.
+      subroutine add_line_joint(slave, s)
+         integer, intent(in) :: slave
+         type(slideline_type), intent(in) :: s
+         integer, allocatable :: segs(:, :), elems(:)
+         integer :: i, l, last, m, le
+         logical :: reversed
+         allocate (segs(2, 0))
+         last = 0
+         do i = 1, size(s%master_links)
+            l = s%master_links(i)
+            if (i == 1) then
+               reversed = any(model%links(s%master_links(2))%node == model%links(l)%node(1))
+            else
+               reversed = model%links(l)%node(2) == last
+            end if
+            m = model%links(l)%nelem
+            elems = [l, (elem_base(l) + le, le=1, m - 1)]
+            if (reversed) then
+               elems = elems(m:1:-1)
+               last = model%links(l)%node(1)
+            else
+               last = model%links(l)%node(2)
+            end if
+            do le = 1, m
+               associate (link => links(elems(le)))
+                  if (reversed) then
+                     segs = reshape([segs, link%node(2), link%node(1)], [2, size(segs, 2) + 1])
+                  else
+                     segs = reshape([segs, link%node], [2, size(segs, 2) + 1])
+                  end if
+               end associate
+            end do
+         end do
+         call add_joint(joint_prismatic, segs(1, 1), slave, s%loc, &
+            & [nodes(segs(2, 1))%x - nodes(segs(1, 1))%x, 0.0_dp])
+         joints(size(joints))%name = model%nodes(slave)%name//'.'//s%name
+         call move_alloc(segs, joints(size(joints))%segments)
+      end subroutine add_line_joint
 
       !> An input error at loc.
       subroutine loc_error(loc, message, advice)

@@ -26,7 +26,7 @@ module fekap_spatial_kinematics
    use fekap_element_se3, only: so3_exp, so3_update
    use fekap_element_se3_beam, only: se3_beam_residual, se3_beam_convective, truss_residual, truss_convective
    use fekap_spatial_mechanism, only: spatial_mechanism_type, point_free, point_line, frame_free, frame_revolute, &
-      & frame_universal, spatial_slide_type
+      & frame_universal, spatial_slide_type, slide_on_segment
    use fekap_spatial_slideline, only: slide_gap, slide_convective
    implicit none
    private
@@ -326,7 +326,7 @@ contains
       end if
       if (allocated(m%slides)) then
          do i = 1, size(m%slides)
-            dofs = slide_dofs(c, m%slides(i))
+            dofs = slide_line_dofs(c, m%slides(i))
             call add_group()
          end do
       end if
@@ -393,6 +393,8 @@ contains
       real(dp) :: x(3, 2), r(3, 3, 2), f(12), ke(12, 12), b(6, 12)
       real(dp) :: ft(6), kt(6, 6), u(3)
       real(dp) :: ra(3, 3), gap(3), ns(3, 10)
+      !> The slide on the segment of its line that holds its stroke.
+      type(spatial_slide_type) :: on
       real(dp), allocatable :: ge(:, :), gt(:, :), gs(:, :), ng(:, :), kes(:, :)
       integer, allocatable :: dofs(:)
       integer :: i, n, p, fr, e
@@ -462,7 +464,8 @@ contains
          ! Points on lines carried by moving frames (penalty slidelines,
          ! fekap_spatial_slideline): force N^T kp g, tangent kp N^T N.
          do i = 1, size(m%slides)
-            associate (sl => m%slides(i))
+            on = slide_on_segment(m%slides(i), c%q(m%slides(i)%dof))
+            associate (sl => on)
                dofs = slide_dofs(c, sl)
                if (allocated(gs)) deallocate (gs)
                allocate (gs(10, size(dofs)), source=0.0_dp)
@@ -514,6 +517,7 @@ contains
       real(dp), intent(in) :: v(:), kappa(:, :)
       type(strain_operator_type), intent(inout) :: op
       real(dp) :: x(3, 2), r(3, 3, 2), nv(3, 2), nw(3, 2), na(3, 2), ra(3, 3), omega(3), ka(3)
+      type(spatial_slide_type) :: on
       integer :: i, n, p, fr, e
       e = 0
       if (allocated(m%beams)) then
@@ -549,7 +553,8 @@ contains
       if (allocated(m%slides)) then
          do i = 1, size(m%slides)
             e = e + 1
-            associate (sl => m%slides(i), dofs => op%element(e)%dofs)
+            on = slide_on_segment(m%slides(i), c%q(m%slides(i)%dof))
+            associate (sl => on, dofs => op%element(e)%dofs)
                ra = identity()
                omega = 0
                ka = 0
@@ -589,6 +594,23 @@ contains
       dofs = element_dofs(c, [sl%point_b, sl%point_a], [sl%frame_a])
       if (.not. any(dofs == sl%dof)) dofs = [dofs, sl%dof]
    end function slide_dofs
+
+   !> The dofs a slide's gap may depend on: slide_dofs over every segment of
+   !> its line (the tangent's storage, whatever segment the slider is on).
+   pure function slide_line_dofs(c, sl) result(dofs)
+      type(spatial_configuration_type), intent(in) :: c
+      type(spatial_slide_type), intent(in) :: sl
+      integer, allocatable :: dofs(:), more(:)
+      integer :: k, i
+      dofs = slide_dofs(c, sl)
+      if (.not. allocated(sl%seg_point)) return
+      do k = 1, size(sl%seg_point)
+         more = element_dofs(c, [sl%seg_point(k)], [sl%seg_frame(k)])
+         do i = 1, size(more)
+            if (.not. any(dofs == more(i))) dofs = [dofs, more(i)]
+         end do
+      end do
+   end function slide_line_dofs
 
    pure function identity() result(e)
       real(dp) :: e(3, 3)

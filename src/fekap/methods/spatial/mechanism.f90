@@ -32,7 +32,8 @@ module fekap_spatial_mechanism
    private
 
    public :: spatial_mechanism_type, add_point, add_frame, add_node, add_beam, add_truss, add_drive
-   public :: add_spherical, add_revolute, add_universal, add_slide
+   public :: add_spherical, add_revolute, add_universal, add_slide, add_slide_segment, slide_on_segment, &
+      & passes_a_segment_end
 
    !> Kinds of point: fixed (no dof), free (3 translations), on a ground line (1).
    integer, parameter, public :: point_fixed = 0, point_free = 1, point_line = 2
@@ -87,6 +88,17 @@ module fekap_spatial_mechanism
       !> In frame A's body axes: the line's place at s = 0 (from point A) and unit direction.
       real(dp) :: offset(3) = 0, axis(3) = 0
       real(dp) :: kp = 0
+      !> A line of several segments (a planar slideline on a chain of links
+      !> hinged together, whose line bends where they meet): segment k is
+      !> carried by point seg_point(k) and frame seg_frame(k), at
+      !> seg_offset(:, k) + s seg_axis(:, k) in that frame's body axes, and
+      !> holds the strokes from seg_start(k) (segment 1: all below segment
+      !> 2's start; the last: all beyond its own). The stroke is the arc
+      !> length along the line, so that it is continuous where the slider
+      !> passes from one segment to the next (slide_on_segment). Not
+      !> allocated: one line, the fields above.
+      integer, allocatable :: seg_point(:), seg_frame(:)
+      real(dp), allocatable :: seg_offset(:, :), seg_axis(:, :), seg_start(:)
    end type spatial_slide_type
 
    type, public :: spatial_drive_type
@@ -338,6 +350,106 @@ contains
       m%slides = [m%slides, sl]
       id = size(m%slides)
    end subroutine add_slide
+
+   !> A further segment of slide id's line, from stroke `start` on (greater
+   !> than the last segment's start): carried by point a and frame fa (0:
+   !> the ground), the line's place at s = 0 from a's place `offset` and its
+   !> direction `axis` (global axes at the reference configuration). The
+   !> slide's own line (add_slide) is its first segment.
+   subroutine add_slide_segment(m, id, a, fa, offset, axis, start, error)
+      type(spatial_mechanism_type), intent(inout) :: m
+      integer, intent(in) :: id, a, fa
+      real(dp), intent(in) :: offset(3), axis(3), start
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: unit(3)
+      integer :: ns, np, nf
+      ns = 0
+      if (allocated(m%slides)) ns = size(m%slides)
+      np = 0
+      if (allocated(m%points)) np = size(m%points)
+      nf = 0
+      if (allocated(m%frames)) nf = size(m%frames)
+      if (id < 1 .or. id > ns .or. a < 1 .or. a > np .or. fa < 0 .or. fa > nf) then
+         call input_error(error, 'a slide segment names a slide, point or frame that does not exist')
+         return
+      end if
+      call unit_axis(axis, unit, error)
+      if (allocated(error)) return
+      associate (sl => m%slides(id))
+         if (.not. allocated(sl%seg_point)) then
+            sl%seg_point = [sl%point_a]
+            sl%seg_frame = [sl%frame_a]
+            sl%seg_offset = reshape(sl%offset, [3, 1])
+            sl%seg_axis = reshape(sl%axis, [3, 1])
+            sl%seg_start = [-huge(1.0_dp)]
+         end if
+         if (.not. start > sl%seg_start(size(sl%seg_start))) then
+            call input_error(error, 'the segments of a slide''s line must begin at increasing strokes')
+            return
+         end if
+         sl%seg_point = [sl%seg_point, a]
+         sl%seg_frame = [sl%seg_frame, fa]
+         sl%seg_offset = reshape([sl%seg_offset, offset], [3, size(sl%seg_point)])
+         sl%seg_axis = reshape([sl%seg_axis, unit], [3, size(sl%seg_point)])
+         sl%seg_start = [sl%seg_start, start]
+      end associate
+   end subroutine add_slide_segment
+
+   !> The slide sl on the segment of its line that holds stroke s: point_a,
+   !> frame_a, offset and axis those of the segment (sl itself for a line of
+   !> one segment). The choice is a function of the stroke alone, so that
+   !> Newton's residual and tangent at an iterate use the segment the slider
+   !> is on there; where the slider passes a segment's end, the gap is
+   !> continuous (the segments meet there at a stress-free configuration)
+   !> and its Jacobian turns with the line.
+   pure function slide_on_segment(sl, s) result(on)
+      type(spatial_slide_type), intent(in) :: sl
+      real(dp), intent(in) :: s
+      type(spatial_slide_type) :: on
+      integer :: k
+      if (.not. allocated(sl%seg_point)) then
+         on = sl
+         return
+      end if
+      k = segment_of(sl, s)
+      on%point_a = sl%seg_point(k)
+      on%frame_a = sl%seg_frame(k)
+      on%point_b = sl%point_b
+      on%dof = sl%dof
+      on%offset = sl%seg_offset(:, k)
+      on%axis = sl%seg_axis(:, k)
+      on%kp = sl%kp
+   end function slide_on_segment
+
+   !> The segment of slide sl's line that holds stroke s (1 for a line of one).
+   pure integer function segment_of(sl, s) result(k)
+      type(spatial_slide_type), intent(in) :: sl
+      real(dp), intent(in) :: s
+      k = 1
+      if (.not. allocated(sl%seg_start)) return
+      k = size(sl%seg_start)
+      do while (k > 1)
+         if (s >= sl%seg_start(k)) exit
+         k = k - 1
+      end do
+   end function segment_of
+
+   !> Whether some slide of m is on another segment of its line at the dofs
+   !> q + dq than at q (lines of one segment never are): the slider's path
+   !> has a corner between, where its rates jump.
+   pure logical function passes_a_segment_end(m, q, dq) result(passes)
+      type(spatial_mechanism_type), intent(in) :: m
+      real(dp), intent(in) :: q(:), dq(:)
+      integer :: i
+      passes = .false.
+      if (.not. allocated(m%slides)) return
+      do i = 1, size(m%slides)
+         associate (sl => m%slides(i))
+            if (.not. allocated(sl%seg_start)) cycle
+            if (segment_of(sl, q(sl%dof)) /= segment_of(sl, q(sl%dof) + dq(sl%dof))) passes = .true.
+         end associate
+      end do
+   end function passes_a_segment_end
 
    !> Prescribe dof by a time law (a revolute frame's angle: its frame%dof;
    !> a line point's stroke: its point%dof).

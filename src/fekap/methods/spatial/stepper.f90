@@ -41,7 +41,7 @@ module fekap_spatial_stepper
    use fekap_stepping_change_point, only: change_verdict, change_regular, response_trusted, next_output_time, &
       & fill_order, fill_shift, rates_drop, change_drop
    use fekap_stepping_jump, only: jump_ratio, verify_turn, max_verify_depth
-   use fekap_spatial_mechanism, only: spatial_mechanism_type
+   use fekap_spatial_mechanism, only: spatial_mechanism_type, passes_a_segment_end
    use fekap_spatial_kinematics, only: spatial_state_type, new_spatial_state, spatial_configuration_type, &
       & configure, assemble_spatial, set_drives, update_state, free_dofs, spatial_rates_factored, point_rate, &
       & spatial_rates, tangent_for
@@ -727,7 +727,8 @@ contains
    !> second rates. In the predictor's own form, the free frames' terms
    !> include what body rates alone would miss (the commutator of omega and
    !> its rate in the third term). Where the two configurations before have
-   !> their j (every step but the first two), k is instead the rate at t of
+   !> their j (every step but the first two, and those after a slider passed
+   !> a hinge of its line of links), k is instead the rate at t of
    !> the quadratic through the three j, which saves two of the four
    !> residuals: for additive dofs an O(h^2) error (O(h^6) in the
    !> predictor); a free frame's j is a body quantity, whose rate differs
@@ -752,6 +753,12 @@ contains
       rhs = -3*(rp(self%fdof) - rm(self%fdof))/d**3 - self%kt%product(self%jerk)
       call self%kt%solve(rhs)
       self%jerk(self%fdof) = rhs
+      ! A slider that passed a hinge of its line of links since t2 (its
+      ! stroke taken back along its rate): the j before belong to the path
+      ! before the corner, where the rates jump; k from the differences.
+      if (self%jerks >= 2) then
+         if (passes_a_segment_end(self%m, self%s%q, -(t - self%t2)*self%v)) self%jerks = 0
+      end if
       if (self%jerks >= 2 .and. t > self%t1 .and. self%t1 > self%t2) then
          ! j(tau) through (0, j), (-h1, j1), (-hh, j2): its rate at 0.
          h1 = t - self%t1
