@@ -466,5 +466,34 @@ def test_huge_times_are_a_deck_error_not_a_trap(tmp_path, span):
     assert "beyond 1e9" in done.stderr
 
 
+def last_positions(directory: Path) -> dict[str, list[float]]:
+    """Each point's x, y (and z, in a spatial run) in the last row of points.csv."""
+    with open(directory / "points.csv") as f:
+        rows = list(csv.DictReader(f))
+    last = rows[-1]["step"]
+    columns = [c for c in ("x", "y", "z") if c in rows[0]]
+    return {r["point"]: [float(r[c]) for c in columns] for r in rows if r["step"] == last}
+
+
+@pytest.mark.parametrize("deck", ["decks/fourbar.deck", "decks/spatial/rssr.deck", "decks/spatial/slider-crank.deck"])
+def test_a_step_longer_than_the_run_ends_where_short_steps_end(tmp_path, deck):
+    """--dt above the run's length makes one step, the run: the spatial
+    stepper's differences for its predictor were a quarter of the given step
+    (NaN from 1e100 on, written as results with exit 0). The end's positions
+    are those of a run of short steps, and no file holds a number that is not
+    finite."""
+    done = fekap("-q", "-o", tmp_path / "one", "--dt", "1e300", deck)
+    assert done.returncode == 0, done.stderr[-600:]
+    for path in (tmp_path / "one").glob("*.csv"):
+        text = path.read_text().lower()
+        assert "nan" not in text and "inf" not in text, path.name
+    done = fekap("-q", "-o", tmp_path / "short", deck)
+    assert done.returncode == 0, done.stderr[-600:]
+    one, short = last_positions(tmp_path / "one"), last_positions(tmp_path / "short")
+    assert one.keys() == short.keys()
+    for point, x in one.items():
+        assert max(abs(a - b) for a, b in zip(x, short[point])) < 1e-9, (point, x, short[point])
+
+
 if __name__ == "__main__":
     sys.exit(pytest.main([__file__, "-q"]))

@@ -12,7 +12,7 @@ module fekap_driver_run
    use fekap_error, only: error_type, analysis_error, fatal_error
    use fekap_stepping_interrupt, only: interrupt_signal
    use fekap_model, only: model_type
-   use fekap_model_results, only: step_result_type, new_step_result
+   use fekap_model_results, only: step_result_type, new_step_result, not_finite, result_kinds
    use fekap_stepping_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_writer, only: writer_list_type, run_summary_type
    use fekap_strings, only: es_text
@@ -100,6 +100,7 @@ contains
             call stepper%advance(step_time(model, n, nsteps), result, step_error)
          end if
          if (timed) c1 = clock_seconds()
+         if (.not. allocated(step_error) .and. result%written) call check_finite(result, step_error)
          if (allocated(step_error) .and. interrupt_signal() /= 0) then
             ! A signal stopped the step in progress (between Newton iterations).
             write (where_, '(a,i0,a,i0,a,a,a)') 'interrupted by signal ', interrupt_signal(), ' during step ', n, &
@@ -163,6 +164,19 @@ contains
    end subroutine run_analysis
 
    !> Say after which step an output file failed.
+   !> A step whose results hold a value that is not finite fails: its rows
+   !> are not written (they would hold NaN), those of the steps before stay.
+   subroutine check_finite(result, error)
+      type(step_result_type), intent(in) :: result
+      type(error_type), allocatable, intent(inout) :: error
+      integer :: kind
+      kind = not_finite(result)
+      if (kind == 0) return
+      call analysis_error(error, 'the method returned '//trim(result_kinds(kind))//' that are not finite numbers '// &
+         & '(NaN or infinity) without noticing its failure; please report the deck. A smaller time step or '// &
+         & 'another method may avoid it')
+   end subroutine check_finite
+
    subroutine tell_step(error, n, t)
       type(error_type), intent(inout) :: error
       integer, intent(in) :: n

@@ -2,15 +2,20 @@
 !> positions, velocities and accelerations of all named nodes and the angle,
 !> angular velocity and angular acceleration of every link.
 module fekap_model_results
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use fekap_kinds, only: dp
    implicit none
    private
 
-   public :: step_result_type, new_step_result, fill_fields_from_nodes, has_note
+   public :: step_result_type, new_step_result, fill_fields_from_nodes, has_note, not_finite
 
    !> Length of a step's note for the listing (fixed-length: gfortran 12 has had
    !> bugs with deferred-length character components of derived types).
    integer, parameter, public :: note_length = 400
+
+   !> What not_finite's index names.
+   character(len=*), parameter, public :: result_kinds(4) = [character(len=31) :: 'positions', 'velocities', &
+      & 'accelerations', 'forces, deflections or energies']
 
    type :: step_result_type
       integer :: step = 0
@@ -91,6 +96,66 @@ contains
       has_note = len(note) > 0
       if (has_note) has_note = note(1:1) /= ' '
    end function has_note
+
+   !> Which of a step's results is not a finite number (NaN or infinity: a
+   !> failure that the method's own checks missed), as an index into
+   !> result_kinds for the time loop's error; 0 if every value is finite.
+   !> Rates are looked at where the step has them, the optional parts where
+   !> they are allocated. A sum finds such a value at the cost of its
+   !> additions (finite values sum to infinity only beyond huge, no result
+   !> either); ieee_is_finite, unlike a comparison, raises no
+   !> invalid-operation flag on a NaN.
+   pure integer function not_finite(result) result(kind)
+      type(step_result_type), intent(in) :: result
+      real(dp) :: s
+      kind = 1
+      s = total(result%pos, size(result%pos)) + total(result%angle, size(result%angle)) + result%residual
+      if (allocated(result%pos_z)) s = s + total(result%pos_z, size(result%pos_z))
+      if (allocated(result%joint_motion)) s = s + sum(result%joint_motion(1, :))
+      if (allocated(result%link_rotation)) s = s + total(result%link_rotation, size(result%link_rotation))
+      if (allocated(result%interior)) s = s + total(result%interior, size(result%interior))
+      if (allocated(result%mesh_pos)) s = s + total(result%mesh_pos, size(result%mesh_pos))
+      if (.not. ieee_is_finite(s)) return
+      kind = 2
+      if (result%has_velocity) then
+         s = total(result%vel, size(result%vel)) + total(result%omega, size(result%omega))
+         if (allocated(result%vel_z)) s = s + total(result%vel_z, size(result%vel_z))
+         if (allocated(result%joint_motion)) s = s + sum(result%joint_motion(2, :))
+         if (allocated(result%link_omega)) s = s + total(result%link_omega, size(result%link_omega))
+         if (allocated(result%mesh_vel)) s = s + total(result%mesh_vel, size(result%mesh_vel))
+         if (.not. ieee_is_finite(s)) return
+      end if
+      kind = 3
+      if (result%has_acceleration) then
+         s = total(result%acc, size(result%acc)) + total(result%alpha, size(result%alpha))
+         if (allocated(result%acc_z)) s = s + total(result%acc_z, size(result%acc_z))
+         if (allocated(result%joint_motion)) s = s + sum(result%joint_motion(3, :))
+         if (allocated(result%link_alpha)) s = s + total(result%link_alpha, size(result%link_alpha))
+         if (allocated(result%mesh_acc)) s = s + total(result%mesh_acc, size(result%mesh_acc))
+         if (.not. ieee_is_finite(s)) return
+      end if
+      kind = 4
+      s = 0
+      if (allocated(result%cell_force)) s = s + total(result%cell_force, size(result%cell_force))
+      if (result%has_reactions) s = s + total(result%reactions, size(result%reactions))
+      if (result%has_deflection) s = s + total(result%deflection, size(result%deflection))
+      if (result%has_energy) s = s + total(result%energy, size(result%energy))
+      if (.not. ieee_is_finite(s)) return
+      kind = 0
+   end function not_finite
+
+   !> The sum of the n values of x, a whole array of any rank (contiguous:
+   !> an allocatable component), in a plain loop: the sum intrinsic on the
+   !> results' small two-dimensional arrays costs several times more.
+   pure real(dp) function total(x, n)
+      integer, intent(in) :: n
+      real(dp), intent(in) :: x(n)
+      integer :: i
+      total = 0
+      do i = 1, n
+         total = total + x(i)
+      end do
+   end function total
 
    !> Allocate a zeroed result for a model with nnode nodes and nlink links.
    pure subroutine new_step_result(self, nnode, nlink)

@@ -178,7 +178,9 @@ contains
       self%max_iter = model%analysis%max_iter
       self%fdof = free_dofs(self%m)
       call tangent_for(self%m, self%kt)
-      self%difference_step = model%analysis%dt/4
+      ! A quarter of the run's step (curve_rates), and of the run where the
+      ! step is longer than the run (its one step is the run).
+      self%difference_step = min(model%analysis%dt, model%analysis%t_end - model%analysis%t_start)/4
       self%t_start = model%analysis%t_start
       self%t_end = model%analysis%t_end
       self%dt = model%analysis%dt
