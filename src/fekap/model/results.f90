@@ -109,29 +109,20 @@ contains
       type(step_result_type), intent(in) :: result
       real(dp) :: s
       kind = 1
-      s = total(result%pos, size(result%pos)) + total(result%angle, size(result%angle)) + result%residual
-      if (allocated(result%pos_z)) s = s + total(result%pos_z, size(result%pos_z))
-      if (allocated(result%joint_motion)) s = s + sum(result%joint_motion(1, :))
-      if (allocated(result%link_rotation)) s = s + total(result%link_rotation, size(result%link_rotation))
+      s = motion_total(result%pos, result%angle, result%pos_z, result%joint_motion, 1, result%link_rotation, &
+         & result%mesh_pos) + result%residual
       if (allocated(result%interior)) s = s + total(result%interior, size(result%interior))
-      if (allocated(result%mesh_pos)) s = s + total(result%mesh_pos, size(result%mesh_pos))
       if (.not. ieee_is_finite(s)) return
       kind = 2
       if (result%has_velocity) then
-         s = total(result%vel, size(result%vel)) + total(result%omega, size(result%omega))
-         if (allocated(result%vel_z)) s = s + total(result%vel_z, size(result%vel_z))
-         if (allocated(result%joint_motion)) s = s + sum(result%joint_motion(2, :))
-         if (allocated(result%link_omega)) s = s + total(result%link_omega, size(result%link_omega))
-         if (allocated(result%mesh_vel)) s = s + total(result%mesh_vel, size(result%mesh_vel))
+         s = motion_total(result%vel, result%omega, result%vel_z, result%joint_motion, 2, result%link_omega, &
+            & result%mesh_vel)
          if (.not. ieee_is_finite(s)) return
       end if
       kind = 3
       if (result%has_acceleration) then
-         s = total(result%acc, size(result%acc)) + total(result%alpha, size(result%alpha))
-         if (allocated(result%acc_z)) s = s + total(result%acc_z, size(result%acc_z))
-         if (allocated(result%joint_motion)) s = s + sum(result%joint_motion(3, :))
-         if (allocated(result%link_alpha)) s = s + total(result%link_alpha, size(result%link_alpha))
-         if (allocated(result%mesh_acc)) s = s + total(result%mesh_acc, size(result%mesh_acc))
+         s = motion_total(result%acc, result%alpha, result%acc_z, result%joint_motion, 3, result%link_alpha, &
+            & result%mesh_acc)
          if (.not. ieee_is_finite(s)) return
       end if
       kind = 4
@@ -143,6 +134,21 @@ contains
       if (.not. ieee_is_finite(s)) return
       kind = 0
    end function not_finite
+
+   !> The sum of one kind of motion (positions, or a rate) over a result's
+   !> parts: nodes, links, and where allocated the nodes' z, row `row` of
+   !> the joints' motion, the links' spatial rotation (or its rate) and the
+   !> mesh's points.
+   pure real(dp) function motion_total(nodes, links, z, joints, row, spatial_links, mesh) result(s)
+      real(dp), contiguous, intent(in) :: nodes(:, :), links(:)
+      real(dp), allocatable, intent(in) :: z(:), joints(:, :), spatial_links(:, :), mesh(:, :)
+      integer, intent(in) :: row
+      s = total(nodes, size(nodes)) + total(links, size(links))
+      if (allocated(z)) s = s + total(z, size(z))
+      if (allocated(joints)) s = s + sum(joints(row, :))
+      if (allocated(spatial_links)) s = s + total(spatial_links, size(spatial_links))
+      if (allocated(mesh)) s = s + total(mesh, size(mesh))
+   end function motion_total
 
    !> The sum of the n values of x, a whole array of any rank (contiguous:
    !> an allocatable component), in a plain loop: the sum intrinsic on the
