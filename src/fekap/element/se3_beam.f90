@@ -47,7 +47,8 @@ module fekap_element_se3_beam
       real(dp) :: length = 1
       !> Relative motion of the end frames in the reference configuration.
       real(dp) :: d0(6) = 0
-      !> k = C/L in the axes of node A (6 x 6, symmetric).
+      !> k = C/L in the axes of node A (6 x 6, symmetric), or the balanced
+      !> weights of new_se3_beam.
       real(dp) :: k(6, 6) = 0
       !> Section axes (e1, e2, e3) as columns, in the axes of node A.
       real(dp) :: axes(3, 3) = 0
@@ -67,11 +68,24 @@ contains
    !> (x2, r2), the section stiffnesses (EA, GA2, GA3, GJ, EI2, EI3) and the
    !> orientation vector v (global axes). Input errors: coincident ends, a
    !> stiffness not positive, v parallel to the beam.
-   pure subroutine new_se3_beam(self, x1, r1, x2, r2, section, orientation, error)
+   !>
+   !> With balanced, k weighs the strains isotropically instead:
+   !> k = (s/L) blockdiag(I, L^2 I), s = max(EA, GA2, GA3, GJ/L^2, EI2/L^2,
+   !> EI3/L^2), a rotation strain counting as its displacement over the
+   !> length (the section is kept for the resultants). The kinematic
+   !> solution is the stress-free state, whatever the weights (every
+   !> element's strain vanishes there), and so are its rates, but Newton's
+   !> convergence and the rates' round-off are not: with the section's own
+   !> k, spread over k_max/k_min, an iterate's stiff strains carry forces
+   !> that the material tangent's soft part cannot balance, and Newton
+   !> converges only from within about k_min/k_max of the solution
+   !> (docs/spatial.md, the spread table).
+   pure subroutine new_se3_beam(self, x1, r1, x2, r2, section, orientation, error, balanced)
       type(se3_beam_type), intent(out) :: self
       real(dp), intent(in) :: x1(3), r1(3, 3), x2(3), r2(3, 3), section(6), orientation(3)
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: e1(3), e2(3), lv, q(6, 6)
+      logical, intent(in), optional :: balanced
+      real(dp) :: e1(3), e2(3), lv, q(6, 6), s
       integer :: i
       self%length = norm2(x2 - x1)
       if (.not. self%length > 0) then
@@ -106,6 +120,14 @@ contains
          self%k(i, i) = section(i)/self%length
       end do
       self%k = matmul(q, matmul(self%k, transpose(q)))
+      if (.not. present(balanced)) return
+      if (.not. balanced) return
+      s = max(maxval(section(1:3)), maxval(section(4:6))/self%length**2)
+      self%k = 0
+      do i = 1, 3
+         self%k(i, i) = s/self%length
+         self%k(i + 3, i + 3) = s*self%length
+      end do
    end subroutine new_se3_beam
 
    !> The relative motion d = log(H_A^-1 H_B) of frames (x(:, n), r(:, :, n)), n = 1, 2.

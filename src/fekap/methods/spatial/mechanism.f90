@@ -273,7 +273,10 @@ contains
    end subroutine add_universal
 
    !> A beam between nodes n1 and n2 (both with frames); section
-   !> (EA, GA2, GA3, GJ, EI2, EI3), orientation vector as CBAR's.
+   !> (EA, GA2, GA3, GJ, EI2, EI3), orientation vector as CBAR's. Its
+   !> strains are weighed by the element's balanced k (new_se3_beam): the
+   !> kinematics does not depend on the stiffnesses, only its Newton and
+   !> round-off on their spread.
    subroutine add_beam(m, n1, n2, section, orientation, error)
       type(spatial_mechanism_type), intent(inout) :: m
       integer, intent(in) :: n1, n2
@@ -292,7 +295,7 @@ contains
          eye(i, i) = 1
       end do
       call new_se3_beam(b%element, m%points(m%nodes(n1)%point)%x0, eye, m%points(m%nodes(n2)%point)%x0, eye, &
-         & section, orientation, error)
+         & section, orientation, error, balanced=.true.)
       if (allocated(error)) return
       b%nodes = [n1, n2]
       m%beams = [m%beams, b]
