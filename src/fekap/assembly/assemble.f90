@@ -96,8 +96,8 @@ contains
          do i = 1, 6
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do
-         call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), mesh%scatter_count(2, e), ke, &
-            & kff%a, kfd)
+         call scatter_element(mesh%scatter_map(:, mesh%scatter_start(e):), mesh%scatter_count(1, e), &
+            & mesh%scatter_count(2, e), ke, kff%a, kfd)
       end do
       call add_contact(mesh, q, seg, r, kff, kfd)
    end subroutine assemble_tangent
@@ -143,7 +143,7 @@ contains
             r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
          end do
          if (mesh%scatter_count(2, e) > 0) then
-            call scatter_element_driven(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), &
+            call scatter_element_driven(mesh%scatter_map(:, mesh%scatter_start(e):), mesh%scatter_count(1, e), &
                & mesh%scatter_count(2, e), ke, kfd)
          end if
       end do
@@ -152,7 +152,7 @@ contains
 
    !> scatter_element's free-driven entries alone.
    pure subroutine scatter_element_driven(map, nb, nd, ke, driven)
-      integer, intent(in) :: map(2, 36), nb, nd
+      integer, intent(in) :: nb, nd, map(2, nb + nd)
       real(dp), intent(in) :: ke(36)
       real(dp), intent(inout) :: driven(*)
       integer :: m
@@ -166,7 +166,7 @@ contains
    !> into the free-driven block, each array taken in memory order (one index
    !> per entry instead of a row and a column).
    pure subroutine scatter_element(map, nb, nd, ke, band, driven)
-      integer, intent(in) :: map(2, 36), nb, nd
+      integer, intent(in) :: nb, nd, map(2, nb + nd)
       real(dp), intent(in) :: ke(36)
       !> The band storage, (kd + 1) * nfree, and the free-driven block, nfree * ndriven.
       real(dp), intent(inout) :: band(*), driven(*)

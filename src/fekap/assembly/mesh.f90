@@ -83,14 +83,19 @@ module fekap_assembly_mesh
       !> statics the weights (fekap_assembly_loads).
       type(load_set_type) :: loads
       type(slide_type), allocatable :: slides(:)
-      !> (2, 36, nelem): where the entries of element e's tangent go, as lists
-      !> of (k, position), k = i + 6 (j - 1) the entry of the 6 x 6 tangent and
-      !> position its place in the band storage (kd + 1, nfree) or in the
-      !> free-driven block (nfree, ndriven), both counted in memory order: first
-      !> scatter_count(1, e) entries into the band, then scatter_count(2, e)
-      !> into the free-driven block. Entries on fixed dofs and in the band's
-      !> lower triangle are not listed.
-      integer, allocatable :: scatter_map(:, :, :)
+      !> (2, entries): where the entries of each element's tangent go, as
+      !> lists of (k, position), k = i + 6 (j - 1) the entry of the 6 x 6
+      !> tangent and position its place in the band storage (kd + 1, nfree) or
+      !> in the free-driven block (nfree, ndriven), both counted in memory
+      !> order: element e's from scatter_start(e), first scatter_count(1, e)
+      !> entries into the band, then scatter_count(2, e) into the free-driven
+      !> block. Entries on fixed dofs and in the band's lower triangle are not
+      !> listed (an element on free dofs has 21 of its 36: the lists one after
+      !> another, not 36 places an element).
+      integer, allocatable :: scatter_map(:, :)
+      !> (nelem + 1): where each element's list starts in scatter_map (the
+      !> last: one past the end).
+      integer, allocatable :: scatter_start(:)
       !> (2, nelem): the lengths of the band and free-driven lists of scatter_map.
       integer, allocatable :: scatter_count(:, :)
    end type mesh_type
@@ -435,38 +440,56 @@ contains
 
    !> Destinations of every element tangent entry (see mesh_type%scatter_map),
    !> so that assembly adds without looking up equation numbers or skipping
-   !> entries that go nowhere.
+   !> entries that go nowhere: the lists' lengths, then the lists.
    pure subroutine build_scatter_map(self)
       type(mesh_type), intent(inout) :: self
-      integer :: e, i, j, ei, ej, dj, nb, nd, band(2, 36), driven(2, 36)
-      allocate (self%scatter_map(2, 36, size(self%elements)), source=0)
-      allocate (self%scatter_count(2, size(self%elements)), source=0)
+      integer :: e, nb, nd, band(2, 36), driven(2, 36), at
+      allocate (self%scatter_count(2, size(self%elements)), self%scatter_start(size(self%elements) + 1))
+      at = 1
       do e = 1, size(self%elements)
-         nb = 0
-         nd = 0
-         do j = 1, 6
-            dj = self%edof(j, e)
-            ej = self%eq(dj)
-            do i = 1, 6
-               ei = self%eq(self%edof(i, e))
-               if (ei == 0) cycle
-               if (ej > 0) then
-                  if (ei <= ej) then
-                     nb = nb + 1
-                     ! A(ei, ej) at (kd + 1 + ei - ej, ej) of the band storage.
-                     band(:, nb) = [i + 6*(j - 1), self%kd + 1 + ei - ej + (self%kd + 1)*(ej - 1)]
-                  end if
-               else if (self%drive_col(dj) > 0) then
-                  nd = nd + 1
-                  driven(:, nd) = [i + 6*(j - 1), ei + self%nfree*(self%drive_col(dj) - 1)]
-               end if
-            end do
-         end do
-         self%scatter_map(:, 1:nb, e) = band(:, 1:nb)
-         self%scatter_map(:, nb + 1:nb + nd, e) = driven(:, 1:nd)
+         call element_destinations(self, e, band, nb, driven, nd)
+         self%scatter_start(e) = at
          self%scatter_count(:, e) = [nb, nd]
+         at = at + nb + nd
+      end do
+      self%scatter_start(size(self%elements) + 1) = at
+      allocate (self%scatter_map(2, at - 1))
+      do e = 1, size(self%elements)
+         call element_destinations(self, e, band, nb, driven, nd)
+         at = self%scatter_start(e)
+         self%scatter_map(:, at:at + nb - 1) = band(:, 1:nb)
+         self%scatter_map(:, at + nb:at + nb + nd - 1) = driven(:, 1:nd)
       end do
    end subroutine build_scatter_map
+
+   !> Element e's entries into the band (nb) and into the free-driven block
+   !> (nd), as build_scatter_map lists them.
+   pure subroutine element_destinations(self, e, band, nb, driven, nd)
+      type(mesh_type), intent(in) :: self
+      integer, intent(in) :: e
+      integer, intent(out) :: band(2, 36), nb, driven(2, 36), nd
+      integer :: i, j, ei, ej, dj
+      nb = 0
+      nd = 0
+      do j = 1, 6
+         dj = self%edof(j, e)
+         ej = self%eq(dj)
+         do i = 1, 6
+            ei = self%eq(self%edof(i, e))
+            if (ei == 0) cycle
+            if (ej > 0) then
+               if (ei <= ej) then
+                  nb = nb + 1
+                  ! A(ei, ej) at (kd + 1 + ei - ej, ej) of the band storage.
+                  band(:, nb) = [i + 6*(j - 1), self%kd + 1 + ei - ej + (self%kd + 1)*(ej - 1)]
+               end if
+            else if (self%drive_col(dj) > 0) then
+               nd = nd + 1
+               driven(:, nd) = [i + 6*(j - 1), ei + self%nfree*(self%drive_col(dj) - 1)]
+            end if
+         end do
+      end do
+   end subroutine element_destinations
 
    !> Dof groups that the tangent couples: every element, and every slideline
    !> (slave translations and tie rotation with every master point's translations).

@@ -33,6 +33,12 @@ module fekap_linalg_band_lu
 
    public :: band_lu_nonzeros_type, new_band_lu_nonzeros, gather_nonzeros, nonzeros_solve, nonzeros_solve_transposed
 
+   !> The symbolic factorisation's window of columns, in multiples of the
+   !> kl + ku + 1 columns that one column's elimination reaches: the window's
+   !> columns are moved to its front once every window_columns - 1 multiples
+   !> (a copy of about 2 ldab / (window_columns - 1) booleans a column).
+   integer, parameter :: window_columns = 16
+
    !> The places of an n x n band LU factor that can hold a nonzero, for
    !> the pivots of its last symbolic factorisation, and their values in
    !> the last factor gathered.
@@ -58,6 +64,11 @@ module fekap_linalg_band_lu
       !> order; rows j - kl - ku to j - 1 of column j).
       integer, allocatable :: upper_start(:), upper_at(:), upper_row(:)
       real(dp), allocatable :: upper(:)
+      !> (2 kl + ku + 1, columns): the symbolic factorisation's booleans for
+      !> a window of columns (symbolic_factor); all false between its calls
+      !> (it clears each column's places as it lists them), so that a call
+      !> need not clear it again.
+      logical, allocatable :: window(:, :)
    end type band_lu_nonzeros_type
 
 contains
@@ -91,6 +102,7 @@ contains
       allocate (nz%lower_at(max(1, n*kl)), nz%lower_column(max(1, n*kl)), nz%lower_row(max(1, n*kl)), &
          & nz%lower(max(1, n*kl)))
       allocate (nz%upper_at(max(1, n*(kl + ku))), nz%upper_row(max(1, n*(kl + ku))), nz%upper(max(1, n*(kl + ku))))
+      allocate (nz%window(size(possible, 1), min(n, window_columns*(kl + ku + 1))), source=.false.)
    end subroutine new_band_lu_nonzeros
 
    !> The values of the factor in ab with pivots ipiv (dgbtrf's band
@@ -143,72 +155,31 @@ contains
    !> update fills the places of column j + jj below row j where column j
    !> has a multiplier and row j an entry of U in that column (a superset
    !> of dgbtf2's, which skips a zero entry of U: every other place of its
-   !> factor is exactly zero). Then the lists, L's rows renumbered: the
-   !> interchange of column j's elimination (rows j and ipiv(j)) comes
-   !> before its multipliers are applied and after column j - 1's, and it
-   !> moves rows below j only after column j's; so with every interchange
-   !> made first, row r of column j's elimination is row final(r) of the
-   !> interchanged b, final being the composition of the interchanges of
-   !> columns j + 1 to n - 1 (row j itself, and the rows above, are not
-   !> moved by them).
+   !> factor is exactly zero). Column j's elimination reaches columns j to
+   !> j + kl + ku alone, and no later one changes column j; so the booleans
+   !> are kept for a window of columns (nz%window, window_columns (kl + ku
+   !> + 1) of them, column c at c - base) rather than for the whole band
+   !> (as much memory as the matrix's band storage, at 4 bytes a place):
+   !> columns' places are listed when their eliminations are done, and the
+   !> columns not yet done moved to the window's front, the next columns'
+   !> entries marked after them (symbolic_kernel). Then L's rows
+   !> renumbered: the interchange of column j's elimination (rows j and
+   !> ipiv(j)) comes before its multipliers are applied and after column j
+   !> - 1's, and it moves rows below j only after column j's; so with every
+   !> interchange made first, row r of column j's elimination is row
+   !> final(r) of the interchanged b, final being the composition of the
+   !> interchanges of columns j + 1 to n - 1 (row j itself, and the rows
+   !> above, are not moved by them).
    pure subroutine symbolic_factor(nz, ipiv)
       type(band_lu_nonzeros_type), intent(inout) :: nz
       integer, contiguous, intent(in) :: ipiv(:)
-      logical, allocatable :: place(:, :)
-      logical :: swap
       integer, allocatable :: final(:)
-      integer :: n, kl, ku, kv, ldab, i, j, jj, jp, ju, km, nl, nu, k, moved
+      integer :: n, i, j, k, moved
       n = nz%n
-      kl = nz%kl
-      ku = nz%ku
-      kv = kl + ku
-      ldab = 2*kl + ku + 1
-      allocate (place(ldab, n), source=.false.)
-      call mark_entries(size(place), place, nz%entry_at)
       nz%pivot = ipiv
-      ju = 1
-      do j = 1, n
-         km = min(kl, n - j)
-         jp = ipiv(j) - j + 1
-         ju = max(ju, min(j + ku + jp - 1, n))
-         if (jp /= 1) then
-            do jj = 0, ju - j
-               swap = place(kv + jp - jj, j + jj)
-               place(kv + jp - jj, j + jj) = place(kv + 1 - jj, j + jj)
-               place(kv + 1 - jj, j + jj) = swap
-            end do
-         end if
-         do jj = 1, ju - j
-            if (place(kv + 1 - jj, j + jj)) then
-               do i = 1, km
-                  place(kv + 1 + i - jj, j + jj) = place(kv + 1 + i - jj, j + jj) .or. place(kv + 1 + i, j)
-               end do
-            end if
-         end do
-      end do
-      nl = 0
-      nu = 0
-      do j = 1, n
-         nz%lower_start(j) = nl + 1
-         nz%upper_start(j) = nu + 1
-         do i = max(1, j - kv), j - 1
-            if (place(kv + 1 + i - j, j)) then
-               nu = nu + 1
-               nz%upper_row(nu) = i
-               nz%upper_at(nu) = kv + 1 + i - j + (j - 1)*ldab
-            end if
-         end do
-         do i = 1, min(kl, n - j)
-            if (place(kv + 1 + i, j)) then
-               nl = nl + 1
-               nz%lower_column(nl) = j
-               nz%lower_row(nl) = j + i
-               nz%lower_at(nl) = kv + 1 + i + (j - 1)*ldab
-            end if
-         end do
-      end do
-      nz%lower_start(n + 1) = nl + 1
-      nz%upper_start(n + 1) = nu + 1
+      call symbolic_kernel(n, nz%kl, nz%ku, size(nz%window, 2), ipiv, nz%entry_start, size(nz%entry_at), nz%entry_at, &
+         & nz%window, size(nz%lower_at), nz%lower_start, nz%lower_column, nz%lower_row, nz%lower_at, size(nz%upper_at), &
+         & nz%upper_start, nz%upper_row, nz%upper_at)
       ! The rows in the order after every interchange, from the last column back.
       final = [(i, i=1, n)]
       do j = n - 1, 1, -1
@@ -223,15 +194,119 @@ contains
       end do
    end subroutine symbolic_factor
 
-   !> place (taken as one array) true at the places `at`.
-   pure subroutine mark_entries(size_of, place, at)
-      integer, intent(in) :: size_of, at(:)
+   !> symbolic_factor's loops and lists on explicit-shape arrays (their
+   !> addresses without a descriptor's arithmetic); place is the window of
+   !> columns, all false on entry and on return. The window holds columns
+   !> base + 1 to loaded; the elimination runs over those whose columns
+   !> reached are all there (to loaded - kl - ku, or to n), then lists them,
+   !> and moves the rest to the window's front.
+   pure subroutine symbolic_kernel(n, kl, ku, columns, ipiv, entry_start, nentry, entry_at, place, nlower, lower_start, &
+      & lower_column, lower_row, lower_at, nupper, upper_start, upper_row, upper_at)
+      integer, intent(in) :: n, kl, ku, columns, ipiv(n), entry_start(n + 1), nentry, entry_at(nentry), nlower, nupper
+      logical, intent(inout) :: place(2*kl + ku + 1, columns)
+      integer, intent(out) :: lower_start(n + 1), lower_column(nlower), lower_row(nlower), lower_at(nlower)
+      integer, intent(out) :: upper_start(n + 1), upper_row(nupper), upper_at(nupper)
+      logical :: swap
+      integer :: kv, ldab, i, j, jj, jp, ju, km, nl, nu, base, loaded, c, first, last, live
+      kv = kl + ku
+      ldab = 2*kl + ku + 1
+      base = 0
+      loaded = columns
+      call mark_columns(entry_start(1), entry_start(loaded + 1) - 1, entry_at, 0, size(place), place)
+      nl = 0
+      nu = 0
+      ju = 1
+      first = 1
+      do
+         last = loaded - kv
+         if (loaded == n) last = n
+         do j = first, last
+            c = j - base
+            km = min(kl, n - j)
+            jp = ipiv(j) - j + 1
+            ju = max(ju, min(j + ku + jp - 1, n))
+            if (jp /= 1) then
+               do jj = 0, ju - j
+                  swap = place(kv + jp - jj, c + jj)
+                  place(kv + jp - jj, c + jj) = place(kv + 1 - jj, c + jj)
+                  place(kv + 1 - jj, c + jj) = swap
+               end do
+            end if
+            do jj = 1, ju - j
+               if (place(kv + 1 - jj, c + jj)) then
+                  do i = 1, km
+                     place(kv + 1 + i - jj, c + jj) = place(kv + 1 + i - jj, c + jj) .or. place(kv + 1 + i, c)
+                  end do
+               end if
+            end do
+         end do
+         call list_columns(n, kl, ku, first, last, base, columns, place, nl, nlower, lower_start, lower_column, lower_row, &
+            & lower_at, nu, nupper, upper_start, upper_row, upper_at)
+         if (last == n) exit
+         ! Columns last + 1 to loaded to the window's front (their old places
+         ! cleared), then the next columns' entries after them.
+         live = loaded - last
+         place(:, 1:live) = place(:, last + 1 - base:loaded - base)
+         place(:, max(live + 1, last + 1 - base):loaded - base) = .false.
+         base = last
+         first = last + 1
+         c = loaded
+         loaded = min(n, base + columns)
+         call mark_columns(entry_start(c + 1), entry_start(loaded + 1) - 1, entry_at, base*ldab, size(place), place)
+      end do
+      lower_start(n + 1) = nl + 1
+      upper_start(n + 1) = nu + 1
+   end subroutine symbolic_kernel
+
+   !> The places of columns first to last (at first - base to last - base
+   !> of the window), their eliminations done, appended to the lists (nl
+   !> and nu of them so far), and cleared in the window (no other place of
+   !> the window is ever set: each is one of the matrix's rows).
+   pure subroutine list_columns(n, kl, ku, first, last, base, columns, place, nl, nlower, lower_start, lower_column, &
+      & lower_row, lower_at, nu, nupper, upper_start, upper_row, upper_at)
+      integer, intent(in) :: n, kl, ku, first, last, base, columns, nlower, nupper
+      logical, intent(inout) :: place(2*kl + ku + 1, columns)
+      integer, intent(inout) :: nl, nu
+      integer, intent(inout) :: lower_start(n + 1), lower_column(nlower), lower_row(nlower), lower_at(nlower)
+      integer, intent(inout) :: upper_start(n + 1), upper_row(nupper), upper_at(nupper)
+      integer :: kv, ldab, i, j, c
+      kv = kl + ku
+      ldab = 2*kl + ku + 1
+      do j = first, last
+         c = j - base
+         lower_start(j) = nl + 1
+         upper_start(j) = nu + 1
+         do i = max(1, j - kv), j - 1
+            if (place(kv + 1 + i - j, c)) then
+               place(kv + 1 + i - j, c) = .false.
+               nu = nu + 1
+               upper_row(nu) = i
+               upper_at(nu) = kv + 1 + i - j + (j - 1)*ldab
+            end if
+         end do
+         place(kv + 1, c) = .false.
+         do i = 1, min(kl, n - j)
+            if (place(kv + 1 + i, c)) then
+               place(kv + 1 + i, c) = .false.
+               nl = nl + 1
+               lower_column(nl) = j
+               lower_row(nl) = j + i
+               lower_at(nl) = kv + 1 + i + (j - 1)*ldab
+            end if
+         end do
+      end do
+   end subroutine list_columns
+
+   !> place (the window taken as one array) true at the matrix's places
+   !> entry_at(first:last), less offset (the window's first column's place).
+   pure subroutine mark_columns(first, last, entry_at, offset, size_of, place)
+      integer, intent(in) :: first, last, entry_at(:), offset, size_of
       logical, intent(inout) :: place(size_of)
       integer :: k
-      do k = 1, size(at)
-         place(at(k)) = .true.
+      do k = first, last
+         place(entry_at(k) - offset) = .true.
       end do
-   end subroutine mark_entries
+   end subroutine mark_columns
 
    !> Solve A x = b with the factor's nonzeros as dgbtrs ('N') does: each
    !> column's row interchange and L's multipliers (all interchanges made

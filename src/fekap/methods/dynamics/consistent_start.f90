@@ -116,7 +116,7 @@ contains
       ! M over the free dofs, in the same band.
       call system%kff%zero()
       do e = 1, size(mesh%elements)
-         call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), 0, dyn%me(:, :, e), &
+         call scatter_element(mesh%scatter_map(:, mesh%scatter_start(e):), mesh%scatter_count(1, e), 0, dyn%me(:, :, e), &
             & system%kff%a, system%kfd)
       end do
       do k = 1, n

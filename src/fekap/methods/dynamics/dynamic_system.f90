@@ -276,8 +276,8 @@ contains
       do e = 1, size(mesh%elements)
          ! c2 M_e and alpha's c1 alpha M_e (beta's share went in with the damping force).
          call scaled(self%me(:, :, e), c2 + c1*self%alpha(e), me)
-         call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), mesh%scatter_count(2, e), me, &
-            & system%kff%a, system%kfd)
+         call scatter_element(mesh%scatter_map(:, mesh%scatter_start(e):), mesh%scatter_count(1, e), &
+            & mesh%scatter_count(2, e), me, system%kff%a, system%kfd)
       end do
       do i = 1, mesh%nfree
          k = self%point_mass(mesh%eq_dof(i))

@@ -167,7 +167,7 @@ contains
          call system%kff%zero()
          do e = 1, size(mesh%elements)
             ! M_ff only: no entries into the free-driven block.
-            call scatter_element(mesh%scatter_map(:, :, e), mesh%scatter_count(1, e), 0, dyn%me(:, :, e), &
+            call scatter_element(mesh%scatter_map(:, mesh%scatter_start(e):), mesh%scatter_count(1, e), 0, dyn%me(:, :, e), &
                & system%kff%a, system%kfd)
          end do
          do k = 1, mesh%nfree
