@@ -21,7 +21,9 @@
 !> of the stress-free form are computed element by element from nodal
 !> differences (strain_rates, strain_accelerations), which keeps them free
 !> of the cancellation of a global product: they are the residuals of the
-!> rates' refinement step.
+!> rates' refinement step. Of a redundant mechanism (more rows than free
+!> dofs) only the rows and that geometry are kept: its rates, solved with
+!> K, are refined with the same residuals weighted by W (strain_forces).
 !>
 !> The module is over 600 lines with one concept: B's assembly (its entries'
 !> destinations found once), its band LU, solves and condition estimate,
@@ -41,6 +43,7 @@ module fekap_assembly_strain_rate
 
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
    public :: strain_rates, strain_accelerations, strain_rate_rcond, strain_rate_rcond_bounds, rate_geometry_at
+   public :: strain_forces, strain_rows
 
    !> The bounds from the last estimate hold while x = ||B_0^-1|| ||B_f - B_0||
    !> is below this (within ((1 + x)/(1 - x))**2 < 2.8 of each other).
@@ -58,6 +61,12 @@ module fekap_assembly_strain_rate
       !> Whether the square-root form applies: B_f square (as many strain and
       !> gap rows as free dofs), one Gauss point per element, no prismatic joints.
       logical :: applies = .false.
+      !> Whether the mechanism is redundant (more strain and gap rows than
+      !> free dofs), with one Gauss point per element and no prismatic
+      !> joints: its rates, solved with K = B^T W B, are refined with the
+      !> strain rates (strain_rates, strain_accelerations, strain_forces) in
+      !> the rows' own order; only the rows and the geometry are kept then.
+      logical :: refines = .false.
       !> Equations (rows = columns), sub- and superdiagonals of B_f.
       integer :: n = 0, kl = 0, ku = 0
       !> Whether dgbtrf takes its blocked code for B_f's shape (band_lu_blocked).
@@ -132,11 +141,20 @@ contains
       nrow = strain_rows(mesh)
       self%n = mesh%nfree
       allocate (self%element_row(3, nelem), self%slide_row(nslide), source=0)
-      if (nrow /= mesh%nfree .or. mesh%nfree == 0) return
+      if (mesh%nfree == 0) return
       if (any(mesh%elements%ngauss /= 1)) return
       do i = 1, nslide
          if (mesh%slides(i)%kind == joint_prismatic) return
       end do
+      if (nrow > mesh%nfree) then
+         ! Redundant: the rows in their own order, and the geometry of B.
+         self%element_row = reshape([(row, row=1, 3*nelem)], [3, nelem])
+         self%slide_row = [(3*nelem + i, i=1, nslide)]
+         call allocate_geometry(self, nelem, nslide)
+         self%refines = .true.
+         return
+      end if
+      if (nrow /= mesh%nfree) return
       ! Each row's least and largest equation: rows 3 (e - 1) + 1:3 are
       ! element e's (Gamma1 and Gamma2 on all six dofs, kappa L on the
       ! rotations), then one per slideline over the dofs of all its segments.
@@ -194,15 +212,22 @@ contains
       allocate (self%ipiv(nrow), source=0)
       self%lu_blocked = band_lu_blocked(nrow, self%kl, self%ku)
       allocate (self%column_max(nrow), source=0.0_dp)
-      allocate (self%section(2, nelem), self%slide_ns(6, nslide), self%slide_ts(6, nslide), &
-         & self%slide_nm(3, nslide), source=0.0_dp)
-      allocate (self%slide_dofs(6, nslide), source=0)
+      call allocate_geometry(self, nelem, nslide)
       call build_element_map(self, mesh)
       ! B_f's places, for its factor's nonzeros and its column sizes (the
       ! nonzeros' record keeps them: entry_start, entry_at).
       call new_band_lu_nonzeros(self%nonzeros, self%kl, self%ku, entry_places(self))
       self%applies = .true.
    end subroutine new_strain_rate
+
+   !> Storage for the geometry of the stress-free B (section, slide_*).
+   pure subroutine allocate_geometry(self, nelem, nslide)
+      type(strain_rate_type), intent(inout) :: self
+      integer, intent(in) :: nelem, nslide
+      allocate (self%section(2, nelem), self%slide_ns(6, nslide), self%slide_ts(6, nslide), &
+         & self%slide_nm(3, nslide), source=0.0_dp)
+      allocate (self%slide_dofs(6, nslide), source=0)
+   end subroutine allocate_geometry
 
    !> Where B_f can have entries in its band storage: the elements' places
    !> (element_map) and every place of a slideline's row in the band (its
@@ -713,6 +738,51 @@ contains
          r(self%slide_row(i)) = r(self%slide_row(i)) - 2*dot_product(self%slide_ts(:, i), vs)*vm/self%slide_nm(3, i)
       end do
    end subroutine strain_accelerations
+
+   !> f = B_f^T W r over the free equations: the nodal forces of the
+   !> stresses W r of strain and gap rates r (by rows, as strain_rates gives
+   !> them), element by element with the stress-free B of the last assembly
+   !> (rate_geometry_at). W is the material tangent's (46): EA L, kGA L and
+   !> EI / L for Gamma1, Gamma2 and kappa L at the one Gauss point (weight 2,
+   !> Jacobian L/2), kp for a gap (65); so K = B^T W B at zero strain.
+   pure subroutine strain_forces(self, mesh, r, f)
+      type(strain_rate_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: r(:)
+      real(dp), contiguous, intent(out) :: f(:)
+      real(dp) :: rl, c, s, p1, p2, p3, fe(6)
+      integer :: e, i, k, eq
+      f = 0
+      do e = 1, size(mesh%elements)
+         associate (el => mesh%elements(e), rows => self%element_row(:, e))
+            rl = 1/el%length
+            c = self%section(1, e)
+            s = self%section(2, e)
+            p1 = el%ea*el%length*r(rows(1))
+            p2 = el%kga*el%length*r(rows(2))
+            p3 = el%ei*rl*r(rows(3))
+            ! The rows of B (see assemble_strain_rate's values at zero strain).
+            fe(1) = (-c*p1 + s*p2)*rl
+            fe(2) = (-s*p1 - c*p2)*rl
+            fe(3) = -p2/2 - p3
+            fe(4) = -fe(1)
+            fe(5) = -fe(2)
+            fe(6) = -p2/2 + p3
+         end associate
+         do k = 1, 6
+            eq = mesh%eq(mesh%edof(k, e))
+            if (eq > 0) f(eq) = f(eq) + fe(k)
+         end do
+      end do
+      do i = 1, size(mesh%slides)
+         p1 = mesh%slides(i)%kp*r(self%slide_row(i))
+         do k = 1, 6
+            if (self%slide_dofs(k, i) == 0) cycle
+            eq = mesh%eq(self%slide_dofs(k, i))
+            if (eq > 0) f(eq) = f(eq) + p1*self%slide_ns(k, i)
+         end do
+      end do
+   end subroutine strain_forces
 
    !> The number of rows of B for a mesh (3 per element, 1 per slideline):
    !> B_f is square when it equals the number of free dofs.

@@ -11,7 +11,8 @@ module fekap_fem_converged
    use fekap_fem_linear_system, only: apply_response
    use fekap_fem_branch, only: drive_increment, branch_verdict, branch_reject, branch_verify, branch_unverifiable
    use fekap_fem_rates, only: pivot_note, solve_velocities, solve_accelerations, singular_floor, root_velocities, &
-      & root_accelerations
+      & root_accelerations, refine_rates
+   use fekap_assembly_strain_rate, only: rate_geometry_at
    use fekap_fem_change_point, only: response_trusted
    use fekap_fem_state, only: fem_core_type, note_response_pivot
    use fekap_fem_predict, only: record_velocity
@@ -146,6 +147,11 @@ contains
                call solve_velocities(self%system, self%mesh, self%law_rate, state%v, self%counts)
             end if
          end if
+         if (self%refined_rates) then
+            ! B's geometry at q, for the strain rates of a redundant mechanism.
+            call rate_geometry_at(self%root, self%mesh, state%q, self%seg, self%system%section)
+            call refine_rates(self%root, self%mesh, self%system, state%v, self%strain_work, self%counts)
+         end if
          self%counts%velocity_solves = self%counts%velocity_solves + 1
          state%has_velocity = .true.
          if (.not. self%model%analysis%accelerations) return
@@ -160,6 +166,8 @@ contains
             call solve_accelerations(self%system, self%mesh, state%q, state%v, self%seg, self%law_rate2, state%a, &
                & self%work, self%counts)
          end if
+         if (self%refined_rates) call refine_rates(self%root, self%mesh, self%system, state%a, self%strain_work, &
+            & self%counts, state%v)
          self%counts%acceleration_solves = self%counts%acceleration_solves + 1
          state%has_acceleration = .true.
       end associate

@@ -24,7 +24,7 @@ module fekap_fem_state
    use fekap_fem_factor_record, only: factor_record_type
    use fekap_fem_prediction, only: prediction_type, new_prediction
    use fekap_fem_change_point, only: change_record_type
-   use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate
+   use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate, strain_rows
    use fekap_fem_fields, only: fill_nodes_links, fill_fields
    use fekap_stepping_step_control, only: step_cuts_type
    use fekap_strings, only: es_text
@@ -90,6 +90,11 @@ module fekap_fem_state
       logical :: root_form = .false.
       !> Scratch over the equations for the square-root form's solves.
       real(dp), allocatable :: root_work(:)
+      !> Whether the K form's rates of a redundant mechanism are refined
+      !> with its strain rates (root%refines, unloaded kinematics: see
+      !> fekap_fem_rates' refine_rates), and its scratch over B's rows.
+      logical :: refined_rates = .false.
+      real(dp), allocatable :: strain_work(:)
       !> Change points (see step_over): the predictor's check and the regular
       !> states on either side of a change point stepped over.
       type(change_record_type) :: change
@@ -132,6 +137,10 @@ contains
       self%root_form = self%root%applies .and. .not. self%loaded .and. model%analysis%solver /= solver_dense .and. &
          & planned_effects(model) == effects_kinematics
       allocate (self%root_work(self%mesh%nfree), source=0.0_dp)
+      ! Stressed configurations (loads, kinetostatics, statics) have no such residual.
+      self%refined_rates = self%root%refines .and. .not. self%loaded .and. &
+         & planned_effects(model) == effects_kinematics
+      if (self%refined_rates) allocate (self%strain_work(strain_rows(self%mesh)), source=0.0_dp)
       self%conv%mode = model%analysis%convergence
       self%conv%tol = model%analysis%tol
       self%conv%length = model%analysis%length_tol*self%model_length

@@ -5,24 +5,31 @@
 !> constrained mechanism solves them in the square-root form instead, with
 !> the band LU of its stress-free strain-rate operator B_f and one step of
 !> refinement (root_velocities, root_accelerations; docs/theory.md, "Rates
-!> at scale").
+!> at scale"). A redundant mechanism's rates from K's factor are refined
+!> with residuals from its element strain rates (refine_rates).
 module fekap_fem_rates
    use fekap_kinds, only: dp
    use fekap_model_work, only: work_counts_type
    use fekap_model_results, only: note_length
    use fekap_assembly_mesh, only: mesh_type
    use fekap_fem_linear_system, only: linear_system_type, drive_load_rhs, solve_system, assemble_second_derivative_at
-   use fekap_assembly_strain_rate, only: strain_rate_type, solve_strain_rate, strain_rates, strain_accelerations
+   use fekap_assembly_strain_rate, only: strain_rate_type, solve_strain_rate, strain_rates, strain_accelerations, &
+      & strain_forces
    implicit none
    private
 
    public :: pivot_note, singular_pivot, solve_velocities, solve_accelerations
-   public :: root_velocities, root_accelerations, root_drive_response
+   public :: root_velocities, root_accelerations, root_drive_response, refine_rates
 
    !> Solves of a rate in the square-root form: the plain solve and one
    !> refinement whose residual is the element strain rates (one more gains
    !> nothing: the error is then at the floor of the positions' round-off).
    integer, parameter :: root_passes = 2
+
+   !> Most refinements of a redundant mechanism's rates (refine_rates): each
+   !> gains about -log10(eps kappa(K)) digits, and they stop sooner when the
+   !> correction stops shrinking or is at round-off of the rates.
+   integer, parameter :: refine_passes = 4
 
    !> Pivot ratios (see band_pivot_ratio) below which the tangent at a
    !> configuration counts as singular or as near-singular (a warning),
@@ -119,6 +126,49 @@ contains
          a(mesh%eq_dof(k)) = system%rhs(k, 1)
       end do
    end subroutine solve_accelerations
+
+   !> Refinement of the velocities x (without v) or the accelerations x (with
+   !> the velocities v) of a redundant mechanism, solved with the factor of K
+   !> = B^T W B in the system (46): its error is eps kappa(K), the square of
+   !> B's condition times the spread of the stiffnesses W. Each pass solves K
+   !> dx_f = -B_f^T W r with that factor, r the strain and gap rates B x (or
+   !> second rates B x + eps2(v)) computed element by element from nodal
+   !> differences (strain_rates, strain_accelerations) and weighted element by
+   !> element (strain_forces): they vanish for the exact rates, and are free
+   !> of the cancellation of K x's global sum. A correction is taken while it
+   !> shrinks, and the passes stop at one at round-off of x. root holds B's
+   !> geometry at the configuration (rate_geometry_at); rows is scratch over
+   !> B's rows.
+   subroutine refine_rates(root, mesh, system, x, rows, counts, v)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      type(linear_system_type), intent(inout) :: system
+      real(dp), contiguous, intent(inout) :: x(:)
+      real(dp), contiguous, intent(inout) :: rows(:)
+      type(work_counts_type), intent(inout) :: counts
+      real(dp), contiguous, intent(in), optional :: v(:)
+      real(dp) :: last, size_of, scale
+      integer :: pass, k
+      last = huge(1.0_dp)
+      scale = maxval(abs(x))
+      do pass = 1, refine_passes
+         if (present(v)) then
+            call strain_accelerations(root, mesh, v, x, rows)
+         else
+            call strain_rates(root, mesh, x, rows)
+         end if
+         call strain_forces(root, mesh, rows, system%rhs(:, 1))
+         system%rhs(:, 1) = -system%rhs(:, 1)
+         call solve_system(system, counts)
+         size_of = maxval(abs(system%rhs(:, 1)))
+         if (.not. size_of < last) exit
+         do k = 1, mesh%nfree
+            x(mesh%eq_dof(k)) = x(mesh%eq_dof(k)) + system%rhs(k, 1)
+         end do
+         if (size_of <= epsilon(1.0_dp)*scale) exit
+         last = size_of
+      end do
+   end subroutine refine_rates
 
    !> Velocities of an exactly constrained mechanism: B_f v_f = -B_d v_d with
    !> the factor of the stress-free B in `root`, then one refinement
