@@ -31,6 +31,9 @@ module fekap_deck_motion
    !> Largest magnitude of a rate, harmonic or polynomial coefficient: larger
    !> drives overflow the residual long before they mean anything.
    real(dp), parameter :: law_max = 1.0e15_dp
+   !> Largest magnitude of a load's force or moment (as coordinates and
+   !> gravity: the statics and kinetostatics overflowed at 1.8e308).
+   real(dp), parameter :: load_max = 1.0e100_dp
 
 contains
 
@@ -324,8 +327,10 @@ contains
          list(n)%node = lookup_node(ctx, iline, 1)
          ok = list(n)%node > 0
          call ctx%real_field(iline, 2, list(n)%force(1), fine)
+         call check_load(2, list(n)%force(1), fine)
          ok = ok .and. fine
          call ctx%real_field(iline, 3, list(n)%force(2), fine)
+         call check_load(3, list(n)%force(2), fine)
          ok = ok .and. fine
          first_law = 4
          if (ctx%nfields(iline) > 3) then
@@ -354,6 +359,7 @@ contains
                end if
                ok = ok .and. list(n)%link > 0
                call ctx%real_field(iline, 6, list(n)%moment, fine)
+               call check_load(6, list(n)%moment, fine)
                ok = ok .and. fine
             else
                ok = .false.
@@ -367,6 +373,16 @@ contains
          if (.not. ok) n = n - 1
       end do
       model%loads = list(:n)
+   contains
+      !> A value read from field k (fine) beyond load_max is an error at the field (fine false).
+      subroutine check_load(k, value, fine)
+         integer, intent(in) :: k
+         real(dp), intent(in) :: value
+         logical, intent(inout) :: fine
+         if (.not. fine .or. abs(value) <= load_max) return
+         call ctx%error(iline, k, 'load too large', label='at most 1e100 in magnitude')
+         fine = .false.
+      end subroutine check_load
    end subroutine read_loads
 
    !> Whether a LOADs field starts a law.
