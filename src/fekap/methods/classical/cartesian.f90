@@ -283,6 +283,10 @@ contains
       call set_driven_angles(self, t)
       call newton_positions(self, t, increment_residual, iterations, error)
       if (allocated(error)) return
+      if (self%system%has_chains()) then
+         call follow_segments(self, t, increment_residual, iterations, error)
+         if (allocated(error)) return
+      end if
       ! Without its redundant equations the system may converge to a
       ! configuration of a mechanism with a joint missing: every equation must hold.
       if (self%redundant) then
@@ -322,6 +326,33 @@ contains
       self%branch = new
       call self%accept(self%q, t)
    end subroutine try_step
+
+   !> A slave that slid past the end of its master segment within the step
+   !> is on the next one at the converged configuration: its equations
+   !> follow it there and Newton goes on from that configuration (as the
+   !> FEM moves a slave on to the next master element), at most
+   !> max_segment_moves times. The last accepted configuration's branch
+   !> state is taken again with the new equations (as at a change of
+   !> equations between steps), and the equations are chosen again at the
+   !> next try, which may be a retry from that configuration.
+   subroutine follow_segments(self, t, increment_residual, iterations, error)
+      class(cartesian_stepper_type), intent(inout) :: self
+      real(dp), intent(in) :: t, increment_residual
+      integer, intent(inout) :: iterations
+      type(error_type), allocatable, intent(out) :: error
+      integer, parameter :: max_segment_moves = 4
+      integer :: move, its
+      logical :: moved
+      do move = 1, max_segment_moves
+         call self%system%select_segments(self%q, moved)
+         if (.not. moved) return
+         self%equations_time = huge(1.0_dp)
+         call branch_state(self, self%history%q(:, self%history%newest), .true., self%branch)
+         call newton_positions(self, t, increment_residual, its, error)
+         iterations = iterations + its
+         if (allocated(error)) return
+      end do
+   end subroutine follow_segments
 
    !> The jump check's view of configuration q with the equations of the
    !> step: the sign of det Phi_q, the conditioning measure |det| over the

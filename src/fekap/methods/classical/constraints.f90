@@ -63,6 +63,8 @@ module fekap_classical_constraints
       !> Initial angle of the slave body.
       real(dp) :: phi0 = 0
       type(segment_type), allocatable :: segments(:)
+      !> The segment the equations follow (0: none chosen yet).
+      integer :: current = 0
    end type slide_type
 
    !> All equations of a model.
@@ -304,14 +306,17 @@ contains
 
    !> For each slideline with a master chain, the segment the slave is on at q:
    !> the master link whose span contains the slave's projection with the least
-   !> normal distance, or else the nearest link.
-   pure subroutine system_select_segments(self, q)
+   !> normal distance, or else the nearest link. changed: whether some
+   !> slideline's segment is another than before.
+   pure subroutine system_select_segments(self, q, changed)
       class(constraint_system_type), intent(inout) :: self
       real(dp), intent(in) :: q(:)
+      logical, intent(out), optional :: changed
       integer :: i, k, best
       real(dp) :: rs(2), p1(2), p2(2), v(2), lambda, dist, best_dist
       logical :: inside, best_inside
 
+      if (present(changed)) changed = .false.
       do i = 1, size(self%slides)
          associate (slide => self%slides(i), e => self%eq(self%slides(i)%slot))
             if (size(slide%segments) == 0) cycle
@@ -332,6 +337,8 @@ contains
                   best_inside = inside
                end if
             end do
+            if (present(changed) .and. best /= slide%current) changed = .true.
+            slide%current = best
             associate (seg => slide%segments(best))
                e%bj = seg%body
                e%sj = seg%p1
