@@ -17,6 +17,10 @@
 !> `--spatial` for a planar slider on a chain of links) is a slide whose
 !> line is carried segment by segment, its stroke the arc length along it,
 !> and holds no rotation.
+!>
+!> The module is over 600 lines with one concept: the joints' double nodes
+!> made into the mechanism's points, frames and slides, with their checks;
+!> the drives and reported joints follow the frames it makes.
 module fekap_spatial_build
    use fekap_kinds, only: dp
    use fekap_vectors, only: cross
