@@ -141,7 +141,7 @@ contains
       !> cos and sin of the section angle and the angle at each Gauss point,
       !> for beam_second_derivative at the same xe (see section_values).
       real(dp), intent(out), optional :: section(section_values, max_gauss)
-      real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, fx, fy, fm, fk, phi
+      real(dp) :: xi, w, wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, phi
       real(dp) :: g13, g23, g33, kg_strain, ea, ga, ca, cb, m11, m12, m22, hx, hy, r
       real(dp) :: th(2, 2), rr(3), ei
       integer :: ig
@@ -175,17 +175,7 @@ contains
          sp = ea*g1                                                ! (30)
          sv = ga*g2
          sm = self%ei*kap
-         ! (38): p = wl (P b1 + V b2 + M bk), by parts.
-         fx = wl*rl*(sp*c - sv*s)
-         fy = wl*rl*(sp*s + sv*c)
-         fm = wl*(sp*g2 - sv*(1 + g1))
-         fk = wl*sm*rl
-         p(1) = p(1) - fx
-         p(2) = p(2) - fy
-         p(3) = p(3) + fm*n1 - fk
-         p(4) = p(4) + fx
-         p(5) = p(5) + fy
-         p(6) = p(6) + fm*n2 + fk
+         call add_point_force(p, wl, rl, c, s, g1, g2, sp, sv, sm, n1, n2)
          if (.not. present(k)) cycle
          g13 = 0
          g23 = 0
@@ -223,7 +213,7 @@ contains
       real(dp), intent(out), optional :: strain
       real(dp), intent(out), optional :: section(section_values, max_gauss)
       real(dp), parameter :: xi = 0, w = 2
-      real(dp) :: wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, fx, fy, fm, fk, phi
+      real(dp) :: wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, phi
       rl = 1/self%length
       kap = (xe(6) - xe(3))*rl
       p = 0
@@ -236,7 +226,17 @@ contains
       sp = self%ea*g1                                           ! (30)
       sv = self%kga*g2
       sm = self%ei*kap
-      ! (38), as beam_residual.
+      call add_point_force(p, wl, rl, c, s, g1, g2, sp, sv, sm, n1, n2)
+   end subroutine one_point_residual
+
+   !> (38): p += wl (P b1 + V b2 + M bk) at one Gauss point, by parts: its
+   !> weight times half the length wl, 1/L rl, the section's cos and sin c,
+   !> s, the strains g1, g2, the resultants sp, sv, sm (30) and the shape
+   !> functions n1, n2 there.
+   pure subroutine add_point_force(p, wl, rl, c, s, g1, g2, sp, sv, sm, n1, n2)
+      real(dp), intent(inout) :: p(6)
+      real(dp), intent(in) :: wl, rl, c, s, g1, g2, sp, sv, sm, n1, n2
+      real(dp) :: fx, fy, fm, fk
       fx = wl*rl*(sp*c - sv*s)
       fy = wl*rl*(sp*s + sv*c)
       fm = wl*(sp*g2 - sv*(1 + g1))
@@ -247,7 +247,7 @@ contains
       p(4) = p(4) + fx
       p(5) = p(5) + fy
       p(6) = p(6) + fm*n2 + fk
-   end subroutine one_point_residual
+   end subroutine add_point_force
 
    !> The element tangent from its blocks (see beam_residual): dofs
    !> (x1, y1, theta1, x2, y2, theta2); th(d, b) = sum h(d) n_b, rr = sum r
