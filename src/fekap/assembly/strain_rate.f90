@@ -37,7 +37,7 @@ module fekap_assembly_strain_rate
    use fekap_assembly_assemble, only: gather
    use fekap_linalg_lapack, only: band_lu_factor, band_lu_factor_loops, band_lu_blocked, norm_estimate_step
    use fekap_linalg_band_lu, only: band_lu_nonzeros_type, new_band_lu_nonzeros, gather_nonzeros, nonzeros_solve, &
-      & nonzeros_solve_transposed
+      & nonzeros_solve_transposed, refactor_nonzeros
    implicit none
    private
 
@@ -48,6 +48,11 @@ module fekap_assembly_strain_rate
    !> The bounds from the last estimate hold while x = ||B_0^-1|| ||B_f - B_0||
    !> is below this (within ((1 + x)/(1 - x))**2 < 2.8 of each other).
    real(dp), parameter :: bound_reach = 0.25_dp
+
+   !> A factorisation keeps the last one's pivot in a column while its
+   !> magnitude is at least this fraction of the column's largest
+   !> (refactor_nonzeros): 1 is partial pivoting's own choice.
+   real(dp), parameter :: keep_pivot = 0.99_dp
 
    !> Entries of an element's rows of B: Gamma1 and Gamma2 on the six dofs
    !> (x1, y1, theta1, x2, y2, theta2), kappa L on theta1 and theta2.
@@ -546,12 +551,14 @@ contains
 
    !> Band LU of the assembled B_f (dgbtrf), in place, and its nonzeros
    !> for the solves (gather_nonzeros); info > 0: the band row where U has
-   !> a zero pivot (B_f singular).
+   !> a zero pivot (B_f singular). A narrow band is factored on the places
+   !> and with the pivots of the last factor while they serve
+   !> (refactor_nonzeros), by the band's loops from the first column where
+   !> they do not.
    subroutine factor_strain_rate(self, info)
       type(strain_rate_type), intent(inout) :: self
       integer, intent(out) :: info
-      integer :: j, diagonal
-      diagonal = self%kl + self%ku + 1
+      integer :: j, stopped
       ! The matrix kept for strain_rate_rcond_bounds and the next estimate
       ! (rows 1 to kl are the factor's fill, zero here, as is the rest of
       ! the storage outside the band).
@@ -565,15 +572,18 @@ contains
          call column_sizes(self%n, self%nonzeros%entry_start, self%nonzeros%entry_at, size(self%ab), self%ab, &
             & self%column_max, self%norm1)
       end if
+      info = 0
+      stopped = 1
       if (self%lu_blocked) then
          call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
       else
-         call band_lu_factor_loops(self%ab, self%kl, self%ku, self%ipiv, info)
+         call refactor_nonzeros(self%nonzeros, self%ab, self%ipiv, keep_pivot, stopped)
+         if (stopped > 0) call band_lu_factor_loops(self%ab, self%kl, self%ku, self%ipiv, info, stopped)
       end if
       self%factored = info == 0
       self%pivot_ratio = 0
       if (.not. self%factored) return
-      call gather_nonzeros(self%nonzeros, self%ab, self%ipiv)
+      if (stopped > 0) call gather_nonzeros(self%nonzeros, self%ab, self%ipiv)
       self%pivot_ratio = huge(1.0_dp)
       do j = 1, self%n
          if (.not. self%column_max(j) > 0) then

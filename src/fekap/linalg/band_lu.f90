@@ -26,12 +26,20 @@
 !> bit, but for the sign of a component that is exactly zero (which
 !> dgbtrs's own BLAS calls, skipping a zero multiplier, do not keep either).
 !> A factor with an infinite or NaN entry is not a factor a solve is asked of.
+!>
+!> The numeric factorisation too can follow the places found
+!> (refactor_nonzeros): along a motion B_f's next matrix has the same
+!> places and, mostly, the same pivots, so its elimination multiplies only
+!> the multipliers and the entries of U that can be nonzero, as a sparse
+!> LU's refactorisation does; the band's loops take over at a column whose
+!> last pivot no longer serves.
 module fekap_linalg_band_lu
    use fekap_kinds, only: dp
    implicit none
    private
 
    public :: band_lu_nonzeros_type, new_band_lu_nonzeros, gather_nonzeros, nonzeros_solve, nonzeros_solve_transposed
+   public :: refactor_nonzeros
 
    !> The symbolic factorisation's window of columns, in multiples of the
    !> kl + ku + 1 columns that one column's elimination reaches: the window's
@@ -64,6 +72,10 @@ module fekap_linalg_band_lu
       !> order; rows j - kl - ku to j - 1 of column j).
       integer, allocatable :: upper_start(:), upper_at(:), upper_row(:)
       real(dp), allocatable :: upper(:)
+      !> U's rows right of the diagonal, for refactor_nonzeros's updates: row
+      !> j's columns at row_start(j) to row_start(j + 1) - 1, increasing (the
+      !> lists above by rows).
+      integer, allocatable :: row_start(:), row_column(:)
       !> (2 kl + ku + 1, columns): the symbolic factorisation's booleans for
       !> a window of columns (symbolic_factor); all false between its calls
       !> (it clears each column's places as it lists them), so that a call
@@ -102,6 +114,7 @@ contains
       allocate (nz%lower_at(max(1, n*kl)), nz%lower_column(max(1, n*kl)), nz%lower_row(max(1, n*kl)), &
          & nz%lower(max(1, n*kl)))
       allocate (nz%upper_at(max(1, n*(kl + ku))), nz%upper_row(max(1, n*(kl + ku))), nz%upper(max(1, n*(kl + ku))))
+      allocate (nz%row_start(n + 1))
       allocate (nz%window(size(possible, 1), min(n, window_columns*(kl + ku + 1))), source=.false.)
    end subroutine new_band_lu_nonzeros
 
@@ -192,7 +205,159 @@ contains
             final(ipiv(j)) = moved
          end if
       end do
+      ! U's places by rows: as many as it has (the lists by columns are
+      ! allocated for the band's count).
+      if (allocated(nz%row_column)) then
+         if (size(nz%row_column) < nz%upper_start(n + 1) - 1) deallocate (nz%row_column)
+      end if
+      if (.not. allocated(nz%row_column)) allocate (nz%row_column(max(1, nz%upper_start(n + 1) - 1)))
+      call list_rows(n, nz%upper_start, nz%upper_row, nz%row_start, nz%row_column)
    end subroutine symbolic_factor
+
+   !> U's places by rows (row_start, row_column) from its lists by columns.
+   pure subroutine list_rows(n, upper_start, upper_row, row_start, row_column)
+      integer, intent(in) :: n, upper_start(n + 1), upper_row(:)
+      integer, intent(out) :: row_start(n + 1), row_column(:)
+      integer :: j, k, i
+      row_start = 0
+      do k = 1, upper_start(n + 1) - 1
+         row_start(upper_row(k)) = row_start(upper_row(k)) + 1
+      end do
+      ! Counts to starts, then each column's rows in increasing column order.
+      k = 1
+      do i = 1, n
+         j = row_start(i)
+         row_start(i) = k
+         k = k + j
+      end do
+      row_start(n + 1) = k
+      do j = 1, n
+         do k = upper_start(j), upper_start(j + 1) - 1
+            i = upper_row(k)
+            row_column(row_start(i)) = j
+            row_start(i) = row_start(i) + 1
+         end do
+      end do
+      ! The starts moved to the next row's: back one row.
+      do i = n, 2, -1
+         row_start(i) = row_start(i - 1)
+      end do
+      row_start(1) = 1
+   end subroutine list_rows
+
+   !> The band LU of ab (the matrix, as fekap_linalg_lapack's
+   !> band_lu_factor_loops takes it) with the pivots and places of the last
+   !> symbolic factorisation, and its values gathered: column by column, the
+   !> last pivot row is kept while its magnitude is at least `keep` times
+   !> the column's largest (1: the largest, as partial pivoting), and the
+   !> elimination multiplies only the places that can be nonzero (the same
+   !> operations as the band's loops on those places, so with the same
+   !> pivots the same factor to the bit). stopped = 0: done, ipiv the
+   !> pivots. Otherwise the column where a pivot did not serve (or there are
+   !> no places known): columns 1 to stopped - 1 are eliminated, their
+   !> pivots in ipiv, and the band's loops go on from column stopped
+   !> (band_lu_factor_loops' first), then gather_nonzeros. Every place of
+   !> ab outside the matrix's and the fill rows 1 to kl must be zero, as
+   !> for those loops.
+   pure subroutine refactor_nonzeros(nz, ab, ipiv, keep, stopped)
+      type(band_lu_nonzeros_type), intent(inout) :: nz
+      real(dp), contiguous, intent(inout) :: ab(:, :)
+      integer, contiguous, intent(inout) :: ipiv(:)
+      real(dp), intent(in) :: keep
+      integer, intent(out) :: stopped
+      stopped = 1
+      if (.not. nz%known) return
+      call refactor_kernel(nz%n, nz%kl, nz%ku, size(ab, 1), ab, nz%pivot, keep, nz%lower_start, &
+         & size(nz%lower_at), nz%lower_at, nz%row_start, size(nz%row_column), nz%row_column, ipiv, stopped)
+      if (stopped > 0) return
+      call gather_values(nz%n, nz%kl + nz%ku, size(ab, 1), ab, nz%lower_start(nz%n + 1) - 1, nz%lower_at, &
+         & nz%upper_start(nz%n + 1) - 1, nz%upper_at, nz%diagonal, nz%lower, nz%upper)
+   end subroutine refactor_nonzeros
+
+   !> refactor_nonzeros's elimination on explicit-shape arrays (ab as one
+   !> array: A(i, j)'s band place kv + 1 + i - j + (j - 1) ldab). A column's
+   !> multipliers are taken down to its last place that can be nonzero, the
+   !> zeros between them included (a loop on consecutive places costs less
+   !> than one through the list): they add zero, as in the band's loops.
+   pure subroutine refactor_kernel(n, kl, ku, ldab, ab, pivot, keep, lower_start, nlower, lower_at, row_start, nrow, &
+      & row_column, ipiv, stopped)
+      integer, intent(in) :: n, kl, ku, ldab, pivot(n), lower_start(n + 1), nlower, lower_at(nlower), row_start(n + 1)
+      integer, intent(in) :: nrow, row_column(nrow)
+      real(dp), intent(inout) :: ab(ldab*n)
+      real(dp), intent(in) :: keep
+      integer, intent(inout) :: ipiv(n)
+      integer, intent(out) :: stopped
+      real(dp) :: largest, temp, recip
+      integer :: kv, i, j, jj, jp, ju, km, m, c, base, rows, shift
+      kv = kl + ku
+      do j = ku + 2, min(kv, n)
+         do i = kv - j + 2, kl
+            ab(i + (j - 1)*ldab) = 0
+         end do
+      end do
+      ju = 1
+      do j = 1, n
+         base = (j - 1)*ldab
+         km = min(kl, n - j)
+         jp = pivot(j) - j + 1
+         largest = 0
+         do i = 1, km + 1
+            largest = max(largest, abs(ab(kv + i + base)))
+         end do
+         ! Kept while it is a pivot partial pivoting would take, or near one
+         ! (not: a zero column, which the band's loops report).
+         if (.not. (largest > 0 .and. abs(ab(kv + jp + base)) >= keep*largest)) then
+            stopped = j
+            return
+         end if
+         if (keep >= 1) then
+            ! The first largest, as idamax takes it: else the loops' pivot differs.
+            do i = 1, jp - 1
+               if (abs(ab(kv + i + base)) >= largest) then
+                  stopped = j
+                  return
+               end if
+            end do
+         end if
+         ipiv(j) = pivot(j)
+         if (j + kv <= n) then
+            do i = 1, kl
+               ab(i + (j + kv - 1)*ldab) = 0
+            end do
+         end if
+         ju = max(ju, min(j + ku + jp - 1, n))
+         if (jp /= 1) then
+            do jj = 0, ju - j
+               temp = ab(kv + jp - jj + base + jj*ldab)
+               ab(kv + jp - jj + base + jj*ldab) = ab(kv + 1 - jj + base + jj*ldab)
+               ab(kv + 1 - jj + base + jj*ldab) = temp
+            end do
+         end if
+         ! Rows j + 1 to j + rows can have multipliers (the last listed).
+         if (lower_start(j + 1) == lower_start(j)) cycle
+         rows = lower_at(lower_start(j + 1) - 1) - base - kv - 1
+         recip = 1/ab(kv + 1 + base)
+         do i = kv + 2 + base, kv + 1 + rows + base
+            ab(i) = recip*ab(i)
+         end do
+         ! Row j of U times the multipliers, from the rows below.
+         do m = row_start(j), row_start(j + 1) - 1
+            c = row_column(m)
+            jj = c - j
+            temp = ab(kv + 1 - jj + (c - 1)*ldab)
+            if (temp /= 0) then
+               temp = -temp
+               shift = (c - 1)*ldab - jj - base
+               !GCC$ unroll 1
+               !GCC$ novector
+               do i = kv + 2 + base, kv + 1 + rows + base
+                  ab(i + shift) = ab(i + shift) + ab(i)*temp
+               end do
+            end if
+         end do
+      end do
+      stopped = 0
+   end subroutine refactor_kernel
 
    !> symbolic_factor's loops and lists on explicit-shape arrays (their
    !> addresses without a descriptor's arithmetic); place is the window of

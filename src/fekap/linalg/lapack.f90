@@ -176,24 +176,35 @@ contains
    !> the last bit; without the BLAS call per column, whose set-up costs more
    !> than the arithmetic of a band a few entries wide (whose loops run a few
    !> times each, so they are neither unrolled nor vectorised: the set-up
-   !> would cost more than it saves). ab as band_lu_factor's.
-   pure subroutine band_lu_factor_loops(ab, kl, ku, ipiv, info)
+   !> would cost more than it saves). ab as band_lu_factor's. With `first`
+   !> (fekap_linalg_band_lu's refactor_nonzeros stopped there), columns 1 to
+   !> first - 1 are eliminated already, with the pivots in ipiv(1:first - 1):
+   !> the loops go on from column first, as they would have from their own.
+   pure subroutine band_lu_factor_loops(ab, kl, ku, ipiv, info, first)
       real(dp), contiguous, intent(inout) :: ab(:, :)
       integer, intent(in) :: kl, ku
-      integer, contiguous, intent(out) :: ipiv(:)
+      integer, contiguous, intent(inout) :: ipiv(:)
       integer, intent(out) :: info
+      integer, intent(in), optional :: first
       real(dp) :: temp, largest, recip
-      integer :: n, kv, i, j, jj, jp, ju, km
+      integer :: n, kv, i, j, jj, jp, ju, km, start
       n = size(ab, 2)
       kv = ku + kl
       info = 0
-      do j = ku + 2, min(kv, n)
-         do i = kv - j + 2, kl
-            ab(i, j) = 0
-         end do
-      end do
+      start = 1
+      if (present(first)) start = first
       ju = 1
-      do j = 1, n
+      do j = 1, start - 1
+         ju = max(ju, min(ku + ipiv(j), n))
+      end do
+      if (start == 1) then
+         do j = ku + 2, min(kv, n)
+            do i = kv - j + 2, kl
+               ab(i, j) = 0
+            end do
+         end do
+      end if
+      do j = start, n
          if (j + kv <= n) then
             do i = 1, kl
                ab(i, j + kv) = 0
