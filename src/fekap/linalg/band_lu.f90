@@ -301,6 +301,8 @@ contains
          km = min(kl, n - j)
          jp = pivot(j) - j + 1
          largest = 0
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = 1, km + 1
             largest = max(largest, abs(ab(kv + i + base)))
          end do
@@ -312,6 +314,7 @@ contains
          end if
          if (keep >= 1) then
             ! The first largest, as idamax takes it: else the loops' pivot differs.
+            !GCC$ unroll 1
             do i = 1, jp - 1
                if (abs(ab(kv + i + base)) >= largest) then
                   stopped = j
@@ -327,6 +330,8 @@ contains
          end if
          ju = max(ju, min(j + ku + jp - 1, n))
          if (jp /= 1) then
+            !GCC$ unroll 1
+            !GCC$ novector
             do jj = 0, ju - j
                temp = ab(kv + jp - jj + base + jj*ldab)
                ab(kv + jp - jj + base + jj*ldab) = ab(kv + 1 - jj + base + jj*ldab)
@@ -337,6 +342,8 @@ contains
          if (lower_start(j + 1) == lower_start(j)) cycle
          rows = lower_at(lower_start(j + 1) - 1) - base - kv - 1
          recip = 1/ab(kv + 1 + base)
+         !GCC$ unroll 1
+         !GCC$ novector
          do i = kv + 2 + base, kv + 1 + rows + base
             ab(i) = recip*ab(i)
          end do
