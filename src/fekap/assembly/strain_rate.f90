@@ -577,6 +577,14 @@ contains
       !> ab and bd as arrays of their sizes (one index per entry).
       real(dp), intent(inout) :: ab(nab), bd(nbd)
       integer :: m
+      if (nb == element_entries) then
+         ! An element on free dofs only (most of a large mesh): its entries
+         ! in their own order (map(1, m) = m), in a loop of fixed length.
+         do m = 1, element_entries
+            ab(map(2, m)) = ab(map(2, m)) + values(m)
+         end do
+         return
+      end if
       do m = 1, nb
          ab(map(2, m)) = ab(map(2, m)) + values(map(1, m))
       end do
