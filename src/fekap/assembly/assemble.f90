@@ -35,8 +35,7 @@ contains
       real(dp), intent(out), optional :: section(section_values, max_gauss, size(mesh%elements))
       real(dp) :: pe(6), xe(6)
       integer :: e, i
-      call mesh%loads%at(t, r)
-      r = -r
+      call mesh%loads%at(t, r, negated=.true.)
       do e = 1, size(mesh%elements)
          do i = 1, 6
             xe(i) = q(mesh%edof(i, e))
@@ -74,8 +73,7 @@ contains
       real(dp), intent(out), optional :: section(section_values, max_gauss, size(mesh%elements))
       real(dp) :: pe(6), ke(6, 6), xe(6), s
       integer :: e, i
-      call mesh%loads%at(t, r)
-      r = -r
+      call mesh%loads%at(t, r, negated=.true.)
       call kff%zero()
       kfd = 0
       strain = 0
@@ -121,8 +119,7 @@ contains
       real(dp), intent(out) :: section(section_values, max_gauss, size(mesh%elements))
       real(dp) :: pe(6), ke(6, 6), xe(6), s
       integer :: e, i
-      call mesh%loads%at(t, r)
-      r = -r
+      call mesh%loads%at(t, r, negated=.true.)
       kfd = 0
       strain = 0
       element = 0

@@ -74,24 +74,38 @@ contains
    end function load_set_is_loaded
 
    !> f = f(t) over all dofs.
-   pure subroutine load_set_at(self, t, f)
+   pure subroutine load_set_at(self, t, f, negated)
       class(load_set_type), intent(in) :: self
       real(dp), intent(in) :: t
       real(dp), intent(out) :: f(:)
+      !> f = -F(t) instead (the assembly's residual starts from it).
+      logical, intent(in), optional :: negated
       real(dp) :: lambda, df, ddf
       integer :: g
+      logical :: minus
       ! No array of the factors: an automatic array is a malloc and a free
       ! per call with gfortran, and this is called at every assembly.
+      minus = .false.
+      if (present(negated)) minus = negated
       if (size(self%f, 2) == 0) then
          f = 0
+         if (minus) f = -f
          return
       end if
       call load_factor(self%factor(1), t, lambda, df, ddf)
+      if (minus .and. size(self%f, 2) == 1) then
+         ! In one pass: (-lambda) F is -(lambda F) to the bit (rounding to
+         ! nearest is symmetric), a zero's sign included. Not for several
+         ! columns: -(a + b) and (-a) - b differ in the sign of an exact zero.
+         f = (-lambda)*self%f(:, 1)
+         return
+      end if
       f = lambda*self%f(:, 1)
       do g = 2, size(self%f, 2)
          call load_factor(self%factor(g), t, lambda, df, ddf)
          f = f + lambda*self%f(:, g)
       end do
+      if (minus) f = -f
    end subroutine load_set_at
 
    !> f = sum_g (lambda_g(t1) - lambda_g(t0)) f(:, g): the change of the loads

@@ -34,7 +34,6 @@ module fekap_assembly_strain_rate
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type
    use fekap_assembly_tracking, only: slide_position
-   use fekap_assembly_assemble, only: gather
    use fekap_linalg_lapack, only: band_lu_factor, band_lu_factor_loops, band_lu_blocked, norm_estimate_step
    use fekap_linalg_band_lu, only: band_lu_nonzeros_type, new_band_lu_nonzeros, gather_nonzeros, nonzeros_solve, &
       & nonzeros_solve_transposed, refactor_nonzeros
@@ -57,6 +56,10 @@ module fekap_assembly_strain_rate
    !> Entries of an element's rows of B: Gamma1 and Gamma2 on the six dofs
    !> (x1, y1, theta1, x2, y2, theta2), kappa L on theta1 and theta2.
    integer, parameter :: element_entries = 14
+   !> Band storages of at most this many places are zeroed whole before an
+   !> assembly (clear_assembled): 2 KiB, below which a block's zeroing costs
+   !> about as much as a column's.
+   integer, parameter :: small_band = 256
    !> The dof (1 to 6) and the row (1 to 3) of each of the element's entries.
    integer, parameter :: entry_dof(element_entries) = [1, 2, 3, 4, 5, 6, 1, 2, 3, 4, 5, 6, 3, 6]
    integer, parameter :: entry_row(element_entries) = [1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 3, 3]
@@ -334,8 +337,7 @@ contains
       real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, xs(2), x1(2)
       real(dp) :: worst, values(element_entries)
       integer :: e, i, k
-      call zero(self%ab, size(self%ab))
-      call zero(self%bd, size(self%bd))
+      call clear_assembled(self, mesh)
       self%factored = .false.
       if (present(largest)) largest = 0
       if (present(element)) element = 0
@@ -460,6 +462,65 @@ contains
       a = 0
    end subroutine zero
 
+   !> Zero what the last assembly and factorisation can have left nonzero in
+   !> ab and bd, before an assembly (not the whole storage: at 10^4 cells it
+   !> is megabytes a step, two assemblies a step).
+   !> - ab, with the band LU's loops (not lu_blocked): rows kl + 1 to
+   !>   2 kl + ku + 1 of each column only. Rows 1 to kl are the factor's fill,
+   !>   which the factorisation itself sets to zero before it adds into them
+   !>   (dgbtf2's order, as band_lu_factor_loops: columns ku + 2 to kv at its
+   !>   start, column j + kv at column j), and which nothing reads before: the
+   !>   entries' places (entry_places) are below them. dgbtrf's blocked code
+   !>   reads no fill either, but every place of the band is an entry place
+   !>   there (column_sizes reads them all): the whole band then.
+   !> A band of at most small_band places is zeroed whole, with bd: one
+   !> short block costs fewer instructions than a loop over the columns.
+   !> - bd: the places the elements' entries go (element_map's second lists)
+   !>   and the slidelines' rows (their dofs change with the segment); bd is
+   !>   zero elsewhere from its allocation.
+   pure subroutine clear_assembled(self, mesh)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer :: i
+      if (self%lu_blocked .or. size(self%ab) <= small_band) then
+         call zero(self%ab, size(self%ab))
+         call zero(self%bd, size(self%bd))
+         return
+      else
+         call zero_rows(size(self%ab, 1), self%n, self%kl + 1, self%ab)
+      end if
+      if (size(self%bd) == 0) return
+      call zero_driven(size(mesh%elements), self%element_map, self%element_count, size(self%bd), self%bd)
+      do i = 1, size(self%slide_row)
+         self%bd(self%slide_row(i), :) = 0
+      end do
+   end subroutine clear_assembled
+
+   !> a(first:, :) = 0 of an (m, n) array, column by column.
+   pure subroutine zero_rows(m, n, first, a)
+      integer, intent(in) :: m, n, first
+      real(dp), intent(inout) :: a(m, n)
+      integer :: i, j
+      do j = 1, n
+         do i = first, m
+            a(i, j) = 0
+         end do
+      end do
+   end subroutine zero_rows
+
+   !> bd (taken as one array) zero at the places of the elements' entries
+   !> on driven dofs (element_map's second lists).
+   pure subroutine zero_driven(nelem, map, count, nbd, bd)
+      integer, intent(in) :: nelem, map(2, element_entries, nelem), count(2, nelem), nbd
+      real(dp), intent(inout) :: bd(nbd)
+      integer :: e, m
+      do e = 1, nelem
+         do m = count(1, e) + 1, count(1, e) + count(2, e)
+            bd(map(2, m, e)) = 0
+         end do
+      end do
+   end subroutine zero_driven
+
    !> b(1:n) = a(1:n) as one block (as zero).
    !> b(k) = a(place(k)): the band storage a, taken as one array, at the places.
    pure subroutine gather_places(nab, a, place, b)
@@ -521,6 +582,14 @@ contains
       !> ab and bd as arrays of their sizes (one index per entry).
       real(dp), intent(inout) :: ab(nab), bd(nbd)
       integer :: m
+      if (nb == element_entries) then
+         ! An element on free dofs only (most of a large mesh): its entries
+         ! in their own order (map(1, m) = m), in a loop of fixed length.
+         do m = 1, element_entries
+            ab(map(2, m)) = ab(map(2, m)) + values(m)
+         end do
+         return
+      end if
       do m = 1, nb
          ab(map(2, m)) = ab(map(2, m)) + values(map(1, m))
       end do
@@ -717,9 +786,24 @@ contains
          r(rows(3)) = ve(6) - ve(3)
       end do
       do i = 1, size(mesh%slides)
-         r(self%slide_row(i)) = dot_product(self%slide_ns(:, i), gather(v, self%slide_dofs(:, i)))
+         ! Into a local array: gather's result of run-time size is a heap
+         ! temporary (a malloc and a free per slideline and call).
+         call gather_six(v, self%slide_dofs(:, i), ve)
+         r(self%slide_row(i)) = dot_product(self%slide_ns(:, i), ve)
       end do
    end subroutine strain_rates
+
+   !> ve = v(dofs), 0 where dofs is 0 (a fixed guide's point), as gather's.
+   pure subroutine gather_six(v, dofs, ve)
+      real(dp), contiguous, intent(in) :: v(:)
+      integer, intent(in) :: dofs(6)
+      real(dp), intent(out) :: ve(6)
+      integer :: k
+      do k = 1, 6
+         ve(k) = 0
+         if (dofs(k) > 0) ve(k) = v(dofs(k))
+      end do
+   end subroutine gather_six
 
    !> r = B a + eps2(v) by band rows: the second rates of the strains and gaps
    !> for accelerations a and velocities v over all dofs, of the stress-free
@@ -742,7 +826,7 @@ contains
          end associate
       end do
       do i = 1, size(mesh%slides)
-         vs = gather(v, self%slide_dofs(:, i))
+         call gather_six(v, self%slide_dofs(:, i), vs)
          ! N_m v: the normal's component of the master's relative velocity.
          vm = dot_product(self%slide_nm(1:2, i), vs(5:6) - vs(3:4))
          r(self%slide_row(i)) = r(self%slide_row(i)) - 2*dot_product(self%slide_ts(:, i), vs)*vm/self%slide_nm(3, i)

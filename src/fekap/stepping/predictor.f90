@@ -141,23 +141,38 @@ contains
       real(dp), intent(in) :: length
       real(dp), contiguous, intent(in) :: dof_length(:)
       real(dp), contiguous, intent(inout) :: qt(:)
-      real(dp) :: beta(history_depth), drop(history_depth), estimate, difference
-      integer :: i, k
+      real(dp) :: beta(history_depth), drop(history_depth), estimate
       taken = .false.
       if (size(columns) < history_depth) return
       call full_adams_weights(self%t, columns, t, beta, drop)
-      estimate = 0
-      do i = 1, size(qt)
-         qt(i) = self%q(i, columns(1))
-         difference = 0
-         do k = 1, history_depth
-            qt(i) = qt(i) + beta(k)*self%velocity(i, columns(k))
-            difference = difference + drop(k)*self%velocity(i, columns(k))
-         end do
-         estimate = max(estimate, abs(difference)*dof_length(i))
-      end do
+      ! The columns as arrays of their own (contiguous: not copied), whose
+      ! addresses the loop need not compute from columns(k) at each unknown.
+      call adams_sums(size(qt), beta, drop, self%q(:, columns(1)), self%velocity(:, columns(1)), &
+         & self%velocity(:, columns(2)), self%velocity(:, columns(3)), self%velocity(:, columns(4)), &
+         & self%velocity(:, columns(5)), dof_length, qt, estimate)
       taken = estimate <= predictor_margin*length
    end function adams_prediction
+
+   !> adams_prediction's sums over the unknowns (history_depth = 5 velocities
+   !> v1, newest, to v5): qt = q1 + sum beta(k) v_k and the largest
+   !> |sum drop(k) v_k| dof_length, each sum in the order k = 1 to 5.
+   pure subroutine adams_sums(n, beta, drop, q1, v1, v2, v3, v4, v5, dof_length, qt, estimate)
+      integer, intent(in) :: n
+      real(dp), intent(in) :: beta(history_depth), drop(history_depth)
+      real(dp), intent(in) :: q1(n), v1(n), v2(n), v3(n), v4(n), v5(n), dof_length(n)
+      real(dp), intent(inout) :: qt(n)
+      real(dp), intent(out) :: estimate
+      real(dp) :: difference
+      integer :: i
+      estimate = 0
+      do i = 1, n
+         qt(i) = q1(i) + beta(1)*v1(i) + beta(2)*v2(i) + beta(3)*v3(i) + beta(4)*v4(i) + beta(5)*v5(i)
+         ! From drop(1) v1 rather than 0 + drop(1) v1: they differ only in
+         ! the sign of a zero, which abs takes away.
+         difference = drop(1)*v1(i) + drop(2)*v2(i) + drop(3)*v3(i) + drop(4)*v4(i) + drop(5)*v5(i)
+         estimate = max(estimate, abs(difference)*dof_length(i))
+      end do
+   end subroutine adams_sums
 
    !> The Taylor series q + h v + h**2/2 a from a configuration and its rates.
    pure subroutine taylor_predict(q, v, a, h, qt)
@@ -191,18 +206,53 @@ contains
    !> order: the polynomial of degree 2n - 1 through the n positions and
    !> velocities. With two (three, four) configurations its error is of order
    !> h**4 (h**6, h**8), against h**3 for quadratic extrapolation of positions.
+   !> At most hermite_points configurations.
+   !> One pass over the unknowns with all the weights (not a pass per
+   !> configuration on a zeroed qpred): each sum is taken from +0 in the
+   !> same order, ((0 + wq_1 q_1) + wv_1 v_1) + wq_2 q_2 ..., so the same
+   !> to the bit.
    pure subroutine hermite_extrapolate(q, v, tk, columns, t, qpred)
-      real(dp), intent(in) :: q(:, :), v(:, :), tk(:), t
+      real(dp), contiguous, intent(in) :: q(:, :), v(:, :)
+      real(dp), intent(in) :: tk(:), t
       integer, intent(in) :: columns(:)
       real(dp), intent(out) :: qpred(:)
-      real(dp) :: wq, wv
-      integer :: k
-      qpred = 0
+      real(dp) :: wq(hermite_points), wv(hermite_points), sum
+      integer :: i, k, c(hermite_points)
       do k = 1, size(columns)
-         call hermite_weights(tk, columns, k, t, wq, wv)
-         qpred = qpred + wq*q(:, columns(k)) + wv*v(:, columns(k))
+         call hermite_weights(tk, columns, k, t, wq(k), wv(k))
+         c(k) = columns(k)
       end do
+      if (size(columns) == hermite_points) then
+         ! The usual case: the columns as arrays of their own (contiguous,
+         ! so not copied), which the compiler's loop takes two at a time.
+         call hermite_sum4(size(qpred), wq, wv, q(:, c(1)), q(:, c(2)), q(:, c(3)), q(:, c(4)), &
+            & v(:, c(1)), v(:, c(2)), v(:, c(3)), v(:, c(4)), qpred)
+      else
+         do i = 1, size(qpred)
+            sum = 0
+            do k = 1, size(columns)
+               sum = sum + wq(k)*q(i, c(k)) + wv(k)*v(i, c(k))
+            end do
+            qpred(i) = sum
+         end do
+      end if
    end subroutine hermite_extrapolate
+
+   !> qpred = sum over k of wq(k) q_k + wv(k) v_k (k = 1 to 4), each sum
+   !> from +0 in hermite_extrapolate's order.
+   pure subroutine hermite_sum4(n, wq, wv, q1, q2, q3, q4, v1, v2, v3, v4, qpred)
+      integer, intent(in) :: n
+      real(dp), intent(in) :: wq(4), wv(4)
+      real(dp), intent(in) :: q1(n), q2(n), q3(n), q4(n), v1(n), v2(n), v3(n), v4(n)
+      real(dp), intent(out) :: qpred(n)
+      real(dp) :: zero
+      integer :: i
+      zero = 0
+      do i = 1, n
+         qpred(i) = zero + wq(1)*q1(i) + wv(1)*v1(i) + wq(2)*q2(i) + wv(2)*v2(i) + wq(3)*q3(i) + wv(3)*v3(i) &
+            & + wq(4)*q4(i) + wv(4)*v4(i)
+      end do
+   end subroutine hermite_sum4
 
    !> Adams-Bashforth extrapolation to time t is the configuration at t_1 =
    !> tk(columns(1)) plus sum_k beta(k) v_k, the integral from t_1 to t of the
