@@ -19,7 +19,7 @@ module fekap_fem_rates
    private
 
    public :: pivot_note, singular_pivot, solve_velocities, solve_accelerations
-   public :: root_velocities, root_accelerations, root_drive_response, refine_rates
+   public :: root_velocities, root_accelerations, root_drive_response, root_drive_block, refine_rates
 
    !> Solves of a rate in the square-root form: the plain solve and one
    !> refinement whose residual is the element strain rates (one more gains
@@ -229,6 +229,25 @@ contains
          resp(mesh%driven_dof(j), j) = 1
       end do
    end subroutine root_drive_response
+
+   !> K's free-driven block from B, K_fd = B_f^T W B_d (46), column by
+   !> column: B_d's column (root%bd, by B's rows) weighted and gathered onto
+   !> the free equations by strain_forces, with the section angles and gap
+   !> gradients root holds. The material tangent's block without assembling
+   !> K: in exact arithmetic K's at a stress-free configuration, to the
+   !> strains' size (round-off at a converged one) otherwise. rows is
+   !> scratch over B's rows.
+   subroutine root_drive_block(root, mesh, kfd, rows)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(out) :: kfd(:, :)
+      real(dp), contiguous, intent(inout) :: rows(:)
+      integer :: j
+      do j = 1, mesh%ndriven
+         rows = root%bd(:, j)
+         call strain_forces(root, mesh, rows, kfd(:, j))
+      end do
+   end subroutine root_drive_block
 
    !> x(mesh%driven_dof) = values, in a loop: the assignment through the
    !> vector subscript copied the index list to a heap temporary (a malloc
