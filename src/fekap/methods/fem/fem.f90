@@ -41,7 +41,7 @@ module fekap_fem
    use fekap_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
    use fekap_fem_fill, only: interpolate_fill, finish_fill, filled_state, next_output_time
    use fekap_fem_newton, only: fem_newton_type, fem_contract
-   use fekap_fem_rates, only: near_singular_drop
+   use fekap_fem_rates, only: near_singular_drop, root_drive_block
    use fekap_fem_branch, only: branch_accept, branch_verify, branch_unverifiable
    use fekap_fem_determinacy, only: check_free_motion
    use fekap_assembly_strain_rate, only: rate_geometry_at
@@ -384,14 +384,18 @@ contains
             if (self%loaded) exit verification
             if (newton%at_predictor) then
                ! The factor at the predictor serves (fem_correct). The square-root
-               ! form took its correction, of round-off size: K's free-driven
-               ! block (the next step's residual scale) and the residual are
-               ! assembled at the corrected configuration, as below, and the
-               ! rates' residuals are taken there (rate_geometry_at).
+               ! form took its correction, of round-off size: the rates'
+               ! residuals are taken at the corrected configuration
+               ! (rate_geometry_at), and K's free-driven block (the next step's
+               ! residual scale, drive_increment_residual) is B_f^T W B_d from
+               ! the predictor's B_d and those section angles
+               ! (root_drive_block), round-off away from K's there: K is not
+               ! assembled, nor the residual at the corrected configuration.
+               ! The residual reported is the predictor's, from which the
+               ! correction of round-off size was solved (newton%residual).
                if (self%root_form) then
-                  call assemble_system_drive_block(system, mesh, qt, t, self%seg, huge(1.0_dp), self%counts)
-                  residual = residual_norm(system, mesh)
-                  call rate_geometry_at(self%root, mesh, qt, self%seg, system%section)
+                  call rate_geometry_at(self%root, mesh, qt, self%seg, system%residual_section)
+                  call root_drive_block(self%root, mesh, system%kfd, self%root_work)
                end if
                exit verification
             end if

@@ -7,12 +7,13 @@
 module fekap_fem_converged
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
+   use fekap_model, only: predictor_taylor
    use fekap_assembly_tracking, only: check_gaps
    use fekap_fem_linear_system, only: apply_response
    use fekap_fem_branch, only: drive_increment, branch_verdict, branch_reject, branch_verify, branch_unverifiable
    use fekap_fem_rates, only: pivot_note, solve_velocities, solve_accelerations, singular_floor, root_velocities, &
-      & root_accelerations, refine_rates
-   use fekap_assembly_strain_rate, only: rate_geometry_at
+      & root_accelerations, refine_rates, plain_rates_rcond
+   use fekap_assembly_strain_rate, only: rate_geometry_at, strain_rate_rcond_bounds
    use fekap_fem_change_point, only: response_trusted
    use fekap_fem_state, only: fem_core_type, note_response_pivot
    use fekap_fem_predict, only: record_velocity
@@ -102,9 +103,9 @@ contains
    !> note on how close to singular it is.
    subroutine solve_rates(self)
       class(fem_core_type), intent(inout) :: self
-      real(dp) :: ratio
+      real(dp) :: ratio, low, high
       integer :: info
-      logical :: regular
+      logical :: regular, refine
       ! The pivot ratio of the tangent at the configuration: a stationary one is
       ! noted also when only positions are computed (the tangent is factored
       ! for the branch-jump check anyway, so at no cost).
@@ -123,12 +124,31 @@ contains
          if (.not. regular .or. .not. self%model%analysis%velocities) return
          call self%model%drives%law%eval(state%t, self%law_value, self%law_rate, self%law_rate2)
          if (self%root_form) then
-            ! The square-root form, refined (see fekap_fem_rates).
-            call root_velocities(self%root, self%mesh, self%law_rate, state%v, self%root_work)
+            ! The square-root form, refined unless the bounds on B_f's
+            ! condition from the last estimate show it well conditioned
+            ! (plain_rates_rcond; no bounds, no skip: see fekap_fem_rates).
+            ! Always refined under the Taylor predictor, whose positions come
+            ! from these rates: a change of their round-off is amplified near
+            ! a change point there (docs/theory.md, "Rates at scale"), while
+            ! the other predictors take the branch check's drive response, so
+            ! that positions never depend on how the rates were solved.
+            refine = self%model%analysis%predictor == predictor_taylor
+            if (.not. refine) then
+               call strain_rate_rcond_bounds(self%root, low, high)
+               refine = .not. low >= plain_rates_rcond
+            end if
+            if (.not. refine .and. history%has_velocity(history%newest)) then
+               ! Unrefined, (47) is R v_d with the drive response R of this
+               ! factor, the plain solve of the same system: record_velocity
+               ! made it already, for the predictor (as in the K form below).
+               state%v = history%velocity(:, history%newest)
+            else
+               call root_velocities(self%root, self%mesh, self%law_rate, state%v, self%root_work, refine)
+            end if
             self%counts%velocity_solves = self%counts%velocity_solves + 1
             state%has_velocity = .true.
             if (.not. self%model%analysis%accelerations) return
-            call root_accelerations(self%root, self%mesh, state%v, self%law_rate2, state%a, self%root_work)
+            call root_accelerations(self%root, self%mesh, state%v, self%law_rate2, state%a, self%root_work, refine)
             self%counts%acceleration_solves = self%counts%acceleration_solves + 1
             state%has_acceleration = .true.
             return

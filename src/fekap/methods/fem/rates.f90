@@ -19,12 +19,24 @@ module fekap_fem_rates
    private
 
    public :: pivot_note, singular_pivot, solve_velocities, solve_accelerations
-   public :: root_velocities, root_accelerations, root_drive_response, refine_rates
+   public :: root_velocities, root_accelerations, root_drive_response, root_drive_block, refine_rates
 
    !> Solves of a rate in the square-root form: the plain solve and one
    !> refinement whose residual is the element strain rates (one more gains
    !> nothing: the error is then at the floor of the positions' round-off).
    integer, parameter :: root_passes = 2
+
+   !> B_f's condition on the tangent's scale (strain_rate_rcond's
+   !> 1/kappa_1(B_f)^2) at or above which the square-root form's rates take
+   !> the plain solve alone (see root_velocities' `refine`): the LU solve's
+   !> error is of order u kappa(B_f) |x| (u the unit round-off; Higham,
+   !> Accuracy and Stability of Numerical Algorithms, 2002, sec. 9), so with
+   !> kappa_1(B_f) <= 100 the refinement's correction is within about 100
+   !> units of the rates' last place, at the round-off of the positions it
+   !> starts from. The ill-conditioned (the scissor lift at scale, a
+   !> mechanism near a change point, stiff sections spread over decades)
+   !> keep their refinement.
+   real(dp), parameter, public :: plain_rates_rcond = 1.0e-4_dp
 
    !> Most refinements of a redundant mechanism's rates (refine_rates): each
    !> gains about -log10(eps kappa(K)) digits, and they stop sooner when the
@@ -173,18 +185,21 @@ contains
    !> Velocities of an exactly constrained mechanism: B_f v_f = -B_d v_d with
    !> the factor of the stress-free B in `root`, then one refinement
    !> B_f dv = -B v with the strain rates B v computed element by element
-   !> from nodal differences. work is scratch over the equations.
-   subroutine root_velocities(root, mesh, vd, v, work)
+   !> from nodal differences (unless `refine` is false: the plain solve
+   !> alone, where B_f is well conditioned, plain_rates_rcond). work is
+   !> scratch over the equations.
+   subroutine root_velocities(root, mesh, vd, v, work, refine)
       type(strain_rate_type), intent(in) :: root
       type(mesh_type), intent(in) :: mesh
       !> The drives' rates.
       real(dp), contiguous, intent(in) :: vd(:)
       real(dp), contiguous, intent(out) :: v(:)
       real(dp), contiguous, intent(inout) :: work(:)
+      logical, intent(in), optional :: refine
       integer :: pass
       v = 0
       call put_driven(mesh, vd, v)
-      do pass = 1, root_passes
+      do pass = 1, passes(refine)
          call strain_rates(root, mesh, v, work)
          call add_root_correction(root, mesh, work, v)
       end do
@@ -193,8 +208,9 @@ contains
    !> Accelerations of an exactly constrained mechanism: B_f a_f = -B_d a_d -
    !> eps2(v) (the strains' second rates vanish) with the factor of the
    !> stress-free B in `root`, then one refinement with the residual
-   !> B a + eps2(v) element by element (strain_accelerations).
-   subroutine root_accelerations(root, mesh, v, ad, a, work)
+   !> B a + eps2(v) element by element (strain_accelerations); `refine` as
+   !> root_velocities'.
+   subroutine root_accelerations(root, mesh, v, ad, a, work, refine)
       type(strain_rate_type), intent(in) :: root
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: v(:)
@@ -202,14 +218,25 @@ contains
       real(dp), contiguous, intent(in) :: ad(:)
       real(dp), contiguous, intent(out) :: a(:)
       real(dp), contiguous, intent(inout) :: work(:)
+      logical, intent(in), optional :: refine
       integer :: pass
       a = 0
       call put_driven(mesh, ad, a)
-      do pass = 1, root_passes
+      do pass = 1, passes(refine)
          call strain_accelerations(root, mesh, v, a, work)
          call add_root_correction(root, mesh, work, a)
       end do
    end subroutine root_accelerations
+
+   !> The solves of a rate in the square-root form: root_passes, or the
+   !> plain solve alone when `refine` is given false.
+   pure integer function passes(refine)
+      logical, intent(in), optional :: refine
+      passes = root_passes
+      if (present(refine)) then
+         if (.not. refine) passes = 1
+      end if
+   end function passes
 
    !> Linear response of every dof to unit changes of the drives (as
    !> drive_response): R_f = -B_f^-1 B_d with the factor in `root`, 1 on the
@@ -229,6 +256,25 @@ contains
          resp(mesh%driven_dof(j), j) = 1
       end do
    end subroutine root_drive_response
+
+   !> K's free-driven block from B, K_fd = B_f^T W B_d (46), column by
+   !> column: B_d's column (root%bd, by B's rows) weighted and gathered onto
+   !> the free equations by strain_forces, with the section angles and gap
+   !> gradients root holds. The material tangent's block without assembling
+   !> K: in exact arithmetic K's at a stress-free configuration, to the
+   !> strains' size (round-off at a converged one) otherwise. rows is
+   !> scratch over B's rows.
+   subroutine root_drive_block(root, mesh, kfd, rows)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(out) :: kfd(:, :)
+      real(dp), contiguous, intent(inout) :: rows(:)
+      integer :: j
+      do j = 1, mesh%ndriven
+         rows = root%bd(:, j)
+         call strain_forces(root, mesh, rows, kfd(:, j))
+      end do
+   end subroutine root_drive_block
 
    !> x(mesh%driven_dof) = values, in a loop: the assignment through the
    !> vector subscript copied the index list to a heap temporary (a malloc
