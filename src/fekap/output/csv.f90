@@ -7,17 +7,18 @@
 !> Writers never open files themselves. Reals are written with 17
 !> significant digits, enough to round-trip. The module is over 600 lines
 !> because the tables' rows share its row prefix, its row lengths and the
-!> cache of number texts that the prefix carries (real_text_cache_type),
-!> which keep the rows of a step in one place; splitting the once-written
-!> mechanism.txt records off would be the way to shorten it.
+!> cache of number texts that the prefix carries (real_text_cache_type, of
+!> fekap_output_format, whose append_reals writes a row's reals in one
+!> call), which keep the rows of a step in one place; splitting the
+!> once-written mechanism.txt records off would be the way to shorten it.
 module fekap_output_csv
    use fekap_kinds, only: dp
    use fekap_model, only: model_type, dof_x, dof_y, dof_rot, effects_dynamics, integrator_names
    use fekap_model_effects, only: planned_effects, effects_name
    use fekap_model_results, only: step_result_type
    use fekap_model_reactions, only: reaction_row_type, reaction_rows
-   use fekap_output_format, only: append_real, append_integer, append_text, real_text
-   use fekap_output_exact_digits, only: i8
+   use fekap_output_format, only: append_real, append_integer, append_text, real_text, append_reals, &
+      & real_text_cache_type, real_width
    use fekap_output_buffer, only: text_buffer_type, reserve_text
    implicit none
    private
@@ -32,6 +33,8 @@ module fekap_output_csv
    !> For mechanism.txt of a spatial run: one line to a unit, a CSV field
    !> quoted, a word of a list of names.
    public :: emit, quoted, word_at, write_mechanism_head, write_track_record
+   !> The cache of real texts (fekap_output_format's), for the rows of other modules.
+   public :: real_text_cache_type
 
    !> The fixed headers (write_header) of steps.csv, reactions.csv and
    !> deflection.csv; energy.csv's is `step,t,` and the effect's columns.
@@ -43,26 +46,9 @@ module fekap_output_csv
       & dynamics_steps_header = floor_steps_header//',error_estimate', &
       & reactions_header = 'step,t,kind,link,node,fx,fy,m', deflection_header = 'step,t,node,ux,uy'
 
-   !> Longest text of a real (es25.16e3 without its leading blank) and of an
-   !> integer, and of the prefix `step,t,` of a row.
-   integer, parameter :: real_width = 24, integer_width = 11, prefix_length = integer_width + real_width + 2
-
-   !> Slots of real_text_cache_type (a power of two: the slot is the top
-   !> bits of a product).
-   integer, parameter :: cache_bits = 8, cache_slots = 2**cache_bits
-
-   !> The texts of the last reals written to the tables, by their bits. The
-   !> rows of a run write the same values again and again: a fixed node's
-   !> coordinates, a constant drive rate, exact zeros, a tracked point's
-   !> position in points.csv and again in nodes.csv; copying a text costs a
-   !> tenth of making it. Direct-mapped: each slot holds the last value whose
-   !> hash fell in it (length 0: none yet), its text in 24 characters of
-   !> which `length` count.
-   type, public :: real_text_cache_type
-      integer(i8) :: bits(0:cache_slots - 1) = 0
-      integer :: length(0:cache_slots - 1) = 0
-      character(len=real_width) :: text(0:cache_slots - 1) = ''
-   end type real_text_cache_type
+   !> Longest text of an integer and of the prefix `step,t,` of a row
+   !> (real_width: of a real).
+   integer, parameter :: integer_width = 11, prefix_length = integer_width + real_width + 2
 
    !> `step,t,`, the start of every row of a step in every table: its text
    !> is made once per step (new_row_prefix), not once per row. It goes to
@@ -93,16 +79,36 @@ contains
       !> new_row_prefix of the result.
       type(row_prefix_type), intent(inout) :: prefix
       logical, intent(in) :: velocities, accelerations
-      integer :: i, node, length
+      real(dp) :: row(6)
+      integer :: i, node, length, m
       length = 0
       do i = 1, size(model%output%points)
-         length = length + row_length(len(model%nodes(model%output%points(i))%name), 6)
+         length = length + row_chars(len(model%nodes(model%output%points(i))%name), 6)
       end do
       call reserve_text(out, length)
       do i = 1, size(model%output%points)
          node = model%output%points(i)
-         call append_rates_row(out%text, out%n, prefix%text(1:prefix%n), model%nodes(node)%name, result%pos(:, node), &
-            & result%vel(:, node), result%acc(:, node), result%has_velocity, velocities, accelerations, prefix%numbers)
+         if (velocities .and. .not. result%has_velocity) then
+            call append_rates_row(out%text, out%n, prefix%text(1:prefix%n), model%nodes(node)%name, result%pos(:, node), &
+               & result%vel(:, node), result%acc(:, node), result%has_velocity, velocities, accelerations, prefix%numbers)
+            cycle
+         end if
+         ! The columns known: x, y and the rates asked for, gathered for one
+         ! append_reals (no array descriptors per row).
+         row(1:2) = result%pos(:, node)
+         m = 2
+         if (velocities) then
+            row(3:4) = result%vel(:, node)
+            m = 4
+            if (accelerations) then
+               row(5:6) = result%acc(:, node)
+               m = 6
+            end if
+         end if
+         call append_prefix(out%text, out%n, prefix)
+         call append_name(out%text, out%n, model%nodes(node)%name)
+         call append_reals(out%text, out%n, row, m, prefix%numbers)
+         call append_char(out%text, out%n, new_line('a'))
       end do
    end subroutine write_points_rows
 
@@ -121,17 +127,36 @@ contains
       !> new_row_prefix of the result.
       type(row_prefix_type), intent(inout) :: prefix
       logical, intent(in) :: velocities, accelerations
-      integer :: i, link, length
+      real(dp) :: row(3)
+      integer :: i, link, length, m
       length = 0
       do i = 1, size(model%output%links)
-         length = length + row_length(len(model%links(model%output%links(i))%name), 3)
+         length = length + row_chars(len(model%links(model%output%links(i))%name), 3)
       end do
       call reserve_text(out, length)
       do i = 1, size(model%output%links)
          link = model%output%links(i)
-         call append_rates_row(out%text, out%n, prefix%text(1:prefix%n), model%links(link)%name, result%angle(link:link), &
-            & result%omega(link:link), result%alpha(link:link), result%has_velocity, velocities, accelerations, &
-            & prefix%numbers)
+         if (velocities .and. .not. result%has_velocity) then
+            call append_rates_row(out%text, out%n, prefix%text(1:prefix%n), model%links(link)%name, &
+               & result%angle(link:link), result%omega(link:link), result%alpha(link:link), result%has_velocity, &
+               & velocities, accelerations, prefix%numbers)
+            cycle
+         end if
+         ! As write_points_rows: the known columns through one append_reals.
+         row(1) = result%angle(link)
+         m = 1
+         if (velocities) then
+            row(2) = result%omega(link)
+            m = 2
+            if (accelerations) then
+               row(3) = result%alpha(link)
+               m = 3
+            end if
+         end if
+         call append_prefix(out%text, out%n, prefix)
+         call append_name(out%text, out%n, model%links(link)%name)
+         call append_reals(out%text, out%n, row, m, prefix%numbers)
+         call append_char(out%text, out%n, new_line('a'))
       end do
    end subroutine write_links_rows
 
@@ -151,8 +176,16 @@ contains
    !> Longest row: the prefix, a name, `reals` reals after it and the newline.
    pure integer function row_length(name_length, reals)
       integer, intent(in) :: name_length, reals
-      row_length = prefix_length + name_length + reals*(real_width + 1) + 1
+      row_length = row_chars(name_length, reals)
    end function row_length
+
+   !> row_length for this module's writers: a public procedure of a module
+   !> compiled as position-independent code is called even from its own
+   !> module (it could be interposed), a private one is inlined.
+   pure integer function row_chars(name_length, reals)
+      integer, intent(in) :: name_length, reals
+      row_chars = prefix_length + name_length + reals*(real_width + 1) + 1
+   end function row_chars
 
    !> The prefix `step,t,` of the rows of the step of `result`.
    pure subroutine new_row_prefix(self, result)
@@ -212,53 +245,48 @@ contains
    end subroutine append_rates_row
 
    !> `,v1,v2,...`: each value as append_real writes it, through `cache`
-   !> (append_cached_real).
+   !> (append_reals).
    pure subroutine append_values(text, n, values, cache)
       character(*), intent(inout) :: text
       integer, intent(inout) :: n
       real(dp), intent(in) :: values(:)
       type(real_text_cache_type), intent(inout) :: cache
-      integer :: i
-      do i = 1, size(values)
-         text(n + 1:n + 1) = ','
-         n = n + 1
-         call append_cached_real(text, n, values(i), cache)
-      end do
+      call append_reals(text, n, values, size(values), cache)
    end subroutine append_values
 
-   !> x as append_real writes it (a function of the bits of x), copied from
-   !> `cache` where x is held there, else written and then held. The caller
-   !> has reserved real_width characters for it.
-   pure subroutine append_cached_real(text, n, x, cache)
+   !> The prefix `step,t,` of a row, copied as its whole prefix_length
+   !> characters (a copy of fixed length is a few moves, one of the prefix's
+   !> length a call of memmove), n advanced by its length: the characters
+   !> beyond are overwritten by what follows. The caller has reserved a
+   !> row_length.
+   pure subroutine append_prefix(text, n, prefix)
       character(*), intent(inout) :: text
       integer, intent(inout) :: n
-      real(dp), intent(in) :: x
-      type(real_text_cache_type), intent(inout) :: cache
-      integer(i8), parameter :: low32 = shiftl(1_i8, 32) - 1, multiplier = 2053222753_i8
-      integer(i8) :: bits
-      integer :: slot, start
-      bits = transfer(x, 0_i8)
-      ! The two halves of the bits folded, times a 31-bit multiplier (the
-      ! product of a 32-bit number and it is below 2**63: no overflow); the
-      ! slot is the top cache_bits bits of the product.
-      slot = int(shiftr(iand(ieor(bits, shiftr(bits, 32)), low32)*multiplier, 63 - cache_bits))
-      if (n + real_width > len(text)) then
-         call append_real(text, n, x)
-      else if (cache%length(slot) > 0 .and. cache%bits(slot) == bits) then
-         ! All real_width characters, one fixed-length copy; after a shorter
-         ! text the rest is overwritten by what follows.
-         text(n + 1:n + real_width) = cache%text(slot)
-         n = n + cache%length(slot)
-      else
-         start = n
-         call append_real(text, n, x)
-         if (n - start <= real_width) then
-            cache%bits(slot) = bits
-            cache%length(slot) = n - start
-            cache%text(slot) = text(start + 1:start + real_width)
-         end if
-      end if
-   end subroutine append_cached_real
+      type(row_prefix_type), intent(in) :: prefix
+      text(n + 1:n + prefix_length) = prefix%text
+      n = n + prefix%n
+   end subroutine append_prefix
+
+   !> A point's or link's name. Names are short: those of one to three
+   !> characters are copied at their fixed length (a move or two), not
+   !> through the call of memmove that a copy of variable length is (a loop
+   !> over the characters the compiler makes into that call too).
+   pure subroutine append_name(text, n, name)
+      character(*), intent(inout) :: text
+      integer, intent(inout) :: n
+      character(*), intent(in) :: name
+      select case (len(name))
+      case (1)
+         text(n + 1:n + 1) = name
+      case (2)
+         text(n + 1:n + 2) = name
+      case (3)
+         text(n + 1:n + 3) = name
+      case default
+         text(n + 1:n + len(name)) = name
+      end select
+      n = n + len(name)
+   end subroutine append_name
 
    !> One character (inlined here, unlike append_text of another module).
    pure subroutine append_char(text, n, c)
@@ -286,7 +314,7 @@ contains
       !> new_row_prefix of the result.
       type(row_prefix_type), intent(inout) :: prefix
       call reserve_text(out, prefix_length + 3*(integer_width + 1) + 2*(real_width + 1))
-      call append_text(out%text, out%n, prefix%text(1:prefix%n))
+      call append_prefix(out%text, out%n, prefix)
       call append_integer(out%text, out%n, result%iterations)
       call append_char(out%text, out%n, ',')
       call append_real(out%text, out%n, result%residual)
@@ -345,10 +373,11 @@ contains
       integer :: i, k, ip
       real(dp) :: xa(2), xb(2)
       call reserve_text(out, prefix_length + 2*size(result%pos, 2)*(real_width + 1) + 1)
-      call append_text(out%text, out%n, prefix%text(1:prefix%n - 1))
-      do i = 1, size(result%pos, 2)
-         call append_values(out%text, out%n, result%pos(:, i), prefix%numbers)
-      end do
+      ! `step,t` without its last comma: each value brings its own.
+      call append_prefix(out%text, out%n, prefix)
+      out%n = out%n - 1
+      ! Every node's x and y, in the order of result%pos (contiguous).
+      call append_reals(out%text, out%n, result%pos, size(result%pos), prefix%numbers)
       if (model%output%mesh_nodes) then
          ip = 0
          do i = 1, size(model%links)
@@ -575,7 +604,7 @@ contains
          type(text_buffer_type), intent(inout) :: buffer
          character(*), intent(in) :: kind, link, node
          integer, intent(in) :: irow
-         call reserve_text(buffer, row_length(len(kind) + len(link) + len(node) + 2, 3))
+         call reserve_text(buffer, row_chars(len(kind) + len(link) + len(node) + 2, 3))
          call append_text(buffer%text, buffer%n, prefix%text(1:prefix%n)//kind//','//link//','//node)
          if (result%has_reactions) then
             call append_values(buffer%text, buffer%n, result%reactions(:, irow), prefix%numbers)
@@ -593,7 +622,7 @@ contains
       type(step_result_type), intent(in) :: result
       type(row_prefix_type), intent(inout) :: prefix
       if (.not. result%has_energy) return
-      call reserve_text(out, row_length(0, size(result%energy)))
+      call reserve_text(out, row_chars(0, size(result%energy)))
       call append_text(out%text, out%n, prefix%text(1:prefix%n - 1))
       call append_values(out%text, out%n, result%energy, prefix%numbers)
       call append_char(out%text, out%n, new_line('a'))
@@ -609,7 +638,7 @@ contains
       type(row_prefix_type), intent(inout) :: prefix
       integer :: i
       do i = 1, size(model%nodes)
-         call reserve_text(out, row_length(len(model%nodes(i)%name), 2))
+         call reserve_text(out, row_chars(len(model%nodes(i)%name), 2))
          call append_text(out%text, out%n, prefix%text(1:prefix%n)//model%nodes(i)%name)
          if (result%has_deflection) then
             call append_values(out%text, out%n, result%deflection(:, i), prefix%numbers)

@@ -6,37 +6,37 @@
 !> k = n - 1 - E, computed exactly in 128-bit integers. E is floor((e + 52)
 !> log10(2)) or one more, from the binary exponent.
 !>
-!> fast_digits takes the values of a kinematic run (0 <= k <= 31: |x| from
-!> about 10**(n - 32) to 10**n): which of the two E is, one comparison with
-!> a table of powers of ten tells; m 5**k is one product and 2**(e + k) a
-!> shift; the code has no loop and no branch on the digits (a small fraction
-!> of a formatted write's cost: docs/performance.md). decimal_digits takes the
-!> rest of the exact path: m times the two 64-bit halves of 5**k up to
-!> k = 54 (|x| down to about 1e-38), a 128-bit division for k < 0 (down to
-!> -21, |x| < 1e38). Other values (subnormals, NaN, infinities, magnitudes
-!> beyond these) go through the formatted write.
+!> The values of a kinematic run (0 <= k <= 31: |x| from about 10**(n - 32)
+!> to 10**n) take fekap_output_format's fast_digits, which lives there so
+!> that the compiler inlines it into the writers (a call per number, with
+!> its outputs through memory, cost a third of it); it uses the tables
+!> below. decimal_digits takes the rest of the exact path: m times the two
+!> 64-bit halves of 5**k up to k = 54 (|x| down to about 1e-38), a 128-bit
+!> division for k < 0 (down to -21, |x| < 1e38). Other values (subnormals,
+!> NaN, infinities, magnitudes beyond these) go through the formatted write.
 module fekap_output_exact_digits
    use fekap_kinds, only: dp
    implicit none
    private
 
-   public :: fast_digits, decimal_digits
+   public :: decimal_digits
 
    integer, parameter, public :: i8 = selected_int_kind(18)
-   integer, parameter :: i16 = selected_int_kind(38)
+   integer, parameter, public :: i16 = selected_int_kind(38)
    !> The exact path reads the significand and exponent from the bits of an
    !> IEEE binary64 double; with any other real kind every value is formatted.
-   logical, parameter :: binary64 = radix(1.0_dp) == 2 .and. digits(1.0_dp) == 53 .and. &
+   logical, parameter, public :: binary64 = radix(1.0_dp) == 2 .and. digits(1.0_dp) == 53 .and. &
       & maxexponent(1.0_dp) == 1024 .and. bit_size(0_i8) == 64
    !> Range of k of the exact path, and its largest decimal exponent.
    integer, parameter :: min_k = -21, max_k = 54, max_exponent10 = 37
    !> k up to which m 5**k (< 2**125) is one 128-bit product.
-   integer, parameter :: max_k_single = 31
+   integer, parameter, public :: max_k_single = 31
    !> k up to which 5**k fits in 64 bits (m 5**k is then one 64-by-64-bit product).
-   integer, parameter :: max_k_64 = 27
-   integer(i16), parameter :: low64_mask = 18446744073709551615_i16, low62_mask = 4611686018427387903_i16
+   integer, parameter, public :: max_k_64 = 27
+   integer(i16), parameter :: low64_mask = 18446744073709551615_i16
+   integer(i16), parameter, public :: low62_mask = 4611686018427387903_i16
    !> Powers of five in 128 bits (kept out of the inner loops).
-   integer(i16), parameter :: power5(0:max_k) = [ &
+   integer(i16), parameter, public :: power5(0:max_k) = [ &
       & 1_i16, 5_i16, 25_i16, 125_i16, 625_i16, 3125_i16, 15625_i16, 78125_i16, 390625_i16, 1953125_i16, 9765625_i16, &
       & 48828125_i16, 244140625_i16, 1220703125_i16, 6103515625_i16, 30517578125_i16, 152587890625_i16, &
       & 762939453125_i16, 3814697265625_i16, 19073486328125_i16, 95367431640625_i16, 476837158203125_i16, &
@@ -52,7 +52,7 @@ module fekap_output_exact_digits
       & 17763568394002504646778106689453125_i16, 88817841970012523233890533447265625_i16, &
       & 444089209850062616169452667236328125_i16, 2220446049250313080847263336181640625_i16, &
       & 11102230246251565404236316680908203125_i16, 55511151231257827021181583404541015625_i16]
-   integer(i8), parameter :: power5_64(0:max_k_64) = int(power5(0:max_k_64), i8)
+   integer(i8), parameter, public :: power5_64(0:max_k_64) = int(power5(0:max_k_64), i8)
    !> 10**j in 64 bits, j = 0..18.
    integer(i8), parameter, public :: power10(0:18) = [ &
       & 1_i8, 10_i8, 100_i8, 1000_i8, 10000_i8, 100000_i8, 1000000_i8, 10000000_i8, &
@@ -60,7 +60,7 @@ module fekap_output_exact_digits
       & 10000000000000_i8, 100000000000000_i8, 1000000000000000_i8, 10000000000000000_i8, &
       & 100000000000000000_i8, 1000000000000000000_i8]
    !> The least double >= 10**j: |x| >= 10**j exactly when |x| >= this.
-   real(dp), parameter :: power10_threshold(-30:17) = [ &
+   real(dp), parameter, public :: power10_threshold(-30:17) = [ &
       & 1.0000000000000001e-30_dp, 1.0000000000000001e-29_dp, 1.0000000000000001e-28_dp, 1.0000000000000000e-27_dp, &
       & 1.0000000000000000e-26_dp, 1.0000000000000000e-25_dp, 1.0000000000000001e-24_dp, 1.0000000000000001e-23_dp, &
       & 1.0000000000000000e-22_dp, 1.0000000000000001e-21_dp, 1.0000000000000001e-20_dp, 1.0000000000000001e-19_dp, &
@@ -79,68 +79,10 @@ module fekap_output_exact_digits
 
 contains
 
-   !> The `ndigits` (<= 17) significant digits of x /= 0, correctly rounded
-   !> (ties to even), and its decimal exponent, where m 5**k is one 128-bit
-   !> product and 2**(e + k) a right shift: 0 <= k <= 31, 1 <= -(e + k) <=
-   !> 126 (normal x from about 10**(ndigits - 32) to 10**ndigits: the values
-   !> of a kinematic run). done = .false. (and nothing computed) otherwise.
-   !> Straight-line code: no loop, and no branch on the digits; E from the
-   !> binary exponent and one comparison with power10_threshold.
-   pure subroutine fast_digits(x, ndigits, significand, e10, done)
-      real(dp), intent(in) :: x
-      integer, intent(in) :: ndigits
-      integer(i8), intent(out) :: significand
-      integer, intent(out) :: e10
-      logical, intent(out) :: done
-      integer(i16) :: wide_product
-      integer(i8) :: bits, q2, sticky
-      integer :: biased, e, k, s
-      bits = transfer(x, 0_i8)
-      biased = int(iand(shiftr(bits, 52), 2047_i8))
-      e = biased - 1075
-      ! |x| lies in [2**(e + 52), 2**(e + 53)), so E is floor((e + 52) log10(2))
-      ! (78913/2**18 is log10(2) close enough over the whole exponent range)
-      ! or one more: one more when |x| >= 10**(that + 1).
-      e10 = shifta((e + 52)*78913, 18)
-      k = ndigits - 1 - e10
-      significand = 0
-      done = binary64 .and. biased > 0 .and. biased < 2047 .and. ndigits >= 1 .and. ndigits <= 17 .and. &
-         & k >= 0 .and. k <= max_k_single
-      if (.not. done) return
-      e10 = e10 + merge(1, 0, abs(x) >= power10_threshold(e10 + 1))
-      k = ndigits - 1 - e10
-      s = -(e + k)
-      done = k >= 0 .and. s >= 1 .and. s <= 126
-      if (.not. done) return
-      ! m 5**k < 2**125, in one 64-by-64-bit multiplication where 5**k fits.
-      if (k <= max_k_64) then
-         wide_product = int(ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52)), i16)*int(power5_64(k), i16)
-      else
-         wide_product = ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52))*power5(k)
-      end if
-      ! x 10**k times two, floored (< 2 10**ndigits): its last bit is the
-      ! rounding bit; sticky (0 or 1) tells whether anything lies below.
-      q2 = int(shiftr(wide_product, s - 1), i8)
-      if (s <= 63) then
-         ! The bits below the rounding bit are in the low 62 (64-bit work).
-         sticky = merge(1_i8, 0_i8, iand(int(iand(wide_product, low62_mask), i8), shiftl(1_i8, s - 1) - 1) /= 0)
-      else
-         sticky = merge(1_i8, 0_i8, iand(wide_product, shiftl(1_i16, s - 1) - 1) /= 0)
-      end if
-      ! Up on more than half, or on half with an odd last digit (computed,
-      ! not branched on: the outcome is as random as the digits).
-      significand = shiftr(q2, 1)
-      significand = significand + shiftr(iand(q2, 1_i8) + ior(sticky, iand(significand, 1_i8)), 1)
-      ! 9.99...95 rounds to the next power of ten.
-      if (significand == power10(ndigits)) then
-         significand = power10(ndigits - 1)
-         e10 = e10 + 1
-      end if
-   end subroutine fast_digits
-
    !> The `ndigits` significant digits of x > 0, correctly rounded (ties to
    !> even), and its decimal exponent, for any x of the exact path (the
-   !> general case of fast_digits); exact = .false. outside it.
+   !> general case of fekap_output_format's fast_digits); exact = .false.
+   !> outside it.
    pure subroutine decimal_digits(x, ndigits, significand, e10, exact)
       real(dp), intent(in) :: x
       integer, intent(in) :: ndigits

@@ -4,21 +4,58 @@
 !> writes cost about a microsecond a number, which made writing two tracked
 !> points ten times dearer than computing them.
 !>
-!> The digits themselves are exact: fekap_output_exact_digits.
+!> The digits themselves are exact: fast_digits here (the values of a
+!> kinematic run, inlined into the writers) and fekap_output_exact_digits.
 module fekap_output_format
    use fekap_kinds, only: dp
    use fekap_strings, only: es_text
-   use fekap_output_exact_digits, only: i8, power10, fast_digits, decimal_digits
+   use fekap_output_exact_digits, only: i8, i16, power10, decimal_digits, binary64, max_k_single, max_k_64, &
+      & low62_mask, power5, power5_64, power10_threshold
    implicit none
    private
 
    public :: real_text, integer_text, append_real, append_integer, append_es, append_i, append_text
+   public :: append_reals
+
+   !> Longest text of append_real (es25.16e3 without its leading blank).
+   integer, parameter, public :: real_width = 24
 
    !> "00" to "99": digits are produced two at a time.
    character(len=200), parameter :: digit_pairs = &
       & '0001020304050607080910111213141516171819'//'2021222324252627282930313233343536373839'// &
       & '4041424344454647484950515253545556575859'//'6061626364656667686970717273747576777879'// &
       & '8081828384858687888990919293949596979899'
+
+   !> Eight digits are made side by side in the lanes of one 64-bit integer
+   !> and stored as its 8 bytes (put_8_digits), the first digit in the lowest
+   !> byte: on a little-endian machine, which this tells.
+   logical, parameter :: little_endian = transfer(1_i8, 'abcdefgh') == achar(1)//repeat(achar(0), 7)
+
+   !> The exponents of es25.16e3 texts on fast_digits' path (E from -15 to
+   !> 17 there), each copied whole (put_17_digits).
+   character(len=5), parameter :: exponent_texts(-20:20) = [ &
+      & 'E-020', 'E-019', 'E-018', 'E-017', 'E-016', 'E-015', 'E-014', 'E-013', 'E-012', &
+      & 'E-011', 'E-010', 'E-009', 'E-008', 'E-007', 'E-006', 'E-005', 'E-004', 'E-003', &
+      & 'E-002', 'E-001', 'E+000', 'E+001', 'E+002', 'E+003', 'E+004', 'E+005', 'E+006', &
+      & 'E+007', 'E+008', 'E+009', 'E+010', 'E+011', 'E+012', 'E+013', 'E+014', 'E+015', &
+      & 'E+016', 'E+017', 'E+018', 'E+019', 'E+020']
+
+   !> Slots of real_text_cache_type (a power of two: the slot is the top
+   !> bits of a product).
+   integer, parameter :: cache_bits = 8, cache_slots = 2**cache_bits
+
+   !> The texts of the last reals written to the tables, by their bits. The
+   !> rows of a run write the same values again and again: a fixed node's
+   !> coordinates, a constant drive rate, exact zeros, a tracked point's
+   !> position in points.csv and again in nodes.csv; copying a text costs a
+   !> tenth of making it. Direct-mapped: each slot holds the last value whose
+   !> hash fell in it (length 0: none yet), its text in 24 characters of
+   !> which `length` count.
+   type, public :: real_text_cache_type
+      integer(i8) :: bits(0:cache_slots - 1) = 0
+      integer :: length(0:cache_slots - 1) = 0
+      character(len=real_width) :: text(0:cache_slots - 1) = ''
+   end type real_text_cache_type
 
 contains
 
@@ -49,14 +86,93 @@ contains
       character(*), intent(inout) :: line
       integer, intent(inout) :: n
       real(dp), intent(in) :: x
+      call put_real(line, n, x)
+   end subroutine append_real
+
+   !> `,v1,v2,...` of m values in a contiguous array, each as append_real
+   !> writes it, through `cache` (append_cached_real). Explicit shape: the
+   !> rows of the CSV tables pass their values without a descriptor, and
+   !> nodes.csv every node's coordinates at once. Here, with the writer of
+   !> a real, so that a row is one call and each value none (a call of
+   !> another module is not inlined, and append_real's registers were
+   !> saved and restored for each value).
+   pure subroutine append_reals(text, n, values, m, cache)
+      character(*), intent(inout) :: text
+      integer, intent(inout) :: n
+      integer, intent(in) :: m
+      real(dp), intent(in) :: values(m)
+      type(real_text_cache_type), intent(inout) :: cache
+      integer :: i
+      do i = 1, m
+         text(n + 1:n + 1) = ','
+         n = n + 1
+         call append_cached_real(text, n, values(i), cache)
+      end do
+   end subroutine append_reals
+
+   !> x as append_real writes it (a function of the bits of x), copied from
+   !> `cache` where x is held there, else written and then held. The caller
+   !> has reserved real_width characters for it.
+   pure subroutine append_cached_real(text, n, x, cache)
+      character(*), intent(inout) :: text
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: x
+      type(real_text_cache_type), intent(inout) :: cache
+      integer(i8), parameter :: low32 = shiftl(1_i8, 32) - 1, multiplier = 2053222753_i8
+      integer(i8) :: bits
+      integer :: slot, start
+      logical :: room
+      bits = transfer(x, 0_i8)
+      ! The two halves of the bits folded, times a 31-bit multiplier (the
+      ! product of a 32-bit number and it is below 2**63: no overflow); the
+      ! slot is the top cache_bits bits of the product.
+      slot = int(shiftr(iand(ieor(bits, shiftr(bits, 32)), low32)*multiplier, 63 - cache_bits))
+      room = n + real_width <= len(text)
+      if (room .and. cache%length(slot) > 0 .and. cache%bits(slot) == bits) then
+         ! All real_width characters, one fixed-length copy; after a shorter
+         ! text the rest is overwritten by what follows.
+         text(n + 1:n + real_width) = cache%text(slot)
+         n = n + cache%length(slot)
+         return
+      end if
+      ! One call of put_real (the compiler inlines it where it is called once).
+      start = n
+      call put_real(text, n, x)
+      if (room .and. n - start <= real_width) then
+         cache%bits(slot) = bits
+         cache%length(slot) = n - start
+         cache%text(slot) = text(start + 1:start + real_width)
+      end if
+   end subroutine append_cached_real
+
+   !> append_real's work. Private: a public procedure of a module compiled
+   !> as position-independent code is called even from its own module (it
+   !> could be interposed), a private one is inlined (here into append_real
+   !> and append_cached_real).
+   pure subroutine put_real(line, n, x)
+      character(*), intent(inout) :: line
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: x
       integer(i8) :: significand
       integer :: e10
       logical :: done
       call fast_digits(x, 17, significand, e10, done)
-      if (done) then
-         call put_17_digits(line, n, x < 0, significand, e10)
-         return
-      else if (x == 0) then
+      if (done .and. e10 >= lbound(exponent_texts, 1) .and. e10 <= ubound(exponent_texts, 1)) then
+         call put_17_digits(line, n, x, significand, e10)
+      else
+         call append_other_real(line, n, x)
+      end if
+   end subroutine put_real
+
+   !> append_real of the values off fast_digits' path: zeros, very small and
+   !> very large magnitudes, subnormals, infinities. Kept apart (and not
+   !> inlined) so that append_real's common path saves no registers for it.
+   pure subroutine append_other_real(line, n, x)
+      character(*), intent(inout) :: line
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: x
+      logical :: done
+      if (x == 0) then
          ! Exact zeros are common (a constant rate, a fixed coordinate).
          if (sign(1.0_dp, x) < 0) call append_text(line, n, '-')
          line(n + 1:n + 23) = '0.0000000000000000E+000'
@@ -68,33 +184,33 @@ contains
          call append_es(line, n, x, 25, 16, 3)
          call squeeze(line, n, 25)
       end if
-   end subroutine append_real
+   end subroutine append_other_real
 
-   !> Write [-]d.dddddddddddddddd E+ddd (the text of es25.16e3) of the 17
-   !> digits `significand` and the decimal exponent |e10| < 1000 after
-   !> position n; advance n. Every position is fixed but the sign's.
-   pure subroutine put_17_digits(line, n, negative, significand, e10)
+   !> Write [-]d.dddddddddddddddd E+ddd (the text of es25.16e3) of x, whose
+   !> 17 digits are `significand` and decimal exponent e10 (within
+   !> exponent_texts), after position n; advance n. Every position is fixed
+   !> but the sign's.
+   pure subroutine put_17_digits(line, n, x, significand, e10)
       character(*), intent(inout) :: line
       integer, intent(inout) :: n
-      logical, intent(in) :: negative
+      real(dp), intent(in) :: x
       integer(i8), intent(in) :: significand
       integer, intent(in) :: e10
       integer(i8) :: high
-      integer :: lead, k
-      ! The minus sign is written, and kept or overwritten by the digits
-      ! (a branch on the sign would be mispredicted half the time).
+      integer :: lead
+      ! The minus sign is written, and kept (n advanced by the sign bit) or
+      ! overwritten by the digits (a branch on the sign would be
+      ! mispredicted half the time).
       line(n + 1:n + 1) = '-'
-      n = n + merge(1, 0, negative)
+      n = n + int(shiftr(transfer(x, 0_i8), 63))
+      ! 1 + 8 + 8 digits: high < 10**9 has the first nine.
       high = significand/100000000_i8
-      lead = int(high/100000000_i8)
+      lead = int(high)/100000000
       line(n + 1:n + 1) = achar(iachar('0') + lead)
       line(n + 2:n + 2) = '.'
-      call put_8_digits(line(n + 3:n + 10), int(high - lead*100000000_i8))
+      call put_8_digits(line(n + 3:n + 10), int(high) - lead*100000000)
       call put_8_digits(line(n + 11:n + 18), int(significand - high*100000000_i8))
-      line(n + 19:n + 20) = merge('E-', 'E+', e10 < 0)
-      k = abs(e10)
-      line(n + 21:n + 21) = achar(iachar('0') + k/100)
-      line(n + 22:n + 23) = digit_pairs(2*mod(k, 100) + 1:2*mod(k, 100) + 2)
+      line(n + 19:n + 23) = exponent_texts(e10)
       n = n + 23
    end subroutine put_17_digits
 
@@ -246,6 +362,66 @@ contains
       call put_decimal(line, n, k, merge(exponent_digits, merge(2, 3, k <= 99), exponent_digits > 0))
    end subroutine put_es
 
+   !> The `ndigits` (<= 17) significant digits of x /= 0, correctly rounded
+   !> (ties to even), and its decimal exponent, where m 5**k is one 128-bit
+   !> product and 2**(e + k) a right shift: 0 <= k <= 31, 1 <= -(e + k) <=
+   !> 126 (normal x from about 10**(ndigits - 32) to 10**ndigits: the values
+   !> of a kinematic run). done = .false. (and nothing computed) otherwise.
+   !> Straight-line code: no loop, and no branch on the digits; E from the
+   !> binary exponent and one comparison with power10_threshold.
+   pure subroutine fast_digits(x, ndigits, significand, e10, done)
+      real(dp), intent(in) :: x
+      integer, intent(in) :: ndigits
+      integer(i8), intent(out) :: significand
+      integer, intent(out) :: e10
+      logical, intent(out) :: done
+      integer(i16) :: wide_product
+      integer(i8) :: bits, q2, sticky
+      integer :: biased, e, k, s
+      bits = transfer(x, 0_i8)
+      biased = int(iand(shiftr(bits, 52), 2047_i8))
+      e = biased - 1075
+      ! |x| lies in [2**(e + 52), 2**(e + 53)), so E is floor((e + 52) log10(2))
+      ! (78913/2**18 is log10(2) close enough over the whole exponent range)
+      ! or one more: one more when |x| >= 10**(that + 1).
+      e10 = shifta((e + 52)*78913, 18)
+      k = ndigits - 1 - e10
+      significand = 0
+      ! Zeros and subnormals (biased 0: E = -308) and infinities and NaN
+      ! (biased 2047: E = 308) are outside 0 <= k <= 31 for every ndigits.
+      done = binary64 .and. ndigits >= 1 .and. ndigits <= 17 .and. k >= 0 .and. k <= max_k_single
+      if (.not. done) return
+      e10 = e10 + merge(1, 0, abs(x) >= power10_threshold(e10 + 1))
+      k = ndigits - 1 - e10
+      s = -(e + k)
+      done = k >= 0 .and. s >= 1 .and. s <= 126
+      if (.not. done) return
+      ! m 5**k < 2**125, in one 64-by-64-bit multiplication where 5**k fits.
+      if (k <= max_k_64) then
+         wide_product = int(ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52)), i16)*int(power5_64(k), i16)
+      else
+         wide_product = ior(iand(bits, shiftl(1_i8, 52) - 1), shiftl(1_i8, 52))*power5(k)
+      end if
+      ! x 10**k times two, floored (< 2 10**ndigits): its last bit is the
+      ! rounding bit; sticky (0 or 1) tells whether anything lies below.
+      q2 = int(shiftr(wide_product, s - 1), i8)
+      if (s <= 63) then
+         ! The bits below the rounding bit are in the low 62 (64-bit work).
+         sticky = merge(1_i8, 0_i8, iand(int(iand(wide_product, low62_mask), i8), shiftl(1_i8, s - 1) - 1) /= 0)
+      else
+         sticky = merge(1_i8, 0_i8, iand(wide_product, shiftl(1_i16, s - 1) - 1) /= 0)
+      end if
+      ! Up on more than half, or on half with an odd last digit (computed,
+      ! not branched on: the outcome is as random as the digits).
+      significand = shiftr(q2, 1)
+      significand = significand + shiftr(iand(q2, 1_i8) + ior(sticky, iand(significand, 1_i8)), 1)
+      ! 9.99...95 rounds to the next power of ten.
+      if (significand == power10(ndigits)) then
+         significand = power10(ndigits - 1)
+         e10 = e10 + 1
+      end if
+   end subroutine fast_digits
+
    !> The digits of i as i0 writes them, in buffer(first:).
    pure subroutine integer_digits(i, buffer, first)
       integer, intent(in) :: i
@@ -339,8 +515,16 @@ contains
       text(2:2) = '.'
    end subroutine put_digits
 
-   !> The 8 digits of 0 <= v < 10**8, leading zeros included. y = v/10**6 in
-   !> 52-bit fixed point holds the first two digits in its integer part; its
+   !> The 8 digits of 0 <= v < 10**8, leading zeros included. On a
+   !> little-endian machine side by side in one 64-bit integer (SWAR): v as
+   !> two 4-digit halves in its 32-bit lanes, each lane split into two 2-digit
+   !> halves in 16-bit lanes, each of those into digits in bytes; a division
+   !> in every lane at once is one product and a shift (x*10486/2**20 is
+   !> x/100 floored for 0 <= x <= 9999, x*103/2**10 is x/10 floored for
+   !> 0 <= x <= 99; no lane's product reaches the next lane), and the 8 bytes
+   !> plus '0' are stored at once: about 20 instructions where the digit
+   !> pairs' table below takes about 40. Elsewhere: y = v/10**6 in 52-bit
+   !> fixed point holds the first two digits in its integer part; its
    !> fraction times 100 the next two, and so on: one product a pair, no
    !> division. (The multiplier ceil(2**52/10**6) makes y too large by less
    !> than 10**8 2**-52 units; after the three products by 100 that is below
@@ -350,8 +534,22 @@ contains
       character(len=8), intent(inout) :: text
       integer, intent(in) :: v
       integer(i8), parameter :: fraction_mask = shiftl(1_i8, 52) - 1, multiplier = 4503599628_i8
-      integer(i8) :: y
-      integer :: pair
+      integer(i8), parameter :: lanes_7f = int(z'0000007F0000007F', i8), lanes_0f = int(z'000F000F000F000F', i8), &
+         & zeros = int(z'3030303030303030', i8)
+      integer(i8) :: y, high
+      integer :: pair, half
+      if (little_endian) then
+         ! v/10**4 as v*ceil(2**40/10**4)/2**40 (exact below 10**8; no
+         ! signed division's correction).
+         half = int(shiftr(int(v, i8)*109951163_i8, 40))
+         y = ior(int(half, i8), shiftl(int(v - half*10000, i8), 32))
+         high = iand(shiftr(y*10486, 20), lanes_7f)
+         y = ior(high, shiftl(y - high*100, 16))
+         high = iand(shiftr(y*103, 10), lanes_0f)
+         y = ior(high, shiftl(y - high*10, 8)) + zeros
+         text = transfer(y, text)
+         return
+      end if
       y = int(v, i8)*multiplier
       pair = int(shiftr(y, 52))
       text(1:2) = digit_pairs(2*pair + 1:2*pair + 2)
