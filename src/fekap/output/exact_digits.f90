@@ -9,7 +9,7 @@
 !> The values of a kinematic run (0 <= k <= 31: |x| from about 10**(n - 32)
 !> to 10**n) take fekap_output_format's fast_digits, which lives there so
 !> that the compiler inlines it into the writers (a call per number, with
-!> its outputs through memory, cost a third of it); it uses the tables
+!> its outputs through memory, is a large part of its cost); it uses the tables
 !> below. decimal_digits takes the rest of the exact path: m times the two
 !> 64-bit halves of 5**k up to k = 54 (|x| down to about 1e-38), a 128-bit
 !> division for k < 0 (down to -21, |x| < 1e38). Other values (subnormals,

@@ -6,6 +6,11 @@
 !>
 !> The digits themselves are exact: fast_digits here (the values of a
 !> kinematic run, inlined into the writers) and fekap_output_exact_digits.
+!> The module is over 600 lines because the digits, the text and the cache
+!> of a real (append_reals' path) must be in one module for the compiler to
+!> inline them into one another (the build has no link-time optimisation,
+!> and a call per number is a large part of its cost); the integers' and the
+!> ES descriptors' writers share its digit tables.
 module fekap_output_format
    use fekap_kinds, only: dp
    use fekap_strings, only: es_text
@@ -165,8 +170,7 @@ contains
    end subroutine put_real
 
    !> append_real of the values off fast_digits' path: zeros, very small and
-   !> very large magnitudes, subnormals, infinities. Kept apart (and not
-   !> inlined) so that append_real's common path saves no registers for it.
+   !> very large magnitudes, subnormals, infinities.
    pure subroutine append_other_real(line, n, x)
       character(*), intent(inout) :: line
       integer, intent(inout) :: n
@@ -274,6 +278,24 @@ contains
       integer, intent(in) :: i, width
       character(len=12) :: buffer
       integer :: first, v, p
+      integer(i8) :: digits
+      integer(i8), parameter :: zeros_to_blanks = int(z'1010101010101010', i8), zeros = int(z'3030303030303030', i8)
+      if (little_endian .and. i >= 10 .and. i < 100000000 .and. width >= 8 .and. width <= 16) then
+         ! A step number or a count of two digits or more in the listing's
+         ! 8- and 12-wide fields: its 8 digits with leading zeros as one
+         ! 64-bit word (put_8_digits), the leading zeros made blanks (the
+         ! digits less '0' are zero bytes up to the first digit that is
+         ! not, whose place trailz gives: the first character is the lowest
+         ! byte), stored as the field's last 8 characters after 8 blanks at
+         ! its start (the field is 8 to 16 wide: both within it).
+         call put_8_digits(buffer(1:8), i)
+         digits = transfer(buffer(1:8), 0_i8)
+         line(n + 1:n + 8) = '        '
+         line(n + width - 7:n + width) = transfer(digits - iand(zeros_to_blanks, &
+            & shiftl(1_i8, 8*(trailz(digits - zeros)/8)) - 1), buffer(1:8))
+         n = n + width
+         return
+      end if
       ! A count or a step number (0 <= i < 10**8, width >= 8, or a single
       ! digit): its digits from the field's end in 32-bit arithmetic, then
       ! the blanks, each a character at a time (the general path makes the
@@ -342,9 +364,15 @@ contains
             n = n + width
             return
          end if
-         do p = n + 1, n + width - length
-            line(p:p) = ' '
-         end do
+         if (width >= 8 .and. width - length <= 8) then
+            ! Eight blanks at once, within the field; the digits overwrite
+            ! those beyond its padding.
+            line(n + 1:n + 8) = '        '
+         else
+            do p = n + 1, n + width - length
+               line(p:p) = ' '
+            end do
+         end if
          n = n + width - length
       end if
       if (negative) then
@@ -488,6 +516,7 @@ contains
       integer, intent(in) :: ndigits
       integer(i8) :: rest, high
       integer :: pos, pair, lead
+      character(len=16) :: digits
       if (ndigits == 17) then
          ! The CSV's 17 digits as 1 + 8 + 8: two short chains, not one of eight.
          high = significand/100000000_i8
@@ -496,6 +525,21 @@ contains
          text(2:2) = '.'
          call put_8_digits(text(3:10), int(high - lead*100000000_i8))
          call put_8_digits(text(11:18), int(significand - high*100000000_i8))
+         return
+      end if
+      if (little_endian .and. ndigits >= 2 .and. ndigits <= 16) then
+         ! The digits after the first, padded with zeros to 16 and made
+         ! eight at a time (put_8_digits), the first ndigits - 1 of them
+         ! copied (the listing's 12 and 7 digits): no loop, and no division
+         ! per pair.
+         lead = int(significand/power10(ndigits - 1))
+         rest = (significand - lead*power10(ndigits - 1))*power10(17 - ndigits)
+         high = rest/100000000_i8
+         call put_8_digits(digits(1:8), int(high))
+         if (ndigits > 9) call put_8_digits(digits(9:16), int(rest - high*100000000_i8))
+         text(1:1) = achar(iachar('0') + lead)
+         text(2:2) = '.'
+         text(3:ndigits + 1) = digits(1:ndigits - 1)
          return
       end if
       ! From the last digit, two at a time.
@@ -522,8 +566,8 @@ contains
    !> in every lane at once is one product and a shift (x*10486/2**20 is
    !> x/100 floored for 0 <= x <= 9999, x*103/2**10 is x/10 floored for
    !> 0 <= x <= 99; no lane's product reaches the next lane), and the 8 bytes
-   !> plus '0' are stored at once: about 20 instructions where the digit
-   !> pairs' table below takes about 40. Elsewhere: y = v/10**6 in 52-bit
+   !> plus '0' are stored at once, without the digit pairs' table lookups
+   !> and two-character stores below. Elsewhere: y = v/10**6 in 52-bit
    !> fixed point holds the first two digits in its integer part; its
    !> fraction times 100 the next two, and so on: one product a pair, no
    !> division. (The multiplier ceil(2**52/10**6) makes y too large by less
