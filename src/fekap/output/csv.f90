@@ -105,10 +105,7 @@ contains
                m = 6
             end if
          end if
-         call append_prefix(out%text, out%n, prefix)
-         call append_name(out%text, out%n, model%nodes(node)%name)
-         call append_reals(out%text, out%n, row, m, prefix%numbers)
-         call append_char(out%text, out%n, new_line('a'))
+         call append_named_row(out, prefix, model%nodes(node)%name, row, m)
       end do
    end subroutine write_points_rows
 
@@ -153,10 +150,7 @@ contains
                m = 3
             end if
          end if
-         call append_prefix(out%text, out%n, prefix)
-         call append_name(out%text, out%n, model%links(link)%name)
-         call append_reals(out%text, out%n, row, m, prefix%numbers)
-         call append_char(out%text, out%n, new_line('a'))
+         call append_named_row(out, prefix, model%links(link)%name, row, m)
       end do
    end subroutine write_links_rows
 
@@ -266,6 +260,20 @@ contains
       text(n + 1:n + prefix_length) = prefix%text
       n = n + prefix%n
    end subroutine append_prefix
+
+   !> A point's or link's row of known columns: `step,t,`, its name, the m
+   !> values and the line's end (the buffer reserved by the caller).
+   subroutine append_named_row(out, prefix, name, values, m)
+      type(text_buffer_type), intent(inout) :: out
+      type(row_prefix_type), intent(inout) :: prefix
+      character(*), intent(in) :: name
+      integer, intent(in) :: m
+      real(dp), intent(in) :: values(m)
+      call append_prefix(out%text, out%n, prefix)
+      call append_name(out%text, out%n, name)
+      call append_reals(out%text, out%n, values, m, prefix%numbers)
+      call append_char(out%text, out%n, new_line('a'))
+   end subroutine append_named_row
 
    !> A point's or link's name. Names are short: those of one to three
    !> characters are copied at their fixed length (a move or two), not
