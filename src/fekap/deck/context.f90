@@ -94,7 +94,7 @@ contains
       do i = 1, self%source%nlines
          associate (line => self%source%lines(i))
             if (line%number /= loc%line) cycle
-            if (self%source%files(line%file)%s /= loc%file) cycle
+            if (line%file /= loc%file) cycle
             do k = 1, size(line%tokens)
                if (line%tokens(k)%col == loc%col) then
                   mark = self%mark(i, k)
@@ -105,7 +105,8 @@ contains
             return
          end associate
       end do
-      mark%file = loc%file
+      mark%file = ''
+      if (loc%file >= 1 .and. loc%file <= self%source%nfiles) mark%file = self%source%files(loc%file)%s
       mark%line = loc%line
       mark%col = loc%col
       mark%text = ''
@@ -117,7 +118,7 @@ contains
       type(source_loc_type) :: loc
       type(mark_type) :: mark
       mark = self%mark(iline, itok)
-      loc%file = mark%file
+      loc%file = self%source%lines(iline)%file
       loc%line = mark%line
       loc%col = mark%col
    end function context_loc

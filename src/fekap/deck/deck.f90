@@ -63,7 +63,15 @@ contains
       character(*), intent(in) :: name
       type(error_type), allocatable, intent(out) :: error
       type(override_type), intent(in), optional :: overrides(:)
+      integer :: i
       model%file = name
+      ! A loop, not an array constructor: gfortran 12 sizes the constructor's
+      ! allocatable strings wrongly (heap overrun at a long file name).
+      if (allocated(model%files)) deallocate (model%files)
+      allocate (model%files(ctx%source%nfiles))
+      do i = 1, ctx%source%nfiles
+         model%files(i)%name = ctx%source%files(i)%s
+      end do
       model%title = ''
       if (ctx%source%readable) then
          if (ctx%source%nlines == 0) then

@@ -8,7 +8,7 @@
 module fekap_deck_spatial
    use fekap_kinds, only: dp
    use fekap_vectors, only: cross
-   use fekap_model, only: model_type, section_type, node_type, link_type, source_loc_type
+   use fekap_model, only: model_type, section_type, node_type, link_type, source_loc_type, loc_file
    use fekap_model_spatial, only: spatial_section_type, spatial_joint_type, spatial_drive_type, joint_names, &
       & joint_spherical, joint_revolute, joint_universal, joint_prismatic, joint_cylindrical, joint_weld
    use fekap_deck_card, only: is_word_of
@@ -287,7 +287,7 @@ contains
          j = spatial_joint_type()
          j%name = ctx%field(iline, 1)
          loc = ctx%loc(iline, 1)
-         j%file = loc%file
+         j%file = loc_file(model, loc)
          j%line = loc%line
          j%col = loc%col
          j%kind = word_index(ctx%field(iline, 2), joint_names)

@@ -89,7 +89,7 @@ contains
    !> sub- and ku superdiagonals whose entries can be at the places
    !> `possible` of their band storage ((2 kl + ku + 1, n); rows 1 to kl,
    !> the factor's fill, are ignored). The lists of the factor's places are
-   !> allocated for the band's full count.
+   !> sized by the first symbolic factorisation.
    pure subroutine new_band_lu_nonzeros(nz, kl, ku, possible)
       type(band_lu_nonzeros_type), intent(out) :: nz
       integer, intent(in) :: kl, ku
@@ -111,9 +111,8 @@ contains
       end do
       nz%entry_start(n + 1) = k + 1
       allocate (nz%pivot(n), nz%diagonal(n), nz%lower_start(n + 1), nz%upper_start(n + 1))
-      allocate (nz%lower_at(max(1, n*kl)), nz%lower_column(max(1, n*kl)), nz%lower_row(max(1, n*kl)), &
-         & nz%lower(max(1, n*kl)))
-      allocate (nz%upper_at(max(1, n*(kl + ku))), nz%upper_row(max(1, n*(kl + ku))), nz%upper(max(1, n*(kl + ku))))
+      ! The factor's lists are sized by the first symbolic factorisation (reserve_lists).
+      call reserve_lists(nz, 0, 0)
       allocate (nz%row_start(n + 1))
       allocate (nz%window(size(possible, 1), min(n, window_columns*(kl + ku + 1))), source=.false.)
    end subroutine new_band_lu_nonzeros
@@ -190,9 +189,12 @@ contains
       integer :: n, i, j, k, moved
       n = nz%n
       nz%pivot = ipiv
-      call symbolic_kernel(n, nz%kl, nz%ku, size(nz%window, 2), ipiv, nz%entry_start, size(nz%entry_at), nz%entry_at, &
-         & nz%window, size(nz%lower_at), nz%lower_start, nz%lower_column, nz%lower_row, nz%lower_at, size(nz%upper_at), &
-         & nz%upper_start, nz%upper_row, nz%upper_at)
+      call list_places(nz, ipiv)
+      ! Lists too short for these pivots' places: made long enough, and the places listed again.
+      if (nz%lower_start(n + 1) - 1 > size(nz%lower_at) .or. nz%upper_start(n + 1) - 1 > size(nz%upper_at)) then
+         call reserve_lists(nz, nz%lower_start(n + 1) - 1, nz%upper_start(n + 1) - 1)
+         call list_places(nz, ipiv)
+      end if
       ! The rows in the order after every interchange, from the last column back.
       final = [(i, i=1, n)]
       do j = n - 1, 1, -1
@@ -205,14 +207,42 @@ contains
             final(ipiv(j)) = moved
          end if
       end do
-      ! U's places by rows: as many as it has (the lists by columns are
-      ! allocated for the band's count).
+      ! U's places by rows: as many as it has (the lists by columns have
+      ! reserve_lists' slack).
       if (allocated(nz%row_column)) then
          if (size(nz%row_column) < nz%upper_start(n + 1) - 1) deallocate (nz%row_column)
       end if
       if (.not. allocated(nz%row_column)) allocate (nz%row_column(max(1, nz%upper_start(n + 1) - 1)))
       call list_rows(n, nz%upper_start, nz%upper_row, nz%row_start, nz%row_column)
    end subroutine symbolic_factor
+
+   !> symbolic_kernel on the record's arrays: its lists, as far as they
+   !> reach, and the starts of the places found however many they are.
+   pure subroutine list_places(nz, ipiv)
+      type(band_lu_nonzeros_type), intent(inout) :: nz
+      integer, contiguous, intent(in) :: ipiv(:)
+      call symbolic_kernel(nz%n, nz%kl, nz%ku, size(nz%window, 2), ipiv, nz%entry_start, size(nz%entry_at), nz%entry_at, &
+         & nz%window, size(nz%lower_at), nz%lower_start, nz%lower_column, nz%lower_row, nz%lower_at, size(nz%upper_at), &
+         & nz%upper_start, nz%upper_row, nz%upper_at)
+   end subroutine list_places
+
+   !> The lists of L's and U's places (and their values) for at least
+   !> nlower and nupper places, and an eighth more, so that the next
+   !> pivots' few places more (a pivot changed at a near tie) rarely list
+   !> them twice. Not the band's count (n kl and n (kl + ku)): a
+   !> mechanism's factor keeps most of the band's zeros, and the band's
+   !> count made these lists the largest arrays of a large lift.
+   pure subroutine reserve_lists(nz, nlower, nupper)
+      type(band_lu_nonzeros_type), intent(inout) :: nz
+      integer, intent(in) :: nlower, nupper
+      integer :: ml, mu
+      ml = max(1, nlower + nlower/8)
+      mu = max(1, nupper + nupper/8)
+      if (allocated(nz%lower_at)) deallocate (nz%lower_at, nz%lower_column, nz%lower_row, nz%lower)
+      if (allocated(nz%upper_at)) deallocate (nz%upper_at, nz%upper_row, nz%upper)
+      allocate (nz%lower_at(ml), nz%lower_column(ml), nz%lower_row(ml), nz%lower(ml))
+      allocate (nz%upper_at(mu), nz%upper_row(mu), nz%upper(mu))
+   end subroutine reserve_lists
 
    !> U's places by rows (row_start, row_column) from its lists by columns.
    pure subroutine list_rows(n, upper_start, upper_row, row_start, row_column)
@@ -432,8 +462,9 @@ contains
 
    !> The places of columns first to last (at first - base to last - base
    !> of the window), their eliminations done, appended to the lists (nl
-   !> and nu of them so far), and cleared in the window (no other place of
-   !> the window is ever set: each is one of the matrix's rows).
+   !> and nu of them so far; counted on past the lists' ends, nlower and
+   !> nupper, but not written there), and cleared in the window (no other
+   !> place of the window is ever set: each is one of the matrix's rows).
    pure subroutine list_columns(n, kl, ku, first, last, base, columns, place, nl, nlower, lower_start, lower_column, &
       & lower_row, lower_at, nu, nupper, upper_start, upper_row, upper_at)
       integer, intent(in) :: n, kl, ku, first, last, base, columns, nlower, nupper
@@ -452,6 +483,7 @@ contains
             if (place(kv + 1 + i - j, c)) then
                place(kv + 1 + i - j, c) = .false.
                nu = nu + 1
+               if (nu > nupper) cycle
                upper_row(nu) = i
                upper_at(nu) = kv + 1 + i - j + (j - 1)*ldab
             end if
@@ -461,6 +493,7 @@ contains
             if (place(kv + 1 + i, c)) then
                place(kv + 1 + i, c) = .false.
                nl = nl + 1
+               if (nl > nlower) cycle
                lower_column(nl) = j
                lower_row(nl) = j + i
                lower_at(nl) = kv + 1 + i + (j - 1)*ldab

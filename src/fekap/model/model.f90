@@ -12,8 +12,8 @@ module fekap_model
 
    public :: model_type, node_type, section_type, link_type, weld_type
    public :: support_type, drive_type, load_type, slideline_type, mass_type, start_velocity_type
-   public :: analysis_type, output_type, source_loc_type, parameter_type
-   public :: find_node, find_link, model_size
+   public :: analysis_type, output_type, source_loc_type, file_name_type, parameter_type
+   public :: find_node, find_link, model_size, loc_file
 
    !> Degree-of-freedom kinds at a node.
    integer, parameter, public :: dof_x = 1, dof_y = 2, dof_rot = 3
@@ -54,11 +54,20 @@ module fekap_model
    real(dp), parameter, public :: default_rho_inf(2) = [0.8_dp, 1.0_dp]
 
    !> Where an entity was declared: for diagnostics that point into the deck.
+   !> The file is an index into model_type%files (loc_file names it): an
+   !> entity's own copy of the file's name, for each of a large mechanism's
+   !> nodes, links and welds in the deck's model and in its method's copy,
+   !> was megabytes (docs/performance.md, the lift's memory).
    type :: source_loc_type
-      character(:), allocatable :: file
+      integer :: file = 0
       integer :: line = 0
       integer :: col = 0
    end type source_loc_type
+
+   !> The name of a file that the deck was read from.
+   type :: file_name_type
+      character(:), allocatable :: name
+   end type file_name_type
 
    !> A named point of the mechanism (a hinge, a pivot, a tracked point).
    type :: node_type
@@ -276,6 +285,8 @@ module fekap_model
    type :: model_type
       !> The deck's file name, for diagnostics.
       character(:), allocatable :: file
+      !> The files read: the deck, then those it INCLudes (source_loc_type's file).
+      type(file_name_type), allocatable :: files(:)
       character(:), allocatable :: title
       type(node_type), allocatable :: nodes(:)
       type(section_type), allocatable :: sections(:)
@@ -300,6 +311,16 @@ module fekap_model
    end type model_type
 
 contains
+
+   !> The name of the file of an entity's place loc (the deck's when not known).
+   pure function loc_file(model, loc) result(name)
+      type(model_type), intent(in) :: model
+      type(source_loc_type), intent(in) :: loc
+      character(:), allocatable :: name
+      name = model%file
+      if (.not. allocated(model%files)) return
+      if (loc%file >= 1 .and. loc%file <= size(model%files)) name = model%files(loc%file)%name
+   end function loc_file
 
    !> Index of the node called `name` (case-insensitive), 0 if there is none.
    pure integer function find_node(model, name) result(idx)

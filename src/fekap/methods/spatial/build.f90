@@ -26,7 +26,7 @@ module fekap_spatial_build
    use fekap_vectors, only: cross
    use fekap_error, only: error_type, input_error
    use fekap_union_find, only: find_root, join
-   use fekap_model, only: model_type
+   use fekap_model, only: model_type, loc_file
    use fekap_model_drive_law, only: law_type, law_rate, law_harmonic, law_polynomial, law_table, &
       & law_constant, law_linear
    use fekap_model_spatial, only: spatial_joint_type, reported_joints, joint_spherical, joint_revolute, joint_universal, &
@@ -439,7 +439,7 @@ contains
             if (holders(find_root(frame_set, link%node(1))) > 1 .or. &
                & holders(find_root(frame_set, link%node(2))) > 1) cycle
             write (where_, '(i0,a,i0)') link%loc%line, ':', link%loc%col
-            call input_error(error, link%loc%file//':'//trim(where_)//': error: link '//link%name// &
+            call input_error(error, loc_file(model, link%loc)//':'//trim(where_)//': error: link '//link%name// &
                & ' turns freely about its own axis: nothing but the link holds the rotation of either end '// &
                & '(a beam between two spherical joints); write `truss` after its section, or hold one '// &
                & 'end''s rotation with a revolute, universal or weld joint')
@@ -525,7 +525,7 @@ contains
          end do
          associate (link => model%links(first))
             write (where_, '(i0,a,i0)') link%loc%line, ':', link%loc%col
-            call input_error(error, link%loc%file//':'//trim(where_)//': error: links '//names// &
+            call input_error(error, loc_file(model, link%loc)//':'//trim(where_)//': error: links '//names// &
                & ' turn together freely about the line through the points where they meet the rest of the '// &
                & 'mechanism (no joint but spherical ones holds their rotation); hold one of their nodes'' '// &
                & 'rotation with a revolute, universal or weld joint, or, for a straight chain, make it one truss')

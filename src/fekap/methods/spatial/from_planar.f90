@@ -53,7 +53,7 @@ module fekap_spatial_from_planar
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, input_error
    use fekap_strings, only: same_name, int_text
-   use fekap_model, only: model_type, node_type, link_type, source_loc_type, weld_type, support_type, &
+   use fekap_model, only: model_type, node_type, link_type, source_loc_type, loc_file, weld_type, support_type, &
       & drive_type, slideline_type, method_fem, dof_x, dof_y, dof_rot, effects_kinematics, &
       & slide_prismatic => joint_prismatic
    use fekap_model_effects, only: effects_plan_type, plan_effects, effects_name
@@ -384,7 +384,7 @@ contains
          end if
          joint%name = nodes(b)%name
          if (present(axis)) joint%axis = axis
-         joint%file = loc%file
+         joint%file = loc_file(model, loc)
          joint%line = loc%line
          joint%col = loc%col
          joints = [joints, joint]
@@ -485,7 +485,7 @@ contains
       subroutine loc_error(loc, message, advice)
          type(source_loc_type), intent(in) :: loc
          character(*), intent(in) :: message, advice
-         call input_error(error, loc%file//':'//int_text(loc%line)//':'//int_text(loc%col)//': error: '// &
+         call input_error(error, loc_file(model, loc)//':'//int_text(loc%line)//':'//int_text(loc%col)//': error: '// &
             & message//'; '//advice)
       end subroutine loc_error
 
