@@ -9,7 +9,8 @@ module fekap_assembly_assemble
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type, slide_type
    use fekap_linalg_band, only: band_matrix_type
-   use fekap_element_beam, only: beam_residual, beam_second_derivative, beam_max_strain, max_gauss, section_values
+   use fekap_element_beam, only: beam_residual, add_beam_residuals, beam_second_derivative, beam_max_strain, max_gauss, &
+      & section_values
    use fekap_assembly_tracking, only: slide_position
    use fekap_contact_slideline, only: slide_force, slide_second_derivative, slide_tie_force, &
       & slide_tie_second_derivative
@@ -29,27 +30,15 @@ contains
    pure subroutine assemble_residual(mesh, q, t, seg, r, section)
       type(mesh_type), intent(in) :: mesh
       !> The configuration and the time (of the loads).
-      real(dp), intent(in) :: q(:), t
+      real(dp), contiguous, intent(in) :: q(:)
+      real(dp), intent(in) :: t
       integer, intent(in) :: seg(:)
-      real(dp), intent(out) :: r(:)
+      real(dp), contiguous, intent(out) :: r(:)
       real(dp), intent(out), optional :: section(section_values, max_gauss, size(mesh%elements))
-      real(dp) :: pe(6), xe(6)
-      integer :: e, i
       call mesh%loads%at(t, r, negated=.true.)
-      do e = 1, size(mesh%elements)
-         do i = 1, 6
-            xe(i) = q(mesh%edof(i, e))
-         end do
-         if (present(section)) then
-            call beam_residual(mesh%elements(e), xe, pe, section=section(:, :, e))
-         else
-            call beam_residual(mesh%elements(e), xe, pe)
-         end if
-         do i = 1, 6
-            r(mesh%edof(i, e)) = r(mesh%edof(i, e)) + pe(i)
-         end do
-      end do
-      call add_contact(mesh, q, seg, r)
+      call add_beam_residuals(mesh%elements, mesh%edof, q, r, section)
+      ! (No call without slidelines: its set-up cost more than the empty loop.)
+      if (size(mesh%slides) > 0) call add_contact(mesh, q, seg, r)
    end subroutine assemble_residual
 
    !> Residual as assemble_residual, and the tangent dR/dq: free-free part into
@@ -64,7 +53,7 @@ contains
       !> The configuration and the time (of the loads).
       real(dp), intent(in) :: q(:), t
       integer, intent(in) :: seg(:)
-      real(dp), intent(out) :: r(:)
+      real(dp), contiguous, intent(out) :: r(:)
       type(band_matrix_type), intent(inout) :: kff
       real(dp), contiguous, intent(out) :: kfd(:, :)
       real(dp), intent(in), optional :: geometric_above
@@ -111,7 +100,7 @@ contains
       !> The configuration and the time (of the loads).
       real(dp), intent(in) :: q(:), t
       integer, intent(in) :: seg(:)
-      real(dp), intent(out) :: r(:)
+      real(dp), contiguous, intent(out) :: r(:)
       real(dp), contiguous, intent(out) :: kfd(:, :)
       real(dp), intent(in) :: geometric_above
       real(dp), intent(out) :: strain
@@ -144,7 +133,7 @@ contains
                & mesh%scatter_count(2, e), ke, kfd)
          end if
       end do
-      call add_contact(mesh, q, seg, r, kfd=kfd)
+      if (size(mesh%slides) > 0) call add_contact(mesh, q, seg, r, kfd=kfd)
    end subroutine assemble_drive_block
 
    !> scatter_element's free-driven entries alone.

@@ -15,7 +15,8 @@ module fekap_element_beam
    implicit none
    private
 
-   public :: beam_type, new_beam, beam_residual, beam_second_derivative, beam_max_strain, beam_resultants
+   public :: beam_type, new_beam, beam_residual, add_beam_residuals, beam_second_derivative, beam_max_strain
+   public :: beam_resultants
    public :: beam_strain_energy
    !> The quadrature and the strains at a Gauss point, for the element's
    !> damping (fekap_element_beam_damping).
@@ -202,6 +203,67 @@ contains
       if (present(k)) call spread_tangent(m11, m12, m22, th, rr, ei, k)
    end subroutine beam_residual
 
+   !> r(edof(:, e)) += p_e for every element e at xe = q(edof(:, e)): the
+   !> residual's element loop (fekap_assembly_assemble's assemble_residual),
+   !> here so that the one-point element force (one_point_force) is computed
+   !> inline, without a call and its optional arguments per element, on
+   !> contiguous arrays: the same operations in the same order as
+   !> beam_residual's p (from +0) added into r. With `section`, each
+   !> element's sections at xe (beam_residual's).
+   pure subroutine add_beam_residuals(elements, edof, q, r, section)
+      type(beam_type), intent(in) :: elements(:)
+      integer, contiguous, intent(in) :: edof(:, :)
+      real(dp), contiguous, intent(in) :: q(:)
+      real(dp), contiguous, intent(inout) :: r(:)
+      real(dp), intent(out), optional :: section(section_values, max_gauss, size(elements))
+      real(dp) :: pe(6), xe(6), c, s, phi, g1, g2
+      integer :: e, i
+      logical :: keep
+      keep = present(section)
+      do e = 1, size(elements)
+         do i = 1, 6
+            xe(i) = q(edof(i, e))
+         end do
+         if (elements(e)%ngauss == 1) then
+            call one_point_force(elements(e), xe, pe, c, s, phi, g1, g2)
+            if (keep) then
+               section(1, 1, e) = c
+               section(2, 1, e) = s
+               section(3, 1, e) = phi
+            end if
+         else if (keep) then
+            call beam_residual(elements(e), xe, pe, section=section(:, :, e))
+         else
+            call beam_residual(elements(e), xe, pe)
+         end if
+         do i = 1, 6
+            r(edof(i, e)) = r(edof(i, e)) + pe(i)
+         end do
+      end do
+   end subroutine add_beam_residuals
+
+   !> The one-point element force p (38) at xe (one Gauss point, xi = 0,
+   !> w = 2), and the section's cos c, sin s and angle phi and strains g1,
+   !> g2 there: beam_residual's operations in its order, p from +0.
+   pure subroutine one_point_force(self, xe, p, c, s, phi, g1, g2)
+      type(beam_type), intent(in) :: self
+      real(dp), intent(in) :: xe(6)
+      real(dp), intent(out) :: p(6), c, s, phi, g1, g2
+      real(dp), parameter :: xi = 0, w = 2
+      real(dp) :: wl, n1, n2, kap, sp, sv, sm, rl
+      rl = 1/self%length
+      kap = (xe(6) - xe(3))*rl
+      p = 0
+      wl = w*self%length/2
+      n1 = (1 - xi)/2
+      n2 = (1 + xi)/2
+      call gauss_strain(self, xe, n1, n2, rl, c, s, g1, g2, phi)     ! (27)
+      sp = self%ea*g1                                           ! (30)
+      sv = self%kga*g2
+      sm = self%ei*kap
+      call add_point_force(p, wl, rl, c, s, g1, g2, sp, sv, sm, n1, n2)
+   end subroutine one_point_force
+
    !> beam_residual's p without the tangent, with one Gauss point (the
    !> default rule): the same operations in the same order on the point's
    !> constants (xi = 0, w = 2), without the loop and the tangent's tests
@@ -212,21 +274,10 @@ contains
       real(dp), intent(out) :: p(6)
       real(dp), intent(out), optional :: strain
       real(dp), intent(out), optional :: section(section_values, max_gauss)
-      real(dp), parameter :: xi = 0, w = 2
-      real(dp) :: wl, n1, n2, c, s, g1, g2, kap, sp, sv, sm, rl, phi
-      rl = 1/self%length
-      kap = (xe(6) - xe(3))*rl
-      p = 0
-      wl = w*self%length/2
-      n1 = (1 - xi)/2
-      n2 = (1 + xi)/2
-      call gauss_strain(self, xe, n1, n2, rl, c, s, g1, g2, phi)     ! (27)
+      real(dp) :: c, s, g1, g2, phi
+      call one_point_force(self, xe, p, c, s, phi, g1, g2)
       if (present(strain)) strain = max(abs(xe(6) - xe(3)), abs(g1), abs(g2))
       if (present(section)) section(:, 1) = [c, s, phi]
-      sp = self%ea*g1                                           ! (30)
-      sv = self%kga*g2
-      sm = self%ei*kap
-      call add_point_force(p, wl, rl, c, s, g1, g2, sp, sv, sm, n1, n2)
    end subroutine one_point_residual
 
    !> (38): p += wl (P b1 + V b2 + M bk) at one Gauss point, by parts: its

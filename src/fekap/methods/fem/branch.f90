@@ -43,6 +43,11 @@ module fekap_fem_branch
       integer, allocatable :: hinge_pairs(:, :)
       !> The rotation dofs, in increasing order (the magnitude rule's).
       integer, allocatable :: rotations(:)
+      !> Of each hinge pair: the rotation dofs of its two link ends (2,
+      !> npairs), and the difference of the two links' initial angles, the
+      !> relative angle's constant part (found once: hinge_flip's per step).
+      integer, allocatable :: pair_rot(:, :)
+      real(dp), allocatable :: pair_angle0(:)
    end type branch_check_type
 
 contains
@@ -59,6 +64,14 @@ contains
             & model%nodes(model%links(i)%node(1))%x))
       end do
       call find_hinge_pairs(model, mesh, self%hinge_pairs)
+      allocate (self%pair_rot(2, size(self%hinge_pairs, 2)), self%pair_angle0(size(self%hinge_pairs, 2)))
+      do i = 1, size(self%hinge_pairs, 2)
+         associate (l1 => self%hinge_pairs(1, i), e1 => self%hinge_pairs(2, i), l2 => self%hinge_pairs(3, i), &
+            & e2 => self%hinge_pairs(4, i))
+            self%pair_rot(:, i) = [mesh%link_rot(e1, l1), mesh%link_rot(e2, l2)]
+            self%pair_angle0(i) = mesh%link_angle0(l1) - mesh%link_angle0(l2)
+         end associate
+      end do
       self%rotations = pack([(i, i=1, mesh%ndof)], mesh%dof_kind(1:mesh%ndof) == dof_rot)
    end subroutine new_branch_check
 
@@ -117,7 +130,7 @@ contains
             worst_dof = i
          end if
       end do
-      call hinge_flip(self, mesh, model, q, qt, dq_old, dq_new, flip_link, flip_node, turn, crossing)
+      call hinge_flip(self, model, q, qt, dq_old, dq_new, flip_link, flip_node, turn, crossing)
       verdict = branch_reject
       if (worst > jump_ratio) then
          write (msg, '(a,es12.5,a,f9.4,a,es9.2,a)') 't = ', t, ': assembly-mode jump rejected (rotation ', &
@@ -180,15 +193,14 @@ contains
    !> returns the largest turn |psi_1 - psi_0| of a pair that crossed
    !> collinear in the sense of the responses (0 if none did), and that pair
    !> (link, link, node).
-   pure subroutine hinge_flip(self, mesh, model, q, qt, dq_old, dq_new, flip_link, flip_node, turn, crossing)
+   pure subroutine hinge_flip(self, model, q, qt, dq_old, dq_new, flip_link, flip_node, turn, crossing)
       type(branch_check_type), intent(in) :: self
-      type(mesh_type), intent(in) :: mesh
       type(model_type), intent(in) :: model
       real(dp), contiguous, intent(in) :: q(:), qt(:), dq_old(:), dq_new(:)
       integer, intent(out) :: flip_link(2), flip_node
       real(dp), intent(out) :: turn
       integer, intent(out) :: crossing(3)
-      integer :: k, l1, l2, e1, e2, r1, r2, outcome
+      integer :: k, l1, l2, e1, r1, r2, outcome
       real(dp) :: psi0, psi1
       flip_link = 0
       flip_node = 0
@@ -196,16 +208,16 @@ contains
       crossing = 0
       associate (links => model%links)
          do k = 1, size(self%hinge_pairs, 2)
+            r1 = self%pair_rot(1, k)
+            r2 = self%pair_rot(2, k)
+            ! (angle0(l1) - angle0(l2)) + q(r1) - q(r2), as written out before: the same sums.
+            psi0 = self%pair_angle0(k) + q(r1) - q(r2)
+            psi1 = self%pair_angle0(k) + qt(r1) - qt(r2)
+            outcome = collinear_crossing(psi0, psi1, dq_old(r1) - dq_old(r2), dq_new(r1) - dq_new(r2))
+            if (outcome == crossing_none) cycle
             l1 = self%hinge_pairs(1, k)
             e1 = self%hinge_pairs(2, k)
             l2 = self%hinge_pairs(3, k)
-            e2 = self%hinge_pairs(4, k)
-            r1 = mesh%link_rot(e1, l1)
-            r2 = mesh%link_rot(e2, l2)
-            psi0 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + q(r1) - q(r2)
-            psi1 = mesh%link_angle0(l1) - mesh%link_angle0(l2) + qt(r1) - qt(r2)
-            outcome = collinear_crossing(psi0, psi1, dq_old(r1) - dq_old(r2), dq_new(r1) - dq_new(r2))
-            if (outcome == crossing_none) cycle
             if (outcome == crossing_against) then
                flip_link = [l1, l2]
                flip_node = links(l1)%node(e1)

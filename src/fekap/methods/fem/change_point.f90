@@ -37,6 +37,17 @@ module fekap_fem_change_point
    !> gives a lower bound of ||B^-1|| that is rarely more than a few times
    !> short, squared on the tangent's scale).
    real(dp), parameter, public :: skip_margin = 100
+   !> ... and only when the bounds keep it at most reference_slack times
+   !> the run's best (the largest estimate so far, the reference of
+   !> change_drop, response_drop and rates_drop): where an estimate would
+   !> have raised the best by less than that, the reference lags by that
+   !> factor at most, well within the estimate's own error (dlacn2's ||B^-1||_1 is a
+   !> lower bound, rarely more than a few times short, squared on the
+   !> tangent's scale), so the thresholds relative to it move by less than
+   !> they are uncertain anyway. Without the slack, every step whose bound
+   !> reached above the best was estimated: most steps near the run's best
+   !> condition (docs/hard-cases.md, "When the estimate is made").
+   real(dp), parameter, public :: reference_slack = 1.1_dp
 
    !> The FEM stepper's change-point record (see fekap_fem's step_over).
    type :: change_record_type
@@ -142,11 +153,13 @@ contains
    !> low <= rcond <= high on it (strain_rate_rcond_bounds) and the run's
    !> best so far, reference: unless the bounds show it regular by
    !> skip_margin (change_verdict and response_trusted would say regular and
-   !> trusted) and no better than the run's best (the reference would not
-   !> change), both whatever the estimate within the bounds.
+   !> trusted) and no better than reference_slack times the run's best (the
+   !> reference would change by less than that), both whatever the estimate
+   !> within the bounds.
    pure logical function estimate_needed(low, high, reference) result(needed)
       real(dp), intent(in) :: low, high, reference
-      needed = .not. (reference > 0 .and. low >= skip_margin*change_drop*reference .and. high <= reference)
+      needed = .not. (reference > 0 .and. low >= skip_margin*change_drop*reference .and. &
+         & high <= reference_slack*reference)
    end function estimate_needed
 
    !> Correct the filled positions q at time t (driven and fixed dofs already

@@ -350,7 +350,7 @@ contains
       iterations = 0
       verdict = branch_accept
       associate (mesh => self%mesh, qt => self%qt, system => self%system)
-         self%seg = self%state%seg
+         self%seg(:) = self%state%seg
          call self%change%forget_predictor()
          call predict(self, t, qt, guard)
          ! Scale of the residual: what the drive (and load) increment alone

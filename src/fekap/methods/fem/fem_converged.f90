@@ -16,7 +16,7 @@ module fekap_fem_converged
    use fekap_assembly_strain_rate, only: rate_geometry_at, strain_rate_rcond_bounds
    use fekap_fem_change_point, only: response_trusted
    use fekap_fem_state, only: fem_core_type, note_response_pivot
-   use fekap_fem_predict, only: record_velocity
+   use fekap_fem_predict, only: record_velocity, drive_laws_at
    use fekap_fem_factor, only: refactor_at_accepted, accepted_pivot, accepted_rcond, accepted_response
    implicit none
    private
@@ -122,7 +122,7 @@ contains
          state%reference_pivot = max(state%reference_pivot, ratio)
          call pivot_note(state%t, ratio, state%reference_pivot, self%model%analysis%velocities, state%note, regular)
          if (.not. regular .or. .not. self%model%analysis%velocities) return
-         call self%model%drives%law%eval(state%t, self%law_value, self%law_rate, self%law_rate2)
+         call drive_laws_at(self, state%t)
          if (self%root_form) then
             ! The square-root form, refined unless the bounds on B_f's
             ! condition from the last estimate show it well conditioned
@@ -141,7 +141,7 @@ contains
                ! Unrefined, (47) is R v_d with the drive response R of this
                ! factor, the plain solve of the same system: record_velocity
                ! made it already, for the predictor (as in the K form below).
-               state%v = history%velocity(:, history%newest)
+               state%v(:) = history%velocity(:, history%newest)
             else
                call root_velocities(self%root, self%mesh, self%law_rate, state%v, self%root_work, refine)
             end if

@@ -95,13 +95,25 @@ contains
       call timed_root_factor(self, info)
       solved = info == 0
       if (.not. solved) return
-      self%root_work = -self%root_work
+      call negate(self%mesh%nfree, self%root_work)
       call solve_strain_rate(self%root, self%root_work)
-      self%system%rhs(:, 1) = self%root_work
-      do k = 1, self%mesh%nfree
-         correction = max(correction, abs(self%root_work(k))*self%dof_length(self%mesh%eq_dof(k)))
-      end do
+      ! The correction into rhs and its length in one pass (B_f square: nfree rows).
+      associate (dq => self%root_work, rhs => self%system%rhs)
+         do k = 1, self%mesh%nfree
+            rhs(k, 1) = dq(k)
+            correction = max(correction, abs(dq(k))*self%dof_length(self%mesh%eq_dof(k)))
+         end do
+      end associate
    end subroutine root_correction
+
+   !> x = -x on an array of explicit shape (a loop the compiler vectorises;
+   !> the assignment on the allocatable component checked its allocation and
+   !> shape first).
+   pure subroutine negate(n, x)
+      integer, intent(in) :: n
+      real(dp), intent(inout) :: x(n)
+      x = -x
+   end subroutine negate
 
    !> Assemble and factor the stress-free B at q (slidelines on seg): the
    !> square-root form's factor at a configuration; info > 0 if B_f is singular there.

@@ -18,6 +18,7 @@ module fekap_fem_fill
       & rates_drop, fill_shift, estimate_needed
    use fekap_fem_state, only: fem_state_type, fem_core_type
    use fekap_fem_factor, only: fill_tangent
+   use fekap_fem_predict, only: drive_laws_at
    implicit none
    private
 
@@ -139,7 +140,7 @@ contains
                & ': velocities and accelerations are left out of this step'
          else if (self%model%analysis%velocities) then
             self%state%note = trim(self%state%note)//': velocities and accelerations are ill-conditioned'
-            call self%model%drives%law%eval(t, self%law_value, self%law_rate, self%law_rate2)
+            call drive_laws_at(self, t)
             call solve_velocities(self%system, self%mesh, self%law_rate, self%state%v, self%counts)
             self%state%has_velocity = .true.
             if (self%model%analysis%accelerations) then

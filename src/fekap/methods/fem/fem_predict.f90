@@ -8,7 +8,6 @@
 module fekap_fem_predict
    use fekap_kinds, only: dp
    use fekap_model, only: predictor_previous, predictor_taylor
-   use fekap_assembly_mesh, only: dof_fixed
    use fekap_assembly_assemble, only: max_strain
    use fekap_fem_setup, only: set_driven
    use fekap_fem_linear_system, only: drive_load_rhs, apply_response
@@ -20,7 +19,7 @@ module fekap_fem_predict
    implicit none
    private
 
-   public :: predict, guard_extrapolation, drive_increment_residual, record_velocity
+   public :: predict, guard_extrapolation, drive_increment_residual, record_velocity, drive_laws_at
 
 contains
 
@@ -60,8 +59,8 @@ contains
             if (made == prediction_none) call tangent_predictor(self, t, qt)
          end select
       end associate
-      do i = 1, self%mesh%ndof
-         if (self%mesh%status(i) == dof_fixed) qt(i) = self%mesh%q0(i)
+      do i = 1, size(self%fixed_dofs)
+         qt(self%fixed_dofs(i)) = self%mesh%q0(self%fixed_dofs(i))
       end do
       call set_driven(self, t, qt)
       call self%prediction%record(qt, smooth)
@@ -146,6 +145,7 @@ contains
       real(dp), intent(in) :: t
       real(dp), contiguous, intent(in) :: qt(:)
       real(dp), intent(out) :: norm
+      integer :: k
       associate (dqd => self%drive_step, dd => self%mesh%driven_dof)
          dqd = qt(dd) - self%state%q(dd)
          if (self%loaded) then
@@ -155,7 +155,12 @@ contains
             call drive_load_rhs(self%system, self%mesh, dqd)
          end if
       end associate
-      norm = sqrt(sum(self%system%rhs(:, 1)**2))
+      norm = 0
+      do k = 1, self%mesh%nfree
+         ! sum's order, from 0 (a loop: the intrinsic on the component's section cost twice as much).
+         norm = norm + self%system%rhs(k, 1)**2
+      end do
+      norm = sqrt(norm)
    end subroutine drive_increment_residual
 
    !> The velocity of the newest configuration of the predictor's history:
@@ -167,9 +172,21 @@ contains
          history%has_velocity(history%newest) = state%has_jump_response .and. &
             & self%response_pivot >= near_singular_drop*state%reference_pivot
          if (.not. history%has_velocity(history%newest)) return
-         call self%model%drives%law%eval(state%t, self%law_value, self%law_rate, self%law_rate2)
+         call drive_laws_at(self, state%t)
          call apply_response(state%jump_response, self%law_rate, history%velocity(:, history%newest))
       end associate
    end subroutine record_velocity
+
+   !> The drives' values, rates and second rates at time t in law_value,
+   !> law_rate and law_rate2, evaluated unless they hold those at t already
+   !> (the history's velocity and the rates of a step ask at the same time).
+   subroutine drive_laws_at(self, t)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), intent(in) :: t
+      if (self%laws_known .and. self%laws_t == t) return
+      call self%model%drives%law%eval(t, self%law_value, self%law_rate, self%law_rate2)
+      self%laws_t = t
+      self%laws_known = .true.
+   end subroutine drive_laws_at
 
 end module fekap_fem_predict

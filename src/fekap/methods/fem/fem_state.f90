@@ -25,6 +25,7 @@ module fekap_fem_state
    use fekap_fem_prediction, only: prediction_type, new_prediction
    use fekap_fem_change_point, only: change_record_type
    use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate, strain_rows
+   use fekap_assembly_mesh, only: dof_fixed
    use fekap_fem_fields, only: fill_nodes_links, fill_fields
    use fekap_stepping_step_control, only: step_cuts_type
    use fekap_strings, only: es_text
@@ -70,6 +71,12 @@ module fekap_fem_state
       real(dp), allocatable :: qt(:), work(:), dq_new(:), dq_old(:)
       !> The drives' increment over a step.
       real(dp), allocatable :: drive_step(:)
+      !> The time at which the base's law_value, law_rate and law_rate2 were
+      !> evaluated (fekap_fem_predict's drive_laws_at), if laws_known.
+      real(dp) :: laws_t = 0
+      logical :: laws_known = .false.
+      !> The fixed dofs (mesh%status dof_fixed), whose predictor is q0.
+      integer, allocatable :: fixed_dofs(:)
       !> Master segment of each slideline during the step.
       integer, allocatable :: seg(:)
       !> The drive response at the new configuration (swapped with the state's).
@@ -120,6 +127,7 @@ contains
    subroutine new_fem_core(self, model)
       class(fem_core_type), intent(inout) :: self
       type(model_type), intent(in) :: model
+      integer :: i
       call new_fem_base(self, model, dense=model%analysis%solver == solver_dense)
       associate (n => self%mesh%ndof, nd => self%mesh%ndriven, state => self%state)
          allocate (self%drive_step(nd), source=0.0_dp)
@@ -132,6 +140,7 @@ contains
       end associate
       self%loaded = self%mesh%loads%is_loaded()
       allocate (self%load_work(self%mesh%ndof), source=0.0_dp)
+      self%fixed_dofs = pack([(i, i=1, self%mesh%ndof)], self%mesh%status(1:self%mesh%ndof) == dof_fixed)
       call new_strain_rate(self%root, self%mesh)
       ! Kinetostatics solves its deflection with the factor of K at the accepted configuration.
       self%root_form = self%root%applies .and. .not. self%loaded .and. model%analysis%solver /= solver_dense .and. &
@@ -202,9 +211,10 @@ contains
       real(dp), contiguous, intent(in) :: q(:)
       associate (state => self%state)
          call state%history%push(q, t)
-         state%q = q
+         ! Same size (no reallocation on assignment to check).
+         state%q(:) = q
          state%t = t
-         state%seg = self%seg
+         state%seg(:) = self%seg
          if (has_note(state%note)) state%note = ''
          state%has_velocity = .false.
          state%has_acceleration = .false.

@@ -229,11 +229,9 @@ contains
       real(dp) :: biggest, factor
       integer :: k
       associate (r => self%rhs(:, 1))
-         do k = 1, mesh%nfree
-            r(k) = -self%r(mesh%eq_dof(k))
-         end do
          biggest = 0
          do k = 1, mesh%nfree
+            r(k) = -self%r(mesh%eq_dof(k))
             biggest = max(biggest, abs(r(k)))
          end do
          norm = 0
