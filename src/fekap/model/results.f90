@@ -108,6 +108,26 @@ contains
    pure integer function not_finite(result) result(kind)
       type(step_result_type), intent(in) :: result
       real(dp) :: s
+      ! A result without optional parts (a kinematic step's): the kinds'
+      ! sums below, the same values in the same order, without
+      ! motion_total's descriptors of the optional parts.
+      if (no_optional_parts(result)) then
+         kind = 1
+         s = total(result%pos, size(result%pos)) + total(result%angle, size(result%angle)) + result%residual
+         if (.not. ieee_is_finite(s)) return
+         kind = 2
+         if (result%has_velocity) then
+            s = total(result%vel, size(result%vel)) + total(result%omega, size(result%omega))
+            if (.not. ieee_is_finite(s)) return
+         end if
+         kind = 3
+         if (result%has_acceleration) then
+            s = total(result%acc, size(result%acc)) + total(result%alpha, size(result%alpha))
+            if (.not. ieee_is_finite(s)) return
+         end if
+         kind = 0
+         return
+      end if
       kind = 1
       s = motion_total(result%pos, result%angle, result%pos_z, result%joint_motion, 1, result%link_rotation, &
          & result%mesh_pos) + result%residual
@@ -149,6 +169,16 @@ contains
       if (allocated(spatial_links)) s = s + total(spatial_links, size(spatial_links))
       if (allocated(mesh)) s = s + total(mesh, size(mesh))
    end function motion_total
+
+   !> Whether a result has none of the optional parts that not_finite looks at.
+   pure logical function no_optional_parts(result)
+      type(step_result_type), intent(in) :: result
+      no_optional_parts = .not. (allocated(result%interior) .or. allocated(result%pos_z) .or. &
+         & allocated(result%vel_z) .or. allocated(result%acc_z) .or. allocated(result%joint_motion) .or. &
+         & allocated(result%link_rotation) .or. allocated(result%link_omega) .or. allocated(result%link_alpha) .or. &
+         & allocated(result%mesh_pos) .or. allocated(result%mesh_vel) .or. allocated(result%mesh_acc) .or. &
+         & allocated(result%cell_force) .or. result%has_reactions .or. result%has_deflection .or. result%has_energy)
+   end function no_optional_parts
 
    !> The sum of the n values of x, a whole array of any rank (contiguous:
    !> an allocatable component), in a plain loop: the sum intrinsic on the

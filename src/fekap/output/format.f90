@@ -31,22 +31,31 @@ module fekap_output_format
       & '4041424344454647484950515253545556575859'//'6061626364656667686970717273747576777879'// &
       & '8081828384858687888990919293949596979899'
 
+   !> "0000" to "9999": digits written four at a time (put_8_digits_quads,
+   !> put_short_es), a load and a store each. Its entries are made from
+   !> digit_pairs by `quad`, an implied-do index only (a constant
+   !> expression's index must be a variable of the scope).
+   integer, private :: quad
+   character(len=4), parameter :: digit_quads(0:9999) = [(digit_pairs(2*(quad/100) + 1:2*(quad/100) + 2) &
+      & //digit_pairs(2*mod(quad, 100) + 1:2*mod(quad, 100) + 2), quad = 0, 9999)]
+
    !> Eight digits are made side by side in the lanes of one 64-bit integer
    !> and stored as its 8 bytes (put_8_digits), the first digit in the lowest
    !> byte: on a little-endian machine, which this tells.
    logical, parameter :: little_endian = transfer(1_i8, 'abcdefgh') == achar(1)//repeat(achar(0), 7)
 
    !> The exponents of es25.16e3 texts on fast_digits' path (E from -15 to
-   !> 17 there), each copied whole (put_17_digits).
-   character(len=5), parameter :: exponent_texts(-20:20) = [ &
-      & 'E-020', 'E-019', 'E-018', 'E-017', 'E-016', 'E-015', 'E-014', 'E-013', 'E-012', &
-      & 'E-011', 'E-010', 'E-009', 'E-008', 'E-007', 'E-006', 'E-005', 'E-004', 'E-003', &
-      & 'E-002', 'E-001', 'E+000', 'E+001', 'E+002', 'E+003', 'E+004', 'E+005', 'E+006', &
-      & 'E+007', 'E+008', 'E+009', 'E+010', 'E+011', 'E+012', 'E+013', 'E+014', 'E+015', &
-      & 'E+016', 'E+017', 'E+018', 'E+019', 'E+020']
+   !> 17 there), each copied whole as 8 characters (put_17_digits), of which
+   !> the digits overwrite the first 3.
+   character(len=8), parameter :: exponent_texts(-20:20) = [ &
+      & '   E-020', '   E-019', '   E-018', '   E-017', '   E-016', '   E-015', '   E-014', &
+      & '   E-013', '   E-012', '   E-011', '   E-010', '   E-009', '   E-008', '   E-007', &
+      & '   E-006', '   E-005', '   E-004', '   E-003', '   E-002', '   E-001', '   E+000', &
+      & '   E+001', '   E+002', '   E+003', '   E+004', '   E+005', '   E+006', '   E+007', &
+      & '   E+008', '   E+009', '   E+010', '   E+011', '   E+012', '   E+013', '   E+014', &
+      & '   E+015', '   E+016', '   E+017', '   E+018', '   E+019', '   E+020']
 
-   !> Slots of real_text_cache_type (a power of two: the slot is the top
-   !> bits of a product).
+   !> Slots of real_text_cache_type (a power of two: the slot is a bit field).
    integer, parameter :: cache_bits = 8, cache_slots = 2**cache_bits
 
    !> The texts of the last reals written to the tables, by their bits. The
@@ -56,10 +65,12 @@ module fekap_output_format
    !> tenth of making it. Direct-mapped: each slot holds the last value whose
    !> hash fell in it (length 0: none yet), its text in 24 characters of
    !> which `length` count.
+   !> Every slot starts as the text of +0.0 (bits 0), a valid entry: the
+   !> lookup needs no test of whether a slot is filled.
    type, public :: real_text_cache_type
       integer(i8) :: bits(0:cache_slots - 1) = 0
-      integer :: length(0:cache_slots - 1) = 0
-      character(len=real_width) :: text(0:cache_slots - 1) = ''
+      integer :: length(0:cache_slots - 1) = 23
+      character(len=real_width) :: text(0:cache_slots - 1) = '0.0000000000000000E+000'
    end type real_text_cache_type
 
 contains
@@ -91,7 +102,8 @@ contains
       character(*), intent(inout) :: line
       integer, intent(inout) :: n
       real(dp), intent(in) :: x
-      call put_real(line, n, x)
+      logical :: fast
+      call put_real(line, n, x, fast)
    end subroutine append_real
 
    !> `,v1,v2,...` of m values in a contiguous array, each as append_real
@@ -123,27 +135,33 @@ contains
       integer, intent(inout) :: n
       real(dp), intent(in) :: x
       type(real_text_cache_type), intent(inout) :: cache
-      integer(i8), parameter :: low32 = shiftl(1_i8, 32) - 1, multiplier = 2053222753_i8
       integer(i8) :: bits
       integer :: slot, start
-      logical :: room
+      logical :: fast
       bits = transfer(x, 0_i8)
-      ! The two halves of the bits folded, times a 31-bit multiplier (the
-      ! product of a 32-bit number and it is below 2**63: no overflow); the
-      ! slot is the top cache_bits bits of the product.
-      slot = int(shiftr(iand(ieor(bits, shiftr(bits, 32)), low32)*multiplier, 63 - cache_bits))
-      room = n + real_width <= len(text)
-      if (room .and. cache%length(slot) > 0 .and. cache%bits(slot) == bits) then
+      ! The slot: the last cache_bits bits of the significand (a computed
+      ! value's are as good as random) folded with the exponent's and the
+      ! significand's first (where a round number, an exact zero, 2, 0.5,
+      ! 1e-4, differs from another), in three instructions: a product and
+      ! a shift cost more than the hits they would add.
+      slot = int(iand(ieor(bits, shiftr(bits, 45)), int(cache_slots - 1, i8)))
+      if (n + real_width > len(text)) then
+         call put_real(text, n, x, fast)
+         return
+      end if
+      if (cache%bits(slot) == bits) then
          ! All real_width characters, one fixed-length copy; after a shorter
          ! text the rest is overwritten by what follows.
          text(n + 1:n + real_width) = cache%text(slot)
          n = n + cache%length(slot)
          return
       end if
-      ! One call of put_real (the compiler inlines it where it is called once).
+      ! Only the texts of fast_digits' path, of known length (23 and the
+      ! sign), are held: no test of the length written. One call of
+      ! put_real (inlined where it is called from few places).
       start = n
-      call put_real(text, n, x)
-      if (room .and. n - start <= real_width) then
+      call put_real(text, n, x, fast)
+      if (fast) then
          cache%bits(slot) = bits
          cache%length(slot) = n - start
          cache%text(slot) = text(start + 1:start + real_width)
@@ -154,15 +172,18 @@ contains
    !> as position-independent code is called even from its own module (it
    !> could be interposed), a private one is inlined (here into append_real
    !> and append_cached_real).
-   pure subroutine put_real(line, n, x)
+   pure subroutine put_real(line, n, x, fast)
       character(*), intent(inout) :: line
       integer, intent(inout) :: n
       real(dp), intent(in) :: x
+      !> Whether x took fast_digits' path (put_17_digits: 23 characters and the sign).
+      logical, intent(out) :: fast
       integer(i8) :: significand
       integer :: e10
       logical :: done
       call fast_digits(x, 17, significand, e10, done)
-      if (done .and. e10 >= lbound(exponent_texts, 1) .and. e10 <= ubound(exponent_texts, 1)) then
+      fast = done .and. e10 >= lbound(exponent_texts, 1) .and. e10 <= ubound(exponent_texts, 1)
+      if (fast) then
          call put_17_digits(line, n, x, significand, e10)
       else
          call append_other_real(line, n, x)
@@ -212,9 +233,12 @@ contains
       lead = int(high)/100000000
       line(n + 1:n + 1) = achar(iachar('0') + lead)
       line(n + 2:n + 2) = '.'
-      call put_8_digits(line(n + 3:n + 10), int(high) - lead*100000000)
-      call put_8_digits(line(n + 11:n + 18), int(significand - high*100000000_i8))
-      line(n + 19:n + 23) = exponent_texts(e10)
+      ! The exponent first, as the 8 characters ending the text (one store
+      ! of fixed length; a copy of 5 was several), its first 3 then
+      ! overwritten by the last digits.
+      line(n + 16:n + 23) = exponent_texts(e10)
+      call put_8_digits_quads(line(n + 3:n + 10), int(high) - lead*100000000)
+      call put_8_digits_quads(line(n + 11:n + 18), int(significand - high*100000000_i8))
       n = n + 23
    end subroutine put_17_digits
 
@@ -257,6 +281,26 @@ contains
       integer, intent(inout) :: n
       real(dp), intent(in) :: x
       integer, intent(in) :: width, decimals, exponent_digits
+      logical :: done
+      ! The listing's step line (es20.11, es16.6), each through its own copy
+      ! of put_short_es with constant field sizes: fixed-length stores only.
+      ! The other fields and values in append_other_es, whose formatted
+      ! write's locals this one does not set up.
+      done = .false.
+      if (exponent_digits == 0 .and. width == 20 .and. decimals == 11) then
+         call put_es_20_11(line, n, x, done)
+      else if (exponent_digits == 0 .and. width == 16 .and. decimals == 6) then
+         call put_es_16_6(line, n, x, done)
+      end if
+      if (.not. done) call append_other_es(line, n, x, width, decimals, exponent_digits)
+   end subroutine append_es
+
+   !> append_es of the fields and values off put_short_es' path.
+   pure subroutine append_other_es(line, n, x, width, decimals, exponent_digits)
+      character(*), intent(inout) :: line
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: x
+      integer, intent(in) :: width, decimals, exponent_digits
       character(len=64) :: buffer
       character(len=16) :: form
       logical :: done
@@ -269,7 +313,74 @@ contains
       else
          call append_text(line, n, es_text(x, width, decimals))
       end if
-   end subroutine append_es
+   end subroutine append_other_es
+
+   !> put_short_es for es20.11 (the listing's t).
+   pure subroutine put_es_20_11(line, n, x, done)
+      character(*), intent(inout) :: line
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: x
+      logical, intent(out) :: done
+      call put_short_es(line, n, x, 20, 11, done)
+   end subroutine put_es_20_11
+
+   !> put_short_es for es16.6 (the listing's residual).
+   pure subroutine put_es_16_6(line, n, x, done)
+      character(*), intent(inout) :: line
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: x
+      logical, intent(out) :: done
+      call put_short_es(line, n, x, 16, 6, done)
+   end subroutine put_es_16_6
+
+   !> Write x as esW.D writes it (W = width, D = decimals: 20 and 11 or 16
+   !> and 6, the listing's fields; E+dd, as fast_digits' exponents are
+   !> within +-99) after position n and advance n; done = .false. (nothing
+   !> written) off fast_digits' path (zeros among them). The field is
+   !> blanks, the sign where x < 0, the digits, E and the exponent's sign
+   !> and two digits, each written at its fixed place from the field's
+   !> end.
+   pure subroutine put_short_es(line, n, x, width, decimals, done)
+      character(*), intent(inout) :: line
+      integer, intent(inout) :: n
+      real(dp), intent(in) :: x
+      integer, intent(in) :: width, decimals
+      logical, intent(out) :: done
+      integer(i8) :: significand, rest
+      integer :: e10, lead, high, q, k
+      call fast_digits(x, decimals + 1, significand, e10, done)
+      if (.not. done .or. (decimals /= 11 .and. decimals /= 6) .or. width < decimals + 7 .or. &
+         & width > decimals + 15) then
+         done = .false.
+         return
+      end if
+      ! The lead digit's place: the text without its sign is decimals + 6 long.
+      q = n + width - decimals - 5
+      line(n + 1:n + 8) = '        '
+      line(n + width - 7:n + width) = '        '
+      if (x < 0) line(q - 1:q - 1) = '-'
+      lead = int(significand/power10(decimals))
+      rest = significand - lead*power10(decimals)
+      if (decimals == 11) then
+         ! 3 + 8 digits: the 3 as a quad's last three, after its '0' which the
+         ! point then overwrites.
+         high = int(rest/100000000_i8)
+         line(q + 1:q + 4) = digit_quads(high)
+         call put_8_digits_quads(line(q + 5:q + 12), int(rest - high*100000000_i8))
+      else
+         ! 2 + 4 digits: the 2 as a quad's last two, after '00' which the
+         ! lead digit and the point overwrite.
+         high = int(rest)/10000
+         line(q:q + 3) = digit_quads(high)
+         line(q + 4:q + 7) = digit_quads(int(rest) - high*10000)
+      end if
+      line(q:q) = achar(iachar('0') + lead)
+      line(q + 1:q + 1) = '.'
+      k = abs(e10)
+      line(q + decimals + 2:q + decimals + 3) = merge('E-', 'E+', e10 < 0)
+      line(q + decimals + 4:q + decimals + 5) = digit_pairs(2*k + 1:2*k + 2)
+      n = n + width
+   end subroutine put_short_es
 
    !> Write i as the edit descriptor iW writes it after position n; advance n.
    pure subroutine append_i(line, n, i, width)
@@ -280,6 +391,21 @@ contains
       integer :: first, v, p
       integer(i8) :: digits
       integer(i8), parameter :: zeros_to_blanks = int(z'1010101010101010', i8), zeros = int(z'3030303030303030', i8)
+      if (i >= 0 .and. i < 10 .and. width >= 4 .and. width <= 16) then
+         ! One digit (the listing's iterations and cuts) in a field of 4 to
+         ! 16: blanks as two overlapping stores of fixed length, then the
+         ! digit (no loop over the blanks).
+         if (width >= 8) then
+            line(n + 1:n + 8) = '        '
+            line(n + width - 7:n + width) = '        '
+         else
+            line(n + 1:n + 4) = '    '
+            line(n + width - 3:n + width) = '    '
+         end if
+         line(n + width:n + width) = achar(iachar('0') + i)
+         n = n + width
+         return
+      end if
       if (little_endian .and. i >= 10 .and. i < 100000000 .and. width >= 8 .and. width <= 16) then
          ! A step number or a count of two digits or more in the listing's
          ! 8- and 12-wide fields: its 8 digits with leading zeros as one
@@ -607,6 +733,19 @@ contains
       pair = int(shiftr(y, 52))
       text(7:8) = digit_pairs(2*pair + 1:2*pair + 2)
    end subroutine put_8_digits
+
+   !> The 8 digits of 0 <= v < 10**8, leading zeros included, as two
+   !> entries of digit_quads: v/10**4 as v*ceil(2**40/10**4)/2**40 (exact
+   !> below 10**8), and the rest. Fewer instructions than put_8_digits'
+   !> lanes, for a table of 40 kB.
+   pure subroutine put_8_digits_quads(text, v)
+      character(len=8), intent(inout) :: text
+      integer, intent(in) :: v
+      integer :: half
+      half = int(shiftr(int(v, i8)*109951163_i8, 40))
+      text(1:4) = digit_quads(half)
+      text(5:8) = digit_quads(v - half*10000)
+   end subroutine put_8_digits_quads
 
    !> Write the last `width` decimal digits of v >= 0 after position n; advance n.
    pure subroutine put_decimal(line, n, v, width)

@@ -461,7 +461,10 @@ contains
       call append_i(out%text, out%n, result%iterations, 12)
       call append_es(out%text, out%n, result%residual, 16, 6, 0)
       call append_i(out%text, out%n, result%cuts, 6)
-      call append_text(out%text, out%n, new_line('a'))
+      ! The line's end stored here: append_text's copy of a length known
+      ! only at run time is a call of memcpy.
+      out%text(out%n + 1:out%n + 1) = new_line('a')
+      out%n = out%n + 1
    end subroutine write_listing_step
 
    !> A note on step `step` (a near-singular configuration, step cuts), after

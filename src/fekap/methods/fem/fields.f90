@@ -22,33 +22,45 @@ contains
       type(model_type), intent(in) :: model
       real(dp), contiguous, intent(in) :: q(:), v(:), a(:)
       type(step_result_type), intent(inout) :: result
-      integer :: i, k, dof
-      do i = 1, size(model%nodes)
-         do k = 1, 2
-            dof = mesh%tdof(k, i)
-            result%pos(k, i) = q(dof)
-            result%vel(k, i) = v(dof)
-            result%acc(k, i) = a(dof)
-         end do
-      end do
+      integer :: i, k
+      ! The nodes' coordinates are the mesh's first points' (tdof's first
+      ! columns), gathered through explicit-shape arrays: the result's
+      ! components written through their descriptors cost several times as
+      ! much (each store could change a descriptor, reloaded for the next).
+      call gather3(q, v, a, size(q), mesh%tdof, 1, 2*size(model%nodes), result%pos, result%vel, result%acc)
       if (model%output%mesh_nodes) then
          if (.not. allocated(result%interior)) allocate (result%interior(2, mesh%npoint - size(model%nodes)))
          do i = 1, size(result%interior, 2)
             result%interior(:, i) = q(mesh%tdof(:, size(model%nodes) + i))
          end do
       end if
-      do i = 1, size(model%links)
-         dof = mesh%link_rot(1, i)
-         result%angle(i) = mesh%link_angle0(i) + q(dof)
-         result%omega(i) = v(dof)
-         result%alpha(i) = a(dof)
-      end do
+      ! Each link's first end rotation (link_rot's first row) and its angle
+      ! from the link's initial direction.
+      call gather3(q, v, a, size(q), mesh%link_rot, 2, size(model%links), result%angle, result%omega, result%alpha)
+      result%angle(:) = mesh%link_angle0(1:size(model%links)) + result%angle(:)
       if (.not. allocated(mesh%chord_links)) return
       do k = 1, size(mesh%chord_links)
          i = mesh%chord_links(k)
          call chord_angle(mesh, model, i, q, v, a, result%angle(i), result%omega(i), result%alpha(i))
       end do
    end subroutine fill_nodes_links
+
+   !> x(i), y(i), z(i) = q(d), v(d), a(d) for d = dofs(1, i), i = 1..n (q,
+   !> v, a of ndof values)
+   !> (dofs(1, :) a row of an array of `stride` rows, or with stride 1 a
+   !> whole array in its element order; x, y, z arrays of any rank).
+   pure subroutine gather3(q, v, a, ndof, dofs, stride, n, x, y, z)
+      integer, intent(in) :: ndof, stride, n
+      real(dp), intent(in) :: q(ndof), v(ndof), a(ndof)
+      integer, intent(in) :: dofs(stride, n)
+      real(dp), intent(out) :: x(n), y(n), z(n)
+      integer :: i
+      do i = 1, n
+         x(i) = q(dofs(1, i))
+         y(i) = v(dofs(1, i))
+         z(i) = a(dofs(1, i))
+      end do
+   end subroutine gather3
 
    !> The direction of link `l`'s chord (its first end node to its last) and
    !> its rates: theta = atan2(y, x) of the chord r = (x, y), theta' = (r x
