@@ -521,31 +521,21 @@ contains
       end do
    end subroutine zero_driven
 
-   !> b(1:n) = a(1:n) as one block (as zero).
-   !> b(k) = a(place(k)): the band storage a, taken as one array, at the places.
-   pure subroutine gather_places(nab, a, place, b)
-      integer, intent(in) :: nab, place(:)
-      real(dp), intent(in) :: a(nab)
-      real(dp), intent(out) :: b(size(place))
-      integer :: k
-      do k = 1, size(place)
-         b(k) = a(place(k))
-      end do
-   end subroutine gather_places
-
    !> The largest magnitude in each column of the band matrix ab (n
    !> columns, taken as one array) and its 1-norm: each column's magnitudes
    !> at its places (place_start, place: entry_places') summed from zero in
    !> row order (the rest of the column is zero: the whole column's maxval
-   !> and sum to the bit); with b, B_0 at the same places (gather_places),
-   !> also ||ab - B_0||_1 the same way (B_0 zero elsewhere too).
-   pure subroutine column_sizes(n, place_start, place, nab, ab, column_max, norm1, b, distance)
+   !> and sum to the bit); with b, B_0 at the same places, also ||ab -
+   !> B_0||_1 the same way (B_0 zero elsewhere too) and ab's values at the
+   !> places into `kept` (b, distance and kept come together).
+   pure subroutine column_sizes(n, place_start, place, nab, ab, column_max, norm1, b, distance, kept)
       integer, intent(in) :: n, place_start(n + 1), place(place_start(n + 1) - 1), nab
       real(dp), intent(in) :: ab(nab)
       real(dp), intent(out) :: column_max(n), norm1
       real(dp), intent(in), optional :: b(place_start(n + 1) - 1)
       real(dp), intent(out), optional :: distance
-      real(dp) :: largest, total, a, column
+      real(dp), intent(out), optional :: kept(place_start(n + 1) - 1)
+      real(dp) :: largest, total, a, column, value
       integer :: j, k
       norm1 = 0
       if (present(distance)) distance = 0
@@ -555,10 +545,12 @@ contains
          column = 0
          if (present(b)) then
             do k = place_start(j), place_start(j + 1) - 1
-               a = abs(ab(place(k)))
+               value = ab(place(k))
+               kept(k) = value
+               a = abs(value)
                if (a > largest) largest = a
                total = total + a
-               column = column + abs(ab(place(k)) - b(k))
+               column = column + abs(value - b(k))
             end do
             if (column > distance) distance = column
          else
@@ -634,9 +626,8 @@ contains
       self%estimate_current = .false.
       self%unfactored_kept = allocated(self%unfactored)
       if (self%unfactored_kept) then
-         call gather_places(size(self%ab), self%ab, self%nonzeros%entry_at, self%unfactored)
          call column_sizes(self%n, self%nonzeros%entry_start, self%nonzeros%entry_at, size(self%ab), self%ab, &
-            & self%column_max, self%norm1, self%estimated, self%distance)
+            & self%column_max, self%norm1, self%estimated, self%distance, self%unfactored)
       else
          call column_sizes(self%n, self%nonzeros%entry_start, self%nonzeros%entry_at, size(self%ab), self%ab, &
             & self%column_max, self%norm1)
