@@ -77,8 +77,7 @@ contains
    pure subroutine load_set_at(self, t, f, negated)
       class(load_set_type), intent(in) :: self
       real(dp), intent(in) :: t
-      ! contiguous: the step's residual assembly calls it; a strided loop cost twice as much.
-      real(dp), contiguous, intent(out) :: f(:)
+      real(dp), intent(out) :: f(:)
       !> f = -F(t) instead (the assembly's residual starts from it).
       logical, intent(in), optional :: negated
       real(dp) :: lambda, df, ddf

@@ -27,9 +27,11 @@ contains
    subroutine static_reactions(rows, mesh, q, t, seg, r, zero, reactions)
       type(kinetostatics_type), intent(in) :: rows
       type(mesh_type), intent(in) :: mesh
-      real(dp), intent(in) :: q(:), t
+      ! contiguous: assemble_residual's (no temporary copies).
+      real(dp), contiguous, intent(in) :: q(:)
+      real(dp), intent(in) :: t
       integer, intent(in) :: seg(:)
-      real(dp), intent(inout) :: r(:)
+      real(dp), contiguous, intent(inout) :: r(:)
       real(dp), intent(in) :: zero(:)
       real(dp), intent(out) :: reactions(:, :)
       real(dp) :: pe(6)
