@@ -33,6 +33,11 @@
 !> the multipliers and the entries of U that can be nonzero, as a sparse
 !> LU's refactorisation does; the band's loops take over at a column whose
 !> last pivot no longer serves.
+!>
+!> The module is over 600 lines with one concept: the factor's places (the
+!> symbolic factorisation and the lists' sizes), the refactorisation on
+!> them and the solves with them share one record and its layout; apart,
+!> each would reach into the others' lists.
 module fekap_linalg_band_lu
    use fekap_kinds, only: dp
    implicit none
