@@ -282,15 +282,15 @@ contains
       real(dp), intent(in) :: x
       integer, intent(in) :: width, decimals, exponent_digits
       logical :: done
-      ! The listing's step line (es20.11, es16.6), each through its own copy
-      ! of put_short_es with constant field sizes: fixed-length stores only.
+      ! The listing's step line (es20.11, es16.6), each a call of
+      ! put_short_es with constant field sizes: fixed-length stores only.
       ! The other fields and values in append_other_es, whose formatted
       ! write's locals this one does not set up.
       done = .false.
       if (exponent_digits == 0 .and. width == 20 .and. decimals == 11) then
-         call put_es_20_11(line, n, x, done)
+         call put_short_es(line, n, x, 20, 11, done)
       else if (exponent_digits == 0 .and. width == 16 .and. decimals == 6) then
-         call put_es_16_6(line, n, x, done)
+         call put_short_es(line, n, x, 16, 6, done)
       end if
       if (.not. done) call append_other_es(line, n, x, width, decimals, exponent_digits)
    end subroutine append_es
@@ -314,24 +314,6 @@ contains
          call append_text(line, n, es_text(x, width, decimals))
       end if
    end subroutine append_other_es
-
-   !> put_short_es for es20.11 (the listing's t).
-   pure subroutine put_es_20_11(line, n, x, done)
-      character(*), intent(inout) :: line
-      integer, intent(inout) :: n
-      real(dp), intent(in) :: x
-      logical, intent(out) :: done
-      call put_short_es(line, n, x, 20, 11, done)
-   end subroutine put_es_20_11
-
-   !> put_short_es for es16.6 (the listing's residual).
-   pure subroutine put_es_16_6(line, n, x, done)
-      character(*), intent(inout) :: line
-      integer, intent(inout) :: n
-      real(dp), intent(in) :: x
-      logical, intent(out) :: done
-      call put_short_es(line, n, x, 16, 6, done)
-   end subroutine put_es_16_6
 
    !> Write x as esW.D writes it (W = width, D = decimals: 20 and 11 or 16
    !> and 6, the listing's fields; E+dd, as fast_digits' exponents are
