@@ -8,9 +8,9 @@
 !> kinematic run, inlined into the writers) and fekap_output_exact_digits.
 !> The module is over 600 lines because the digits, the text and the cache
 !> of a real (append_reals' path) must be in one module for the compiler to
-!> inline them into one another (the build has no link-time optimisation,
-!> and a call per number is a large part of its cost); the integers' and the
-!> ES descriptors' writers share its digit tables.
+!> inline them into one another whatever the build's link-time
+!> optimisation does (a call per number is a large part of its cost); the
+!> integers' and the ES descriptors' writers share its digit tables.
 module fekap_output_format
    use fekap_kinds, only: dp
    use fekap_strings, only: es_text
