@@ -90,7 +90,9 @@ module fekap_assembly_strain_rate
       integer, allocatable :: element_map(:, :, :)
       !> (2, nelem): the lengths of the two lists of element_map.
       integer, allocatable :: element_count(:, :)
-      !> (2 kl + ku + 1, n): B_f as dgbtrf stores it, then its LU factor.
+      !> (2 kl + ku + 1, n): B_f as dgbtrf stores it, then its LU factor if
+      !> the band's loops made it (lu_blocked, or the pivots changed; B_f
+      !> itself if refactor_nonzeros did: the factor is in nonzeros).
       real(dp), allocatable :: ab(:, :)
       integer, allocatable :: ipiv(:)
       !> The factor's nonzeros, which the solves take (gathered at each
@@ -650,7 +652,7 @@ contains
             self%pivot_ratio = 0
             return
          end if
-         self%pivot_ratio = min(self%pivot_ratio, (abs(self%nonzeros%diagonal(j))/self%column_max(j))**2)
+         self%pivot_ratio = min(self%pivot_ratio, (abs(self%nonzeros%values(j))/self%column_max(j))**2)
       end do
    end subroutine factor_strain_rate
 

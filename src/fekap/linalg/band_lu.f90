@@ -32,7 +32,14 @@
 !> places and, mostly, the same pivots, so its elimination multiplies only
 !> the multipliers and the entries of U that can be nonzero, as a sparse
 !> LU's refactorisation does; the band's loops take over at a column whose
-!> last pivot no longer serves.
+!> last pivot no longer serves. It works in the factor's own slots (the
+!> solves' lists), not in the band: with the pivots known, a row
+!> interchange only moves a value, so each of the matrix's entries is put
+!> at the slot the interchanges would take it to, and each update adds
+!> into a slot listed by the symbolic factorisation (which numbers the
+!> values as it moves them). No interchange, no fill to clear, no index
+!> arithmetic of the band, no gathering afterwards: the same products and
+!> sums in the same order, on the places that can be nonzero.
 !>
 !> The module is over 600 lines with one concept: the factor's places (the
 !> symbolic factorisation and the lists' sizes), the refactorisation on
@@ -40,6 +47,7 @@
 !> each would reach into the others' lists.
 module fekap_linalg_band_lu
    use fekap_kinds, only: dp
+   use fekap_linalg_lapack, only: band_lu_given_pivots
    implicit none
    private
 
@@ -63,29 +71,41 @@ module fekap_linalg_band_lu
       integer, allocatable :: entry_start(:), entry_at(:)
       !> Whether the lists below hold the places for `pivot`.
       logical :: known = .false.
-      !> (n): the pivots (dgbtrf's ipiv) of the places below, and U's diagonal.
+      !> (n): the pivots (dgbtrf's ipiv) of the places below.
       integer, allocatable :: pivot(:)
-      real(dp), allocatable :: diagonal(:)
       !> L's multipliers, column after column (column j's at lower_start(j)
-      !> to lower_start(j + 1) - 1, in increasing row order): the value, its
-      !> place in the band storage taken as one array, its column (the row
-      !> of b it takes) and its row in the order of b after all of the
-      !> factor's row interchanges (see nonzeros_solve).
+      !> to lower_start(j + 1) - 1, in increasing row order): its place in
+      !> the band storage taken as one array, its column (the row of b it
+      !> takes) and its row in the order of b after all of the factor's row
+      !> interchanges (see nonzeros_solve).
       integer, allocatable :: lower_start(:), lower_at(:), lower_column(:), lower_row(:)
-      real(dp), allocatable :: lower(:)
       !> U's columns above the diagonal the same way (rows in increasing
       !> order; rows j - kl - ku to j - 1 of column j).
       integer, allocatable :: upper_start(:), upper_at(:), upper_row(:)
-      real(dp), allocatable :: upper(:)
+      !> The factor's values at its places, each at its slot: U's diagonal
+      !> at 1 to n, L's multipliers at n + 1 to n + size(lower_at) (lower_at's
+      !> order), U's entries above the diagonal after them (upper_at's order);
+      !> the last a spare, where refactor_nonzeros puts the matrix's entries
+      !> outside the n x n matrix (possible's, zero).
+      real(dp), allocatable :: values(:)
       !> U's rows right of the diagonal, for refactor_nonzeros's updates: row
-      !> j's columns at row_start(j) to row_start(j + 1) - 1, increasing (the
-      !> lists above by rows).
-      integer, allocatable :: row_start(:), row_column(:)
-      !> (2 kl + ku + 1, columns): the symbolic factorisation's booleans for
-      !> a window of columns (symbolic_factor); all false between its calls
-      !> (it clears each column's places as it lists them), so that a call
-      !> need not clear it again.
-      logical, allocatable :: window(:, :)
+      !> j's entries at row_start(j) to row_start(j + 1) - 1, increasing
+      !> columns (the lists above by rows): their slots.
+      integer, allocatable :: row_start(:), row_slot(:)
+      !> refactor_nonzeros's lists, made by the symbolic factorisation: the
+      !> slot of each of the matrix's entries (entry_at's order) in the
+      !> factor, and the slot each update of the elimination adds into
+      !> (column j's: for each of row j's entries of U in increasing column,
+      !> one for each of column j's multipliers in increasing row).
+      integer, allocatable :: entry_slot(:), update_target(:)
+      !> How many of update_target's slots the last symbolic factorisation listed.
+      integer :: updates = 0
+      !> (2 kl + ku + 1, columns): the symbolic factorisation's window of
+      !> columns: at each place the number of the value there (0: none; the
+      !> matrix's entries 1 to size(entry_at), fill numbered on); all zero
+      !> between its calls (it clears each column's places as it lists
+      !> them), so that a call need not clear it again.
+      integer, allocatable :: window(:, :)
    end type band_lu_nonzeros_type
 
 contains
@@ -115,11 +135,11 @@ contains
          end do
       end do
       nz%entry_start(n + 1) = k + 1
-      allocate (nz%pivot(n), nz%diagonal(n), nz%lower_start(n + 1), nz%upper_start(n + 1))
+      allocate (nz%pivot(n), nz%lower_start(n + 1), nz%upper_start(n + 1), nz%entry_slot(k))
       ! The factor's lists are sized by the first symbolic factorisation (reserve_lists).
-      call reserve_lists(nz, 0, 0)
+      call reserve_lists(nz, 0, 0, 0)
       allocate (nz%row_start(n + 1))
-      allocate (nz%window(size(possible, 1), min(n, window_columns*(kl + ku + 1))), source=.false.)
+      allocate (nz%window(size(possible, 1), min(n, window_columns*(kl + ku + 1))), source=0)
    end subroutine new_band_lu_nonzeros
 
    !> The values of the factor in ab with pivots ipiv (dgbtrf's band
@@ -144,24 +164,31 @@ contains
          nz%known = .true.
       end if
       call gather_values(nz%n, nz%kl + nz%ku, size(ab, 1), ab, nz%lower_start(nz%n + 1) - 1, nz%lower_at, &
-         & nz%upper_start(nz%n + 1) - 1, nz%upper_at, nz%diagonal, nz%lower, nz%upper)
+         & nz%upper_start(nz%n + 1) - 1, nz%upper_at, upper_slots(nz), size(nz%values), nz%values)
    end subroutine gather_nonzeros
 
-   !> The values at the places found (explicit-shape arrays: their
-   !> addresses without a descriptor's arithmetic).
-   pure subroutine gather_values(n, kv, ldab, ab, nl, lower_at, nu, upper_at, diagonal, lower, upper)
-      integer, intent(in) :: n, kv, ldab, nl, lower_at(nl), nu, upper_at(nu)
+   !> The slot before U's first entry above the diagonal in nz%values.
+   pure integer function upper_slots(nz) result(upper)
+      type(band_lu_nonzeros_type), intent(in) :: nz
+      upper = nz%n + size(nz%lower_at)
+   end function upper_slots
+
+   !> The values at the places found, at their slots (U's above the
+   !> diagonal after `upper`); explicit-shape arrays: their addresses
+   !> without a descriptor's arithmetic.
+   pure subroutine gather_values(n, kv, ldab, ab, nl, lower_at, nu, upper_at, upper, nvalues, values)
+      integer, intent(in) :: n, kv, ldab, nl, lower_at(nl), nu, upper_at(nu), upper, nvalues
       real(dp), intent(in) :: ab(ldab*n)
-      real(dp), intent(out) :: diagonal(n), lower(nl), upper(nu)
+      real(dp), intent(inout) :: values(nvalues)
       integer :: j, k
       do j = 1, n
-         diagonal(j) = ab(kv + 1 + (j - 1)*ldab)
+         values(j) = ab(kv + 1 + (j - 1)*ldab)
       end do
       do k = 1, nl
-         lower(k) = ab(lower_at(k))
+         values(n + k) = ab(lower_at(k))
       end do
       do k = 1, nu
-         upper(k) = ab(upper_at(k))
+         values(upper + k) = ab(upper_at(k))
       end do
    end subroutine gather_values
 
@@ -173,33 +200,48 @@ contains
    !> has a multiplier and row j an entry of U in that column (a superset
    !> of dgbtf2's, which skips a zero entry of U: every other place of its
    !> factor is exactly zero). Column j's elimination reaches columns j to
-   !> j + kl + ku alone, and no later one changes column j; so the booleans
+   !> j + kl + ku alone, and no later one changes column j; so the places
    !> are kept for a window of columns (nz%window, window_columns (kl + ku
    !> + 1) of them, column c at c - base) rather than for the whole band
    !> (as much memory as the matrix's band storage, at 4 bytes a place):
    !> columns' places are listed when their eliminations are done, and the
    !> columns not yet done moved to the window's front, the next columns'
-   !> entries marked after them (symbolic_kernel). Then L's rows
-   !> renumbered: the interchange of column j's elimination (rows j and
-   !> ipiv(j)) comes before its multipliers are applied and after column j
-   !> - 1's, and it moves rows below j only after column j's; so with every
-   !> interchange made first, row r of column j's elimination is row
-   !> final(r) of the interchanged b, final being the composition of the
-   !> interchanges of columns j + 1 to n - 1 (row j itself, and the rows
-   !> above, are not moved by them).
+   !> entries marked after them (symbolic_kernel). Each place holds the
+   !> number of the value there (an interchange moves it; an update into an
+   !> empty place starts a new one), so that where each of the matrix's
+   !> entries and each update's sum end in the factor, their slots, are
+   !> known when the places are listed: refactor_nonzeros's lists. Then L's
+   !> rows renumbered: the interchange of column j's elimination (rows j
+   !> and ipiv(j)) comes before its multipliers are applied and after
+   !> column j - 1's, and it moves rows below j only after column j's; so
+   !> with every interchange made first, row r of column j's elimination is
+   !> row final(r) of the interchanged b, final being the composition of
+   !> the interchanges of columns j + 1 to n - 1 (row j itself, and the
+   !> rows above, are not moved by them).
    pure subroutine symbolic_factor(nz, ipiv)
       type(band_lu_nonzeros_type), intent(inout) :: nz
       integer, contiguous, intent(in) :: ipiv(:)
-      integer, allocatable :: final(:)
+      integer, allocatable :: final(:), slot_of(:)
       integer :: n, i, j, k, moved
       n = nz%n
       nz%pivot = ipiv
-      call list_places(nz, ipiv)
+      call list_places(nz, ipiv, slot_of)
       ! Lists too short for these pivots' places: made long enough, and the places listed again.
-      if (nz%lower_start(n + 1) - 1 > size(nz%lower_at) .or. nz%upper_start(n + 1) - 1 > size(nz%upper_at)) then
-         call reserve_lists(nz, nz%lower_start(n + 1) - 1, nz%upper_start(n + 1) - 1)
-         call list_places(nz, ipiv)
+      if (nz%lower_start(n + 1) - 1 > size(nz%lower_at) .or. nz%upper_start(n + 1) - 1 > size(nz%upper_at) &
+         & .or. nz%updates > size(nz%update_target)) then
+         call reserve_lists(nz, nz%lower_start(n + 1) - 1, nz%upper_start(n + 1) - 1, nz%updates)
+         call list_places(nz, ipiv, slot_of)
       end if
+      ! The slots of the entries and of the updates' sums, from their values' numbers.
+      do k = 1, size(nz%entry_slot)
+         nz%entry_slot(k) = slot_of(k)
+         ! A place outside the matrix (possible's corners; zero): the spare slot.
+         if (slot_of(k) == 0) nz%entry_slot(k) = size(nz%values)
+      end do
+      do k = 1, nz%updates
+         nz%update_target(k) = slot_of(nz%update_target(k))
+      end do
+      deallocate (slot_of)
       ! The rows in the order after every interchange, from the last column back.
       final = [(i, i=1, n)]
       do j = n - 1, 1, -1
@@ -214,45 +256,57 @@ contains
       end do
       ! U's places by rows: as many as it has (the lists by columns have
       ! reserve_lists' slack).
-      if (allocated(nz%row_column)) then
-         if (size(nz%row_column) < nz%upper_start(n + 1) - 1) deallocate (nz%row_column)
+      if (allocated(nz%row_slot)) then
+         if (size(nz%row_slot) < nz%upper_start(n + 1) - 1) deallocate (nz%row_slot)
       end if
-      if (.not. allocated(nz%row_column)) allocate (nz%row_column(max(1, nz%upper_start(n + 1) - 1)))
-      call list_rows(n, nz%upper_start, nz%upper_row, nz%row_start, nz%row_column)
+      if (.not. allocated(nz%row_slot)) allocate (nz%row_slot(max(1, nz%upper_start(n + 1) - 1)))
+      call list_rows(n, nz%upper_start, nz%upper_row, upper_slots(nz), nz%row_start, nz%row_slot)
    end subroutine symbolic_factor
 
    !> symbolic_kernel on the record's arrays: its lists, as far as they
-   !> reach, and the starts of the places found however many they are.
-   pure subroutine list_places(nz, ipiv)
+   !> reach, the starts of the places found however many they are, the
+   !> number of updates (their values' numbers in update_target, as far as
+   !> it reaches), and the slot of each value's number (slot_of).
+   pure subroutine list_places(nz, ipiv, slot_of)
       type(band_lu_nonzeros_type), intent(inout) :: nz
       integer, contiguous, intent(in) :: ipiv(:)
+      integer, allocatable, intent(out) :: slot_of(:)
+      ! The entries' numbers, and at most one more for each place of the
+      ! factor, as long as the lists hold them.
+      allocate (slot_of(size(nz%entry_at) + nz%n + size(nz%lower_at) + size(nz%upper_at)), source=0)
       call symbolic_kernel(nz%n, nz%kl, nz%ku, size(nz%window, 2), ipiv, nz%entry_start, size(nz%entry_at), nz%entry_at, &
          & nz%window, size(nz%lower_at), nz%lower_start, nz%lower_column, nz%lower_row, nz%lower_at, size(nz%upper_at), &
-         & nz%upper_start, nz%upper_row, nz%upper_at)
+         & nz%upper_start, nz%upper_row, nz%upper_at, size(nz%update_target), nz%updates, nz%update_target, &
+         & size(slot_of), slot_of)
    end subroutine list_places
 
-   !> The lists of L's and U's places (and their values) for at least
-   !> nlower and nupper places, and an eighth more, so that the next
-   !> pivots' few places more (a pivot changed at a near tie) rarely list
-   !> them twice. Not the band's count (n kl and n (kl + ku)): a
-   !> mechanism's factor keeps most of the band's zeros, and the band's
-   !> count made these lists the largest arrays of a large lift.
-   pure subroutine reserve_lists(nz, nlower, nupper)
+   !> The lists of L's and U's places (and the values' slots) for at least
+   !> nlower and nupper places, and refactor_nonzeros's for nupdate
+   !> updates, and an eighth more, so that the next pivots' few places more
+   !> (a pivot changed at a near tie) rarely list them twice. Not the
+   !> band's count (n kl and n (kl + ku)): a mechanism's factor keeps most
+   !> of the band's zeros, and the band's count made these lists the
+   !> largest arrays of a large lift.
+   pure subroutine reserve_lists(nz, nlower, nupper, nupdate)
       type(band_lu_nonzeros_type), intent(inout) :: nz
-      integer, intent(in) :: nlower, nupper
-      integer :: ml, mu
+      integer, intent(in) :: nlower, nupper, nupdate
+      integer :: ml, mu, mup
       ml = max(1, nlower + nlower/8)
       mu = max(1, nupper + nupper/8)
-      if (allocated(nz%lower_at)) deallocate (nz%lower_at, nz%lower_column, nz%lower_row, nz%lower)
-      if (allocated(nz%upper_at)) deallocate (nz%upper_at, nz%upper_row, nz%upper)
-      allocate (nz%lower_at(ml), nz%lower_column(ml), nz%lower_row(ml), nz%lower(ml))
-      allocate (nz%upper_at(mu), nz%upper_row(mu), nz%upper(mu))
+      mup = max(1, nupdate + nupdate/8)
+      if (allocated(nz%lower_at)) deallocate (nz%lower_at, nz%lower_column, nz%lower_row)
+      if (allocated(nz%upper_at)) deallocate (nz%upper_at, nz%upper_row)
+      if (allocated(nz%values)) deallocate (nz%values, nz%update_target)
+      allocate (nz%lower_at(ml), nz%lower_column(ml), nz%lower_row(ml))
+      allocate (nz%upper_at(mu), nz%upper_row(mu))
+      allocate (nz%values(nz%n + ml + mu + 1), nz%update_target(mup))
    end subroutine reserve_lists
 
-   !> U's places by rows (row_start, row_column) from its lists by columns.
-   pure subroutine list_rows(n, upper_start, upper_row, row_start, row_column)
-      integer, intent(in) :: n, upper_start(n + 1), upper_row(:)
-      integer, intent(out) :: row_start(n + 1), row_column(:)
+   !> U's places by rows (row_start, and their slots row_slot: after
+   !> `upper`) from its lists by columns.
+   pure subroutine list_rows(n, upper_start, upper_row, upper, row_start, row_slot)
+      integer, intent(in) :: n, upper_start(n + 1), upper_row(:), upper
+      integer, intent(out) :: row_start(n + 1), row_slot(:)
       integer :: j, k, i
       row_start = 0
       do k = 1, upper_start(n + 1) - 1
@@ -269,7 +323,7 @@ contains
       do j = 1, n
          do k = upper_start(j), upper_start(j + 1) - 1
             i = upper_row(k)
-            row_column(row_start(i)) = j
+            row_slot(row_start(i)) = upper + k
             row_start(i) = row_start(i) + 1
          end do
       end do
@@ -282,15 +336,16 @@ contains
 
    !> The band LU of ab (the matrix, as fekap_linalg_lapack's
    !> band_lu_factor_loops takes it) with the pivots and places of the last
-   !> symbolic factorisation, and its values gathered: column by column, the
-   !> last pivot row is kept while its magnitude is at least `keep` times
-   !> the column's largest (1: the largest, as partial pivoting), and the
-   !> elimination multiplies only the places that can be nonzero (the same
-   !> operations as the band's loops on those places, so with the same
-   !> pivots the same factor to the bit). stopped = 0: done, ipiv the
-   !> pivots. Otherwise the column where a pivot did not serve (or there are
-   !> no places known): columns 1 to stopped - 1 are eliminated, their
-   !> pivots in ipiv, and the band's loops go on from column stopped
+   !> symbolic factorisation, its values at their slots: column by column,
+   !> the last pivot row is kept while its magnitude is at least `keep`
+   !> times the column's largest (1: the largest, as partial pivoting), and
+   !> the elimination multiplies only the places that can be nonzero (the
+   !> same operations as the band's loops on those places, so with the same
+   !> pivots the same factor to the bit). ab is left as it is. stopped = 0:
+   !> done, ipiv the pivots. Otherwise the column where a pivot did not
+   !> serve (or there are no places known): columns 1 to stopped - 1 of ab
+   !> are eliminated with the kept pivots, in ipiv (the band's loops,
+   !> band_lu_given_pivots), and the band's loops go on from column stopped
    !> (band_lu_factor_loops' first), then gather_nonzeros. Every place of
    !> ab outside the matrix's and the fill rows 1 to kl must be zero, as
    !> for those loops.
@@ -302,99 +357,98 @@ contains
       integer, intent(out) :: stopped
       stopped = 1
       if (.not. nz%known) return
-      call refactor_kernel(nz%n, nz%kl, nz%ku, size(ab, 1), ab, nz%pivot, keep, nz%lower_start, &
-         & size(nz%lower_at), nz%lower_at, nz%row_start, size(nz%row_column), nz%row_column, ipiv, stopped)
-      if (stopped > 0) return
-      call gather_values(nz%n, nz%kl + nz%ku, size(ab, 1), ab, nz%lower_start(nz%n + 1) - 1, nz%lower_at, &
-         & nz%upper_start(nz%n + 1) - 1, nz%upper_at, nz%diagonal, nz%lower, nz%upper)
+      call refactor_kernel(nz%n, nz%kl + nz%ku, size(ab, 1), size(ab), ab, size(nz%entry_at), nz%entry_at, nz%entry_slot, &
+         & nz%pivot, keep, nz%lower_start, size(nz%lower_at), nz%lower_at, nz%row_start, size(nz%row_slot), nz%row_slot, &
+         & size(nz%update_target), nz%update_target, size(nz%values), nz%values, stopped)
+      if (stopped == 0) then
+         ipiv(1:nz%n) = nz%pivot
+         return
+      end if
+      ! ab as the band's loops leave it after column stopped - 1 with these
+      ! pivots (the values' own operations, on the whole band).
+      ipiv(1:stopped - 1) = nz%pivot(1:stopped - 1)
+      call band_lu_given_pivots(ab, nz%kl, nz%ku, ipiv, stopped - 1)
    end subroutine refactor_nonzeros
 
-   !> refactor_nonzeros's elimination on explicit-shape arrays (ab as one
-   !> array: A(i, j)'s band place kv + 1 + i - j + (j - 1) ldab). A column's
-   !> multipliers are taken down to its last place that can be nonzero, the
-   !> zeros between them included (a loop on consecutive places costs less
-   !> than one through the list): they add zero, as in the band's loops.
-   pure subroutine refactor_kernel(n, kl, ku, ldab, ab, pivot, keep, lower_start, nlower, lower_at, row_start, nrow, &
-      & row_column, ipiv, stopped)
-      integer, intent(in) :: n, kl, ku, ldab, pivot(n), lower_start(n + 1), nlower, lower_at(nlower), row_start(n + 1)
-      integer, intent(in) :: nrow, row_column(nrow)
-      real(dp), intent(inout) :: ab(ldab*n)
-      real(dp), intent(in) :: keep
-      integer, intent(inout) :: ipiv(n)
+   !> refactor_nonzeros's elimination on explicit-shape arrays, in the
+   !> factor's slots: values zero but for the matrix's entries (no row
+   !> interchange is made: each value is at its slot from the start, where
+   !> the interchanges would have taken it), then for each column j the
+   !> pivot's check (the column's values before its interchange are its
+   !> slots' values: the diagonal and the multipliers', with row pivot(j)'s
+   !> and row j's exchanged), the multipliers (the diagonal's reciprocal
+   !> times them) and, for each of row j's entries of U that is not zero
+   !> (the band's loops skip a zero one, as dger does), the multipliers
+   !> times it taken from the slots of update_target in turn. A place that
+   !> cannot be nonzero gets no product: b - t*0 is b to the bit (module
+   !> header).
+   pure subroutine refactor_kernel(n, kv, ldab, nab, ab, nentry, entry_at, entry_slot, pivot, keep, lower_start, nlower, &
+      & lower_at, row_start, nrow, row_slot, nupdate, update_target, nvalues, values, stopped)
+      integer, intent(in) :: n, kv, ldab, nab, nentry, entry_at(nentry), entry_slot(nentry), pivot(n)
+      integer, intent(in) :: lower_start(n + 1), nlower, lower_at(nlower), row_start(n + 1), nrow, row_slot(nrow)
+      integer, intent(in) :: nupdate, update_target(nupdate), nvalues
+      real(dp), intent(in) :: ab(nab), keep
+      real(dp), intent(inout) :: values(nvalues)
       integer, intent(out) :: stopped
-      real(dp) :: largest, temp, recip
-      integer :: kv, i, j, jj, jp, ju, km, m, c, base, rows, shift
-      kv = kl + ku
-      do j = ku + 2, min(kv, n)
-         do i = kv - j + 2, kl
-            ab(i + (j - 1)*ldab) = 0
-         end do
+      real(dp) :: largest, temp, recip, diagonal
+      integer :: j, k, m, t, first, last, row
+      values = 0
+      !GCC$ unroll 1
+      !GCC$ novector
+      do k = 1, nentry
+         values(entry_slot(k)) = ab(entry_at(k))
       end do
-      ju = 1
+      t = 0
       do j = 1, n
-         base = (j - 1)*ldab
-         km = min(kl, n - j)
-         jp = pivot(j) - j + 1
-         largest = 0
+         ! Column j's multipliers at values(first:last).
+         first = n + lower_start(j)
+         last = n + lower_start(j + 1) - 1
+         diagonal = values(j)
+         largest = abs(diagonal)
          !GCC$ unroll 1
          !GCC$ novector
-         do i = 1, km + 1
-            largest = max(largest, abs(ab(kv + i + base)))
+         do k = first, last
+            largest = max(largest, abs(values(k)))
          end do
          ! Kept while it is a pivot partial pivoting would take, or near one
          ! (not: a zero column, which the band's loops report).
-         if (.not. (largest > 0 .and. abs(ab(kv + jp + base)) >= keep*largest)) then
+         if (.not. (largest > 0 .and. abs(diagonal) >= keep*largest)) then
             stopped = j
             return
          end if
-         if (keep >= 1) then
-            ! The first largest, as idamax takes it: else the loops' pivot differs.
-            !GCC$ unroll 1
-            do i = 1, jp - 1
-               if (abs(ab(kv + i + base)) >= largest) then
+         if (keep >= 1 .and. pivot(j) /= j) then
+            ! The first largest, as idamax takes it: else the loops' pivot
+            ! differs. Rows j to pivot(j) - 1 before the interchange; row
+            ! j's value is at row pivot(j)'s slot after it.
+            do k = first, last
+               row = j + lower_at(k - n) - kv - 1 - (j - 1)*ldab
+               if (row == pivot(j)) row = j
+               if (row < pivot(j) .and. abs(values(k)) >= largest) then
                   stopped = j
                   return
                end if
             end do
          end if
-         ipiv(j) = pivot(j)
-         if (j + kv <= n) then
-            do i = 1, kl
-               ab(i + (j + kv - 1)*ldab) = 0
-            end do
-         end if
-         ju = max(ju, min(j + ku + jp - 1, n))
-         if (jp /= 1) then
-            !GCC$ unroll 1
-            !GCC$ novector
-            do jj = 0, ju - j
-               temp = ab(kv + jp - jj + base + jj*ldab)
-               ab(kv + jp - jj + base + jj*ldab) = ab(kv + 1 - jj + base + jj*ldab)
-               ab(kv + 1 - jj + base + jj*ldab) = temp
-            end do
-         end if
-         ! Rows j + 1 to j + rows can have multipliers (the last listed).
-         if (lower_start(j + 1) == lower_start(j)) cycle
-         rows = lower_at(lower_start(j + 1) - 1) - base - kv - 1
-         recip = 1/ab(kv + 1 + base)
+         if (last < first) cycle
+         recip = 1/diagonal
          !GCC$ unroll 1
          !GCC$ novector
-         do i = kv + 2 + base, kv + 1 + rows + base
-            ab(i) = recip*ab(i)
+         do k = first, last
+            values(k) = recip*values(k)
          end do
-         ! Row j of U times the multipliers, from the rows below.
+         ! Row j of U times the multipliers, from the slots below.
          do m = row_start(j), row_start(j + 1) - 1
-            c = row_column(m)
-            jj = c - j
-            temp = ab(kv + 1 - jj + (c - 1)*ldab)
+            temp = values(row_slot(m))
             if (temp /= 0) then
                temp = -temp
-               shift = (c - 1)*ldab - jj - base
                !GCC$ unroll 1
                !GCC$ novector
-               do i = kv + 2 + base, kv + 1 + rows + base
-                  ab(i + shift) = ab(i + shift) + ab(i)*temp
+               do k = first, last
+                  t = t + 1
+                  values(update_target(t)) = values(update_target(t)) + values(k)*temp
                end do
+            else
+               t = t + last - first + 1
             end if
          end do
       end do
@@ -403,18 +457,24 @@ contains
 
    !> symbolic_factor's loops and lists on explicit-shape arrays (their
    !> addresses without a descriptor's arithmetic); place is the window of
-   !> columns, all false on entry and on return. The window holds columns
+   !> columns, all zero on entry and on return. The window holds columns
    !> base + 1 to loaded; the elimination runs over those whose columns
    !> reached are all there (to loaded - kl - ku, or to n), then lists them,
-   !> and moves the rest to the window's front.
+   !> and moves the rest to the window's front. The values' numbers: the
+   !> matrix's entries 1 to nentry (entry_at's order), fill from nentry + 1
+   !> as it appears; update_id, each update's sum's number (nup of them,
+   !> counted on past nupdate but not written there), and slot_of (at most
+   !> nslot numbers) are refactor_nonzeros's lists.
    pure subroutine symbolic_kernel(n, kl, ku, columns, ipiv, entry_start, nentry, entry_at, place, nlower, lower_start, &
-      & lower_column, lower_row, lower_at, nupper, upper_start, upper_row, upper_at)
+      & lower_column, lower_row, lower_at, nupper, upper_start, upper_row, upper_at, nupdate, nup, update_id, nslot, slot_of)
       integer, intent(in) :: n, kl, ku, columns, ipiv(n), entry_start(n + 1), nentry, entry_at(nentry), nlower, nupper
-      logical, intent(inout) :: place(2*kl + ku + 1, columns)
+      integer, intent(in) :: nupdate, nslot
+      integer, intent(inout) :: place(2*kl + ku + 1, columns)
       integer, intent(out) :: lower_start(n + 1), lower_column(nlower), lower_row(nlower), lower_at(nlower)
       integer, intent(out) :: upper_start(n + 1), upper_row(nupper), upper_at(nupper)
-      logical :: swap
-      integer :: kv, ldab, i, j, jj, jp, ju, km, nl, nu, base, loaded, c, first, last, live
+      integer, intent(out) :: nup, update_id(nupdate)
+      integer, intent(inout) :: slot_of(nslot)
+      integer :: kv, ldab, i, j, jj, jp, ju, km, nl, nu, base, loaded, c, first, last, live, swap, number
       kv = kl + ku
       ldab = 2*kl + ku + 1
       base = 0
@@ -422,6 +482,8 @@ contains
       call mark_columns(entry_start(1), entry_start(loaded + 1) - 1, entry_at, 0, size(place), place)
       nl = 0
       nu = 0
+      nup = 0
+      number = nentry
       ju = 1
       first = 1
       do
@@ -440,21 +502,27 @@ contains
                end do
             end if
             do jj = 1, ju - j
-               if (place(kv + 1 - jj, c + jj)) then
+               if (place(kv + 1 - jj, c + jj) /= 0) then
                   do i = 1, km
-                     place(kv + 1 + i - jj, c + jj) = place(kv + 1 + i - jj, c + jj) .or. place(kv + 1 + i, c)
+                     if (place(kv + 1 + i, c) == 0) cycle
+                     if (place(kv + 1 + i - jj, c + jj) == 0) then
+                        number = number + 1
+                        place(kv + 1 + i - jj, c + jj) = number
+                     end if
+                     nup = nup + 1
+                     if (nup <= nupdate) update_id(nup) = place(kv + 1 + i - jj, c + jj)
                   end do
                end if
             end do
          end do
          call list_columns(n, kl, ku, first, last, base, columns, place, nl, nlower, lower_start, lower_column, lower_row, &
-            & lower_at, nu, nupper, upper_start, upper_row, upper_at)
+            & lower_at, nu, nupper, upper_start, upper_row, upper_at, nslot, slot_of)
          if (last == n) exit
          ! Columns last + 1 to loaded to the window's front (their old places
          ! cleared), then the next columns' entries after them.
          live = loaded - last
          place(:, 1:live) = place(:, last + 1 - base:loaded - base)
-         place(:, max(live + 1, last + 1 - base):loaded - base) = .false.
+         place(:, max(live + 1, last + 1 - base):loaded - base) = 0
          base = last
          first = last + 1
          c = loaded
@@ -468,16 +536,18 @@ contains
    !> The places of columns first to last (at first - base to last - base
    !> of the window), their eliminations done, appended to the lists (nl
    !> and nu of them so far; counted on past the lists' ends, nlower and
-   !> nupper, but not written there), and cleared in the window (no other
-   !> place of the window is ever set: each is one of the matrix's rows).
+   !> nupper, but not written there), the slots of their values' numbers
+   !> noted in slot_of (U's diagonal at 1 to n, L's after, U's after n +
+   !> nlower), and cleared in the window (no other place of the window is
+   !> ever set: each is one of the matrix's rows).
    pure subroutine list_columns(n, kl, ku, first, last, base, columns, place, nl, nlower, lower_start, lower_column, &
-      & lower_row, lower_at, nu, nupper, upper_start, upper_row, upper_at)
-      integer, intent(in) :: n, kl, ku, first, last, base, columns, nlower, nupper
-      logical, intent(inout) :: place(2*kl + ku + 1, columns)
+      & lower_row, lower_at, nu, nupper, upper_start, upper_row, upper_at, nslot, slot_of)
+      integer, intent(in) :: n, kl, ku, first, last, base, columns, nlower, nupper, nslot
+      integer, intent(inout) :: place(2*kl + ku + 1, columns)
       integer, intent(inout) :: nl, nu
       integer, intent(inout) :: lower_start(n + 1), lower_column(nlower), lower_row(nlower), lower_at(nlower)
-      integer, intent(inout) :: upper_start(n + 1), upper_row(nupper), upper_at(nupper)
-      integer :: kv, ldab, i, j, c
+      integer, intent(inout) :: upper_start(n + 1), upper_row(nupper), upper_at(nupper), slot_of(nslot)
+      integer :: kv, ldab, i, j, c, number
       kv = kl + ku
       ldab = 2*kl + ku + 1
       do j = first, last
@@ -485,36 +555,43 @@ contains
          lower_start(j) = nl + 1
          upper_start(j) = nu + 1
          do i = max(1, j - kv), j - 1
-            if (place(kv + 1 + i - j, c)) then
-               place(kv + 1 + i - j, c) = .false.
+            number = place(kv + 1 + i - j, c)
+            if (number /= 0) then
+               place(kv + 1 + i - j, c) = 0
                nu = nu + 1
                if (nu > nupper) cycle
                upper_row(nu) = i
                upper_at(nu) = kv + 1 + i - j + (j - 1)*ldab
+               if (number <= nslot) slot_of(number) = n + nlower + nu
             end if
          end do
-         place(kv + 1, c) = .false.
+         number = place(kv + 1, c)
+         if (number /= 0 .and. number <= nslot) slot_of(number) = j
+         place(kv + 1, c) = 0
          do i = 1, min(kl, n - j)
-            if (place(kv + 1 + i, c)) then
-               place(kv + 1 + i, c) = .false.
+            number = place(kv + 1 + i, c)
+            if (number /= 0) then
+               place(kv + 1 + i, c) = 0
                nl = nl + 1
                if (nl > nlower) cycle
                lower_column(nl) = j
                lower_row(nl) = j + i
                lower_at(nl) = kv + 1 + i + (j - 1)*ldab
+               if (number <= nslot) slot_of(number) = n + nl
             end if
          end do
       end do
    end subroutine list_columns
 
-   !> place (the window taken as one array) true at the matrix's places
-   !> entry_at(first:last), less offset (the window's first column's place).
+   !> place (the window taken as one array) at the matrix's places
+   !> entry_at(first:last), less offset (the window's first column's
+   !> place), the entries' numbers.
    pure subroutine mark_columns(first, last, entry_at, offset, size_of, place)
       integer, intent(in) :: first, last, entry_at(:), offset, size_of
-      logical, intent(inout) :: place(size_of)
+      integer, intent(inout) :: place(size_of)
       integer :: k
       do k = first, last
-         place(entry_at(k) - offset) = .true.
+         place(entry_at(k) - offset) = k
       end do
    end subroutine mark_columns
 
@@ -526,8 +603,13 @@ contains
    pure subroutine nonzeros_solve(nz, b)
       type(band_lu_nonzeros_type), intent(in) :: nz
       real(dp), contiguous, intent(inout) :: b(:)
-      call solve_kernel(nz%n, nz%lower_start(nz%n + 1) - 1, nz%upper_start(nz%n + 1) - 1, nz%pivot, nz%lower_column, &
-         & nz%lower_row, nz%lower, nz%upper_start, nz%upper_row, nz%upper, nz%diagonal, b)
+      integer :: n, nl, nu, upper
+      n = nz%n
+      nl = nz%lower_start(n + 1) - 1
+      nu = nz%upper_start(n + 1) - 1
+      upper = upper_slots(nz)
+      call solve_kernel(n, nl, nu, nz%pivot, nz%lower_column, nz%lower_row, nz%values(n + 1:n + nl), nz%upper_start, &
+         & nz%upper_row, nz%values(upper + 1:upper + nu), nz%values(1:n), b)
    end subroutine nonzeros_solve
 
    !> nonzeros_solve on explicit-shape arrays.
@@ -570,8 +652,13 @@ contains
    pure subroutine nonzeros_solve_transposed(nz, b)
       type(band_lu_nonzeros_type), intent(in) :: nz
       real(dp), contiguous, intent(inout) :: b(:)
-      call solve_transposed_kernel(nz%n, nz%lower_start(nz%n + 1) - 1, nz%upper_start(nz%n + 1) - 1, nz%pivot, &
-         & nz%lower_start, nz%lower_row, nz%lower, nz%upper_start, nz%upper_row, nz%upper, nz%diagonal, b)
+      integer :: n, nl, nu, upper
+      n = nz%n
+      nl = nz%lower_start(n + 1) - 1
+      nu = nz%upper_start(n + 1) - 1
+      upper = upper_slots(nz)
+      call solve_transposed_kernel(n, nl, nu, nz%pivot, nz%lower_start, nz%lower_row, nz%values(n + 1:n + nl), &
+         & nz%upper_start, nz%upper_row, nz%values(upper + 1:upper + nu), nz%values(1:n), b)
    end subroutine nonzeros_solve_transposed
 
    !> nonzeros_solve_transposed on explicit-shape arrays.

@@ -8,7 +8,7 @@ module fekap_linalg_lapack
 
    public :: dpbtrf, dpbtrs, dgbtrf, dgbtf2, dgbtrs, dgetrf, dgetrs, dgeqp3, dlacn2
    public :: dense_lu_factor, dense_lu_solve, dense_pivoted_qr
-   public :: band_lu_factor, band_lu_solve, band_lu_blocked, band_lu_factor_loops, norm_estimate_step
+   public :: band_lu_factor, band_lu_solve, band_lu_blocked, band_lu_factor_loops, band_lu_given_pivots, norm_estimate_step
 
    interface
       !> Cholesky factorisation of a symmetric positive definite band matrix.
@@ -186,13 +186,38 @@ contains
       integer, contiguous, intent(inout) :: ipiv(:)
       integer, intent(out) :: info
       integer, intent(in), optional :: first
+      integer :: start
+      start = 1
+      if (present(first)) start = first
+      call band_loops(ab, kl, ku, ipiv, info, start, start - 1, size(ab, 2))
+   end subroutine band_lu_factor_loops
+
+   !> Columns 1 to last of ab (as band_lu_factor_loops takes it) eliminated
+   !> with the pivots ipiv(1:last) given (not idamax's choice): the loops'
+   !> operations with those pivots, so that band_lu_factor_loops can go on
+   !> from column last + 1 (fekap_linalg_band_lu's refactor_nonzeros, where
+   !> its last pivots stop serving). Each given pivot must be nonzero.
+   pure subroutine band_lu_given_pivots(ab, kl, ku, ipiv, last)
+      real(dp), contiguous, intent(inout) :: ab(:, :)
+      integer, intent(in) :: kl, ku, last
+      integer, contiguous, intent(inout) :: ipiv(:)
+      integer :: info
+      if (last < 1) return
+      call band_loops(ab, kl, ku, ipiv, info, 1, last, last)
+   end subroutine band_lu_given_pivots
+
+   !> dgbtf2's loops over columns start to last (columns 1 to start - 1
+   !> eliminated already), the pivots of columns up to given those of ipiv.
+   pure subroutine band_loops(ab, kl, ku, ipiv, info, start, given, last)
+      real(dp), contiguous, intent(inout) :: ab(:, :)
+      integer, intent(in) :: kl, ku, start, given, last
+      integer, contiguous, intent(inout) :: ipiv(:)
+      integer, intent(out) :: info
       real(dp) :: temp, largest, recip
-      integer :: n, kv, i, j, jj, jp, ju, km, start
+      integer :: n, kv, i, j, jj, jp, ju, km
       n = size(ab, 2)
       kv = ku + kl
       info = 0
-      start = 1
-      if (present(first)) start = first
       ju = 1
       do j = 1, start - 1
          ju = max(ju, min(ku + ipiv(j), n))
@@ -204,24 +229,28 @@ contains
             end do
          end do
       end if
-      do j = start, n
+      do j = start, last
          if (j + kv <= n) then
             do i = 1, kl
                ab(i, j + kv) = 0
             end do
          end if
          km = min(kl, n - j)
-         jp = 1
-         largest = abs(ab(kv + 1, j))
-         !GCC$ unroll 1
-         !GCC$ novector
-         do i = 2, km + 1
-            if (abs(ab(kv + i, j)) > largest) then
-               jp = i
-               largest = abs(ab(kv + i, j))
-            end if
-         end do
-         ipiv(j) = jp + j - 1
+         if (j <= given) then
+            jp = ipiv(j) - j + 1
+         else
+            jp = 1
+            largest = abs(ab(kv + 1, j))
+            !GCC$ unroll 1
+            !GCC$ novector
+            do i = 2, km + 1
+               if (abs(ab(kv + i, j)) > largest) then
+                  jp = i
+                  largest = abs(ab(kv + i, j))
+               end if
+            end do
+            ipiv(j) = jp + j - 1
+         end if
          if (ab(kv + jp, j) /= 0) then
             ju = max(ju, min(j + ku + jp - 1, n))
             if (jp /= 1) then
@@ -258,7 +287,7 @@ contains
             info = j
          end if
       end do
-   end subroutine band_lu_factor_loops
+   end subroutine band_loops
 
    !> dlacn2 (the 1-norm estimator of dgbcon, Hager and Higham) in loops, by
    !> the same reverse communication: call with kase = 0, then, while kase /=
