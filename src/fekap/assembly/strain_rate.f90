@@ -42,7 +42,7 @@ module fekap_assembly_strain_rate
 
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
    public :: strain_rates, strain_accelerations, strain_rate_rcond, strain_rate_rcond_bounds, rate_geometry_at
-   public :: strain_forces, strain_rows
+   public :: strain_forces, strain_rows, carry_geometry
 
    !> The bounds from the last estimate hold while x = ||B_0^-1|| ||B_f - B_0||
    !> is below this (within ((1 + x)/(1 - x))**2 < 2.8 of each other).
@@ -111,6 +111,10 @@ module fekap_assembly_strain_rate
       real(dp), allocatable :: column_max(:)
       !> Whether ab holds a factor.
       logical :: factored = .false.
+      !> Whether the factor is of B_f at another configuration than the
+      !> geometry and B_d held (carry_geometry moved them on since the last
+      !> assembly): its condition bounds are then not known.
+      logical :: carried = .false.
       !> Pivot ratio of the factor on the scale of the tangent's
       !> (band_pivot_ratio): min over j of (|U(j, j)| / max_i |B(i, j)|)**2.
       !> K = B^T W B has the squares of B's pivots (exactly so for the R of
@@ -341,6 +345,7 @@ contains
       integer :: e, i, k
       call clear_assembled(self, mesh)
       self%factored = .false.
+      self%carried = .false.
       if (present(largest)) largest = 0
       if (present(element)) element = 0
       do e = 1, size(mesh%elements)
@@ -411,6 +416,80 @@ contains
          call slide_geometry(self, mesh, i, seg(i), q, xs, x1)
       end do
    end subroutine rate_geometry_at
+
+   !> The strains and gaps at q (into strain, by B's rows, as
+   !> assemble_strain_rate's), B's geometry there (rate_geometry_at's) and
+   !> the stress-free B_d there, leaving the factor as it is: a factor made
+   !> at a Newton iterate one correction from q then solves at q, its
+   !> residuals (strain_rates, strain_accelerations) and B_d q's (carried).
+   !> Slidelines on the segments seg, which must be the factor's. `section`
+   !> as assemble_strain_rate's, so that the geometry is its to the bit.
+   subroutine carry_geometry(self, mesh, q, seg, strain, section)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(in) :: q(:)
+      integer, intent(in) :: seg(:)
+      real(dp), contiguous, intent(out) :: strain(:)
+      real(dp), contiguous, intent(in), optional :: section(:, :, :)
+      real(dp) :: xe(6), rl, phi, c, s, a1, a2, values(element_entries), xs(2), x1(2)
+      integer :: e, i, k, nb
+      do e = 1, size(mesh%elements)
+         associate (el => mesh%elements(e), dofs => mesh%edof(:, e), rows => self%element_row(:, e))
+            do k = 1, 6
+               xe(k) = q(dofs(k))
+            end do
+            rl = 1/el%length
+            phi = el%angle + (xe(3) + xe(6))/2
+            call section_of(phi, e, c, s, section)
+            self%section(1, e) = c
+            self%section(2, e) = s
+            a1 = (xe(4) - xe(1))*rl
+            a2 = (xe(5) - xe(2))*rl
+            ! (27), as assemble_strain_rate.
+            strain(rows(1)) = c*a1 + s*a2 - 1
+            strain(rows(2)) = -s*a1 + c*a2
+            strain(rows(3)) = xe(6) - xe(3)
+            nb = self%element_count(1, e)
+            if (self%element_count(2, e) == 0) cycle
+            ! The element's driven columns, stress-free (assemble_strain_rate's values with Gamma = 0).
+            values = [-c*rl, -s*rl, 0.0_dp, c*rl, s*rl, 0.0_dp, &
+               & s*rl, -c*rl, -0.5_dp, -s*rl, c*rl, -0.5_dp, -1.0_dp, 1.0_dp]
+            call driven_entries(self%element_map(:, :, e), nb, self%element_count(2, e), values, size(self%bd), &
+               & self%bd)
+         end associate
+      end do
+      do i = 1, size(mesh%slides)
+         call slide_geometry(self, mesh, i, seg(i), q, xs, x1)
+         strain(self%slide_row(i)) = dot_product(xs - x1, self%slide_nm(1:2, i))
+         ! The gap's driven columns (scatter_row's, B_d's part only).
+         associate (row => self%slide_row(i), dofs => self%slide_dofs(:, i))
+            self%bd(row, :) = 0
+            do k = 1, size(dofs)
+               if (dofs(k) == 0) cycle
+               if (mesh%eq(dofs(k)) > 0) cycle
+               if (mesh%drive_col(dofs(k)) > 0) then
+                  self%bd(row, mesh%drive_col(dofs(k))) = self%bd(row, mesh%drive_col(dofs(k))) + self%slide_ns(k, i)
+               end if
+            end do
+         end associate
+      end do
+      self%carried = .true.
+   end subroutine carry_geometry
+
+   !> An element's entries on the driven dofs into bd (taken as one array),
+   !> replacing what was there: map, nb and nd as scatter_entries'.
+   pure subroutine driven_entries(map, nb, nd, values, nbd, bd)
+      integer, intent(in) :: map(2, element_entries), nb, nd, nbd
+      real(dp), intent(in) :: values(element_entries)
+      real(dp), intent(inout) :: bd(nbd)
+      integer :: m
+      do m = nb + 1, nb + nd
+         bd(map(2, m)) = 0
+      end do
+      do m = nb + 1, nb + nd
+         bd(map(2, m)) = bd(map(2, m)) + values(map(1, m))
+      end do
+   end subroutine driven_entries
 
    !> cos(phi) and sin(phi) of element e's section angle phi: those of
    !> `section` (section_values, max_gauss, nelem; the beams' assembly at
@@ -720,7 +799,7 @@ contains
       real(dp) :: reach, distance, limit
       low = 0
       high = huge(1.0_dp)
-      if (.not. self%factored .or. .not. self%inverse_norm > 0 .or. .not. self%norm1 > 0) return
+      if (.not. self%factored .or. self%carried .or. .not. self%inverse_norm > 0 .or. .not. self%norm1 > 0) return
       limit = bound_reach/self%inverse_norm
       distance = 0
       if (.not. self%estimate_current) then

@@ -5,6 +5,9 @@
 !> the factor it made at the accepted configuration (mark), anything that
 !> overwrites the factor invalidates it, a new step resets both; the rates,
 !> the free-motion probe and kinetostatics ask (is_current, is_singular).
+!> A factor carried to the accepted configuration from Newton's last
+!> iterate (fekap_fem_factor's carry_factor) comes with the drive response
+!> made there, which the branch check takes once (take_carried).
 module fekap_fem_factor_record
    implicit none
    private
@@ -13,7 +16,7 @@ module fekap_fem_factor_record
 
    type :: factor_record_type
       private
-      logical :: current = .false., singular = .false.
+      logical :: current = .false., singular = .false., carried = .false.
    contains
       !> Whether the system holds the factor of the tangent at the accepted configuration.
       procedure :: is_current => record_is_current
@@ -27,6 +30,11 @@ module fekap_fem_factor_record
       procedure :: invalidate => record_invalidate
       !> A new configuration is being solved: nothing is known about its factor.
       procedure :: reset => record_reset
+      !> The factor held was carried to the accepted configuration, with its
+      !> drive response (made by carry_factor).
+      procedure :: carry => record_carry
+      !> Whether a carried factor's drive response is waiting; it is taken once.
+      procedure :: take_carried => record_take_carried
    end type factor_record_type
 
 contains
@@ -51,12 +59,26 @@ contains
    pure subroutine record_invalidate(self)
       class(factor_record_type), intent(inout) :: self
       self%current = .false.
+      self%carried = .false.
    end subroutine record_invalidate
 
    pure subroutine record_reset(self)
       class(factor_record_type), intent(inout) :: self
       self%current = .false.
       self%singular = .false.
+      self%carried = .false.
    end subroutine record_reset
+
+   pure subroutine record_carry(self)
+      class(factor_record_type), intent(inout) :: self
+      self%carried = .true.
+   end subroutine record_carry
+
+   pure subroutine record_take_carried(self, carried)
+      class(factor_record_type), intent(inout) :: self
+      logical, intent(out) :: carried
+      carried = self%carried
+      self%carried = .false.
+   end subroutine record_take_carried
 
 end module fekap_fem_factor_record

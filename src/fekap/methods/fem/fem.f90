@@ -36,7 +36,8 @@ module fekap_fem
       & try_ended
    use fekap_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
       & prepend_cuts_note, model_distance, no_convergence_error
-   use fekap_fem_factor, only: refactor_at_accepted, root_correction, factor_root, take_correction, restore_state
+   use fekap_fem_factor, only: refactor_at_accepted, root_correction, factor_root, take_correction, restore_state, &
+      & carry_factor
    use fekap_fem_predict, only: predict, drive_increment_residual, record_velocity
    use fekap_fem_converged, only: branch_jump, solve_rates, check_mechanism, start_response
    use fekap_fem_fill, only: interpolate_fill, finish_fill, filled_state, next_output_time
@@ -425,8 +426,16 @@ contains
                ! exact gradient), whose correction is the one applied: near a
                ! singular B_f the two corrections can fall on either side of
                ! the margin.
+               ! First Newton's own factor, where it serves at qt (carry_factor).
                root_solved = .false.
                if (newton%by_estimate) then
+                  if (newton%root_solved) then
+                     call carry_factor(self, qt, root_solved)
+                     if (root_solved) then
+                        info = 0
+                        exit verification
+                     end if
+                  end if
                   call root_correction(self, qt, .true., correction, root_solved, system%section)
                   if (root_solved .and. correction <= estimate_margin*self%conv%length .and. &
                      & self%root%pivot_ratio >= near_singular_drop*self%state%reference_pivot) then
@@ -436,6 +445,13 @@ contains
                   call root_correction(self, qt, .true., correction, root_solved)
                end if
                if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
+                  if (.not. newton%by_estimate .and. newton%root_solved) then ! converged by the contract
+                     call carry_factor(self, qt, root_solved)
+                     if (root_solved) then
+                        info = 0
+                        exit verification
+                     end if
+                  end if
                   call factor_root(self, qt, self%seg, info, system%section)
                   exit verification
                end if

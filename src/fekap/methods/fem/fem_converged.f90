@@ -137,10 +137,13 @@ contains
                call strain_rate_rcond_bounds(self%root, low, high)
                refine = .not. low >= plain_rates_rcond
             end if
-            if (.not. refine .and. history%has_velocity(history%newest)) then
+            if ((.not. refine .or. self%root%carried) .and. history%has_velocity(history%newest)) then
                ! Unrefined, (47) is R v_d with the drive response R of this
                ! factor, the plain solve of the same system: record_velocity
                ! made it already, for the predictor (as in the K form below).
+               ! A factor carried to the configuration (fekap_fem_factor's
+               ! carry_factor) refined R there once, as root_velocities would
+               ! v: R v_d is then the refined velocities.
                state%v(:) = history%velocity(:, history%newest)
             else
                call root_velocities(self%root, self%mesh, self%law_rate, state%v, self%root_work, refine)

@@ -10,15 +10,24 @@ module fekap_fem_factor
    use fekap_kinds, only: dp
    use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, factor_system, system_pivot, &
       & newton_correction, apply_correction, drive_response, system_rcond, phase_start, phase_end
-   use fekap_fem_rates, only: root_drive_response
+   use fekap_fem_rates, only: root_drive_response, near_singular_drop, plain_rates_rcond
+   use fekap_fem_convergence, only: estimate_margin
+   use fekap_model, only: predictor_taylor
    use fekap_assembly_strain_rate, only: assemble_strain_rate, factor_strain_rate, solve_strain_rate, &
-      & strain_rate_rcond
+      & strain_rate_rcond, carry_geometry, strain_rates, strain_rate_rcond_bounds
    use fekap_fem_state, only: fem_state_type, fem_core_type
    implicit none
    private
 
    public :: refactor_at_accepted, newton_assembly, root_correction, factor_root, accepted_pivot
-   public :: accepted_rcond, accepted_response, fill_tangent, take_correction, restore_state
+   public :: accepted_rcond, accepted_response, fill_tangent, take_correction, restore_state, carry_factor
+
+   !> The largest contraction (the drive response's refinement correction
+   !> against the response, see carry_factor) at which a factor made one
+   !> Newton correction away serves the accepted configuration: the rates'
+   !> one refinement (fekap_fem_rates' root_passes) then leaves an error of
+   !> its square, 1e-16 of the rates, below their round-off.
+   real(dp), parameter :: carry_contraction = 1.0e-8_dp
 
 contains
 
@@ -76,25 +85,33 @@ contains
    !> (assemble only): B_f stress-free instead, with the sections of the
    !> system's last assembly at qt, so that its factor is factor_root's at
    !> qt to the bit (the rates' factor) and eps is still the residual.
-   subroutine root_correction(self, qt, assemble, correction, solved, section)
+   subroutine root_correction(self, qt, assemble, correction, solved, section, carry)
       class(fem_core_type), intent(inout) :: self
       real(dp), contiguous, intent(in) :: qt(:)
       logical, intent(in) :: assemble
       real(dp), intent(out) :: correction
       logical, intent(out) :: solved
       real(dp), contiguous, intent(in), optional :: section(:, :, :)
+      !> With the factor B_f holds, carried to qt (carry_geometry; carry_factor).
+      logical, intent(in), optional :: carry
       integer :: info, k
       correction = 0
-      if (assemble) then
-         if (present(section)) then
-            call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .true., self%root_work, section=section)
-         else
-            call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
+      solved = .false.
+      if (present(carry)) then
+         if (.not. self%root%factored) return
+         call carry_geometry(self%root, self%mesh, qt, self%seg, self%root_work, section)
+      else
+         if (assemble) then
+            if (present(section)) then
+               call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .true., self%root_work, section=section)
+            else
+               call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
+            end if
          end if
+         call timed_root_factor(self, info)
+         if (info /= 0) return
       end if
-      call timed_root_factor(self, info)
-      solved = info == 0
-      if (.not. solved) return
+      solved = .true.
       call negate(self%mesh%nfree, self%root_work)
       call solve_strain_rate(self%root, self%root_work)
       ! The correction into rhs and its length in one pass (B_f square: nfree rows).
@@ -105,6 +122,81 @@ contains
          end do
       end associate
    end subroutine root_correction
+
+   !> Whether the factor of Newton's last B_f (at the iterate one correction
+   !> before qt, with its strains) serves at qt, where Newton stopped on its
+   !> estimate, in place of the stress-free B_f factored at qt (the second
+   !> factorisation of such a step). The estimate is checked with it as
+   !> solve_step checks it with qt's own factor: the correction for the
+   !> strains at qt within estimate_margin of the length tolerance, the pivot
+   !> ratio not near singular against the run's best. Then the drive
+   !> response at qt (the branch check's, fekap_fem_converged's branch_jump,
+   !> and the predictor's velocity) is solved with it and refined once with
+   !> its residual at qt (the strain rates of the response, B's geometry and
+   !> B_d moved to qt: carry_geometry); the refinement's correction against
+   !> the response is the factor's contraction rho = ||I - B_f^-1 B(qt)||
+   !> along it. The factor serves if rho <= carry_contraction: each solve of
+   !> the rates with their one refinement then leaves rho**2 of the rates.
+   !> At the lift of N = 1,000 (dt 0.01) rho is 3e-11 to 5e-9 a step, a Newton
+   !> correction of 1e-7 against kappa_1(B_f) up to 1e7: the change of B_f
+   !> over a correction is not a worst case for its inverse. The response
+   !> stays in jump_response_new for the branch check (accepted_response);
+   !> the factor is marked carried (no condition bounds: B_f is not the
+   !> last estimate's, and the rates refine). Otherwise nothing is kept: the
+   !> caller factors qt's B_f as before. The slidelines' segments are the
+   !> factor's (Newton's last pass was on them).
+   subroutine carry_factor(self, qt, carried)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(in) :: qt(:)
+      logical, intent(out) :: carried
+      real(dp) :: correction, rho, low, high
+      logical :: solved
+      carried = .false.
+      ! Not under the Taylor predictor, whose positions come from the rates
+      ! (a change of their round-off is amplified near a change point; as
+      ! solve_rates' refinement there), nor loaded (the full tangent's factor).
+      if (self%loaded .or. self%model%analysis%predictor == predictor_taylor) return
+      ! Nor where the rates take the plain solve (B_f's bounds from the last
+      ! estimate show it well conditioned: plain_rates_rcond), which needs
+      ! the factor at qt itself; a carried factor's rates are refined.
+      call strain_rate_rcond_bounds(self%root, low, high)
+      if (low >= plain_rates_rcond) return
+      if (self%root%pivot_ratio < near_singular_drop*self%state%reference_pivot) return
+      call root_correction(self, qt, .false., correction, solved, self%system%section, carry=.true.)
+      if (.not. solved .or. correction > estimate_margin*self%conv%length) return
+      call refined_response(self, self%jump_response_new, rho)
+      if (rho > carry_contraction) return
+      carried = .true.
+      call self%factor%carry()
+   end subroutine carry_factor
+
+   !> The drive response with the factor B_f holds (root_drive_response),
+   !> refined once with its strain rates at B's geometry, and the largest
+   !> refinement correction against the response's largest entry (rho).
+   subroutine refined_response(self, resp, rho)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), contiguous, intent(inout) :: resp(:, :)
+      real(dp), intent(out) :: rho
+      real(dp) :: size_resp, change
+      integer :: j, k
+      call root_drive_response(self%root, self%mesh, resp, self%root_work)
+      rho = 0
+      associate (work => self%root_work, mesh => self%mesh)
+         do j = 1, mesh%ndriven
+            call strain_rates(self%root, mesh, resp(:, j), work)
+            call negate(mesh%nfree, work)
+            call solve_strain_rate(self%root, work)
+            size_resp = 0
+            change = 0
+            do k = 1, mesh%nfree
+               size_resp = max(size_resp, abs(resp(mesh%eq_dof(k), j)))
+               change = max(change, abs(work(k)))
+               resp(mesh%eq_dof(k), j) = resp(mesh%eq_dof(k), j) + work(k)
+            end do
+            rho = max(rho, change/max(size_resp, 1.0_dp))
+         end do
+      end associate
+   end subroutine refined_response
 
    !> x = -x on an array of explicit shape (a loop the compiler vectorises;
    !> the assignment on the allocatable component checked its allocation and
@@ -166,10 +258,17 @@ contains
 
    !> The drive response at the accepted configuration, whose factor the
    !> system (or root) holds: from B_f in the square-root form, else from K_ff.
+   !> A factor carried to it (carry_factor) made it already, refined, into
+   !> jump_response_new, which the branch check passes as resp.
    subroutine accepted_response(self, resp)
       class(fem_core_type), intent(inout) :: self
       real(dp), contiguous, intent(inout) :: resp(:, :)
+      logical :: carried
       if (self%root_form) then
+         if (self%root%carried) then
+            call self%factor%take_carried(carried)
+            if (carried) return
+         end if
          call root_drive_response(self%root, self%mesh, resp, self%root_work)
       else
          call drive_response(self%system, self%mesh, resp, self%counts)
