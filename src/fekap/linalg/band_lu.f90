@@ -273,27 +273,29 @@ contains
    end subroutine symbolic_factor
 
    !> The slots of the factor's places (U's diagonal, L's and U's listed)
-   !> that are no entry's: nz%fill_slot, as long as they are.
+   !> that are no entry's: nz%fill_slot, as long as they are. nz%values
+   !> marks them (1 at an entry's slot, and at the lists' slack and the
+   !> spare; 0 at the fill's): no array more at a large lift's symbolic
+   !> factorisation, and its values are gathered next (gather_nonzeros).
    pure subroutine list_fill(nz)
       type(band_lu_nonzeros_type), intent(inout) :: nz
-      logical, allocatable :: entry(:)
       integer :: upper, k, m
       upper = upper_slots(nz)
-      allocate (entry(size(nz%values)), source=.false.)
+      nz%values = 0
       do k = 1, size(nz%entry_slot)
-         entry(nz%entry_slot(k)) = .true.
+         nz%values(nz%entry_slot(k)) = 1
       end do
       ! The places' slots only (not the lists' slack, nor the spare).
-      entry(nz%n + nz%lower_start(nz%n + 1):upper) = .true.
-      entry(upper + nz%upper_start(nz%n + 1):) = .true.
-      m = count(.not. entry)
+      nz%values(nz%n + nz%lower_start(nz%n + 1):upper) = 1
+      nz%values(upper + nz%upper_start(nz%n + 1):) = 1
+      m = count(nz%values == 0)
       if (allocated(nz%fill_slot)) then
          if (size(nz%fill_slot) /= m) deallocate (nz%fill_slot)
       end if
       if (.not. allocated(nz%fill_slot)) allocate (nz%fill_slot(m))
       m = 0
-      do k = 1, size(entry)
-         if (entry(k)) cycle
+      do k = 1, size(nz%values)
+         if (nz%values(k) /= 0) cycle
          m = m + 1
          nz%fill_slot(m) = k
       end do
@@ -307,9 +309,12 @@ contains
       type(band_lu_nonzeros_type), intent(inout) :: nz
       integer, contiguous, intent(in) :: ipiv(:)
       integer, allocatable, intent(out) :: slot_of(:)
-      ! The entries' numbers, and at most one more for each place of the
-      ! factor, as long as the lists hold them.
-      allocate (slot_of(size(nz%entry_at) + nz%n + size(nz%lower_at) + size(nz%upper_at)), source=0)
+      ! A number for each place of the factor, as long as the lists hold
+      ! them, and for each entry outside the matrix (possible's corners,
+      ! ku (ku + 1)/2 and kl (kl + 1)/2 places at most): the entries' own
+      ! are places of the factor, the fill's too.
+      allocate (slot_of(nz%n + size(nz%lower_at) + size(nz%upper_at) + (nz%ku*(nz%ku + 1) + nz%kl*(nz%kl + 1))/2), &
+         & source=0)
       call symbolic_kernel(nz%n, nz%kl, nz%ku, size(nz%window, 2), ipiv, nz%entry_start, size(nz%entry_at), nz%entry_at, &
          & nz%window, size(nz%lower_at), nz%lower_start, nz%lower_column, nz%lower_row, nz%lower_at, size(nz%upper_at), &
          & nz%upper_start, nz%upper_row, nz%upper_at, size(nz%update_target), nz%updates, nz%update_target, &
