@@ -608,10 +608,14 @@ contains
    !> row order (the rest of the column is zero: the whole column's maxval
    !> and sum to the bit); with b, B_0 at the same places, also ||ab -
    !> B_0||_1 the same way (B_0 zero elsewhere too) and ab's values at the
-   !> places into `kept` (b, distance and kept come together).
-   pure subroutine column_sizes(n, place_start, place, nab, ab, column_max, norm1, b, distance, kept)
-      integer, intent(in) :: n, place_start(n + 1), place(place_start(n + 1) - 1), nab
+   !> places into `kept` (b, distance and kept come together). Each value
+   !> also goes to values(slot(k)): the factor's slot of the place
+   !> (fekap_linalg_band_lu's entry_slot, for refactor_nonzeros).
+   pure subroutine column_sizes(n, place_start, place, nab, ab, slot, nvalues, values, column_max, norm1, b, distance, kept)
+      integer, intent(in) :: n, place_start(n + 1), place(place_start(n + 1) - 1), nab, slot(place_start(n + 1) - 1)
+      integer, intent(in) :: nvalues
       real(dp), intent(in) :: ab(nab)
+      real(dp), intent(inout) :: values(nvalues)
       real(dp), intent(out) :: column_max(n), norm1
       real(dp), intent(in), optional :: b(place_start(n + 1) - 1)
       real(dp), intent(out), optional :: distance
@@ -628,6 +632,7 @@ contains
             do k = place_start(j), place_start(j + 1) - 1
                value = ab(place(k))
                kept(k) = value
+               values(slot(k)) = value
                a = abs(value)
                if (a > largest) largest = a
                total = total + a
@@ -636,7 +641,9 @@ contains
             if (column > distance) distance = column
          else
             do k = place_start(j), place_start(j + 1) - 1
-               a = abs(ab(place(k)))
+               value = ab(place(k))
+               values(slot(k)) = value
+               a = abs(value)
                if (a > largest) largest = a
                total = total + a
             end do
@@ -700,39 +707,44 @@ contains
    subroutine factor_strain_rate(self, info)
       type(strain_rate_type), intent(inout) :: self
       integer, intent(out) :: info
+      real(dp) :: ratio
       integer :: j, stopped
       ! The matrix kept for strain_rate_rcond_bounds and the next estimate
       ! (rows 1 to kl are the factor's fill, zero here, as is the rest of
       ! the storage outside the band).
       self%estimate_current = .false.
       self%unfactored_kept = allocated(self%unfactored)
-      if (self%unfactored_kept) then
-         call column_sizes(self%n, self%nonzeros%entry_start, self%nonzeros%entry_at, size(self%ab), self%ab, &
-            & self%column_max, self%norm1, self%estimated, self%distance, self%unfactored)
-      else
-         call column_sizes(self%n, self%nonzeros%entry_start, self%nonzeros%entry_at, size(self%ab), self%ab, &
-            & self%column_max, self%norm1)
-      end if
+      ! The same pass puts B_f's entries at their slots in the factor
+      ! (refactor_nonzeros' first step, `loaded`).
+      associate (nz => self%nonzeros)
+         if (self%unfactored_kept) then
+            call column_sizes(self%n, nz%entry_start, nz%entry_at, size(self%ab), self%ab, nz%entry_slot, size(nz%values), &
+               & nz%values, self%column_max, self%norm1, self%estimated, self%distance, self%unfactored)
+         else
+            call column_sizes(self%n, nz%entry_start, nz%entry_at, size(self%ab), self%ab, nz%entry_slot, size(nz%values), &
+               & nz%values, self%column_max, self%norm1)
+         end if
+      end associate
       info = 0
       stopped = 1
       if (self%lu_blocked) then
          call band_lu_factor(self%ab, self%kl, self%ku, self%ipiv, info)
       else
-         call refactor_nonzeros(self%nonzeros, self%ab, self%ipiv, keep_pivot, stopped)
+         call refactor_nonzeros(self%nonzeros, self%ab, self%ipiv, keep_pivot, stopped, loaded=.true.)
          if (stopped > 0) call band_lu_factor_loops(self%ab, self%kl, self%ku, self%ipiv, info, stopped)
       end if
       self%factored = info == 0
       self%pivot_ratio = 0
       if (.not. self%factored) return
       if (stopped > 0) call gather_nonzeros(self%nonzeros, self%ab, self%ipiv)
-      self%pivot_ratio = huge(1.0_dp)
+      ! The least ratio, then its square: the least of the squares to the
+      ! bit (a rounded square does not decrease as its argument grows).
+      ratio = huge(1.0_dp)
       do j = 1, self%n
-         if (.not. self%column_max(j) > 0) then
-            self%pivot_ratio = 0
-            return
-         end if
-         self%pivot_ratio = min(self%pivot_ratio, (abs(self%nonzeros%values(j))/self%column_max(j))**2)
+         if (.not. self%column_max(j) > 0) return
+         ratio = min(ratio, abs(self%nonzeros%values(j))/self%column_max(j))
       end do
+      self%pivot_ratio = min(huge(1.0_dp), ratio**2)
    end subroutine factor_strain_rate
 
    !> The condition estimate of the factor of B_f (1-norm, Higham's estimator

@@ -71,8 +71,10 @@ module fekap_linalg_band_lu
       integer, allocatable :: entry_start(:), entry_at(:)
       !> Whether the lists below hold the places for `pivot`.
       logical :: known = .false.
-      !> (n): the pivots (dgbtrf's ipiv) of the places below.
-      integer, allocatable :: pivot(:)
+      !> (n): the pivots (dgbtrf's ipiv) of the places below; the columns
+      !> j whose pivot is not row j, in increasing order (the solves' row
+      !> interchanges).
+      integer, allocatable :: pivot(:), interchange(:)
       !> L's multipliers, column after column (column j's at lower_start(j)
       !> to lower_start(j + 1) - 1, in increasing row order): its place in
       !> the band storage taken as one array, its column (the row of b it
@@ -98,6 +100,9 @@ module fekap_linalg_band_lu
       !> (column j's: for each of row j's entries of U in increasing column,
       !> one for each of column j's multipliers in increasing row).
       integer, allocatable :: entry_slot(:), update_target(:)
+      !> The factor's slots that no entry of the matrix starts (its fill):
+      !> zero before refactor_nonzeros's updates add into them.
+      integer, allocatable :: fill_slot(:)
       !> How many of update_target's slots the last symbolic factorisation listed.
       integer :: updates = 0
       !> (2 kl + ku + 1, columns): the symbolic factorisation's window of
@@ -138,6 +143,8 @@ contains
       allocate (nz%pivot(n), nz%lower_start(n + 1), nz%upper_start(n + 1), nz%entry_slot(k))
       ! The factor's lists are sized by the first symbolic factorisation (reserve_lists).
       call reserve_lists(nz, 0, 0, 0)
+      ! The spare slot (see values) until the first symbolic factorisation.
+      nz%entry_slot = size(nz%values)
       allocate (nz%row_start(n + 1))
       allocate (nz%window(size(possible, 1), min(n, window_columns*(kl + ku + 1))), source=0)
    end subroutine new_band_lu_nonzeros
@@ -225,6 +232,7 @@ contains
       integer :: n, i, j, k, moved
       n = nz%n
       nz%pivot = ipiv
+      nz%interchange = pack([(j, j=1, n)], ipiv(1:n) /= [(j, j=1, n)])
       call list_places(nz, ipiv, slot_of)
       ! Lists too short for these pivots' places: made long enough, and the places listed again.
       if (nz%lower_start(n + 1) - 1 > size(nz%lower_at) .or. nz%upper_start(n + 1) - 1 > size(nz%upper_at) &
@@ -242,6 +250,7 @@ contains
          nz%update_target(k) = slot_of(nz%update_target(k))
       end do
       deallocate (slot_of)
+      call list_fill(nz)
       ! The rows in the order after every interchange, from the last column back.
       final = [(i, i=1, n)]
       do j = n - 1, 1, -1
@@ -263,6 +272,35 @@ contains
       call list_rows(n, nz%upper_start, nz%upper_row, upper_slots(nz), nz%row_start, nz%row_slot)
    end subroutine symbolic_factor
 
+   !> The slots of the factor's places (U's diagonal, L's and U's listed)
+   !> that are no entry's: nz%fill_slot, as long as they are. nz%values
+   !> marks them (1 at an entry's slot, and at the lists' slack and the
+   !> spare; 0 at the fill's): no array more at a large lift's symbolic
+   !> factorisation, and its values are gathered next (gather_nonzeros).
+   pure subroutine list_fill(nz)
+      type(band_lu_nonzeros_type), intent(inout) :: nz
+      integer :: upper, k, m
+      upper = upper_slots(nz)
+      nz%values = 0
+      do k = 1, size(nz%entry_slot)
+         nz%values(nz%entry_slot(k)) = 1
+      end do
+      ! The places' slots only (not the lists' slack, nor the spare).
+      nz%values(nz%n + nz%lower_start(nz%n + 1):upper) = 1
+      nz%values(upper + nz%upper_start(nz%n + 1):) = 1
+      m = count(nz%values == 0)
+      if (allocated(nz%fill_slot)) then
+         if (size(nz%fill_slot) /= m) deallocate (nz%fill_slot)
+      end if
+      if (.not. allocated(nz%fill_slot)) allocate (nz%fill_slot(m))
+      m = 0
+      do k = 1, size(nz%values)
+         if (nz%values(k) /= 0) cycle
+         m = m + 1
+         nz%fill_slot(m) = k
+      end do
+   end subroutine list_fill
+
    !> symbolic_kernel on the record's arrays: its lists, as far as they
    !> reach, the starts of the places found however many they are, the
    !> number of updates (their values' numbers in update_target, as far as
@@ -271,9 +309,12 @@ contains
       type(band_lu_nonzeros_type), intent(inout) :: nz
       integer, contiguous, intent(in) :: ipiv(:)
       integer, allocatable, intent(out) :: slot_of(:)
-      ! The entries' numbers, and at most one more for each place of the
-      ! factor, as long as the lists hold them.
-      allocate (slot_of(size(nz%entry_at) + nz%n + size(nz%lower_at) + size(nz%upper_at)), source=0)
+      ! A number for each place of the factor, as long as the lists hold
+      ! them, and for each entry outside the matrix (possible's corners,
+      ! ku (ku + 1)/2 and kl (kl + 1)/2 places at most): the entries' own
+      ! are places of the factor, the fill's too.
+      allocate (slot_of(nz%n + size(nz%lower_at) + size(nz%upper_at) + (nz%ku*(nz%ku + 1) + nz%kl*(nz%kl + 1))/2), &
+         & source=0)
       call symbolic_kernel(nz%n, nz%kl, nz%ku, size(nz%window, 2), ipiv, nz%entry_start, size(nz%entry_at), nz%entry_at, &
          & nz%window, size(nz%lower_at), nz%lower_start, nz%lower_column, nz%lower_row, nz%lower_at, size(nz%upper_at), &
          & nz%upper_start, nz%upper_row, nz%upper_at, size(nz%update_target), nz%updates, nz%update_target, &
@@ -349,16 +390,26 @@ contains
    !> (band_lu_factor_loops' first), then gather_nonzeros. Every place of
    !> ab outside the matrix's and the fill rows 1 to kl must be zero, as
    !> for those loops.
-   pure subroutine refactor_nonzeros(nz, ab, ipiv, keep, stopped)
+   pure subroutine refactor_nonzeros(nz, ab, ipiv, keep, stopped, loaded)
       type(band_lu_nonzeros_type), intent(inout) :: nz
       real(dp), contiguous, intent(inout) :: ab(:, :)
       integer, contiguous, intent(inout) :: ipiv(:)
       real(dp), intent(in) :: keep
       integer, intent(out) :: stopped
+      !> Whether the caller has put ab's entries at their slots already
+      !> (nz%values(nz%entry_slot(k)) = ab's place nz%entry_at(k), for
+      !> every k; the spare slot before the first symbolic factorisation).
+      logical, intent(in), optional :: loaded
+      integer :: nentry
       stopped = 1
       if (.not. nz%known) return
-      call refactor_kernel(nz%n, nz%kl + nz%ku, size(ab, 1), size(ab), ab, size(nz%entry_at), nz%entry_at, nz%entry_slot, &
-         & nz%pivot, keep, nz%lower_start, size(nz%lower_at), nz%lower_at, nz%row_start, size(nz%row_slot), nz%row_slot, &
+      nentry = size(nz%entry_at)
+      if (present(loaded)) then
+         if (loaded) nentry = 0
+      end if
+      call refactor_kernel(nz%n, nz%kl + nz%ku, size(ab, 1), size(ab), ab, nentry, size(nz%entry_at), nz%entry_at, &
+         & nz%entry_slot, size(nz%fill_slot), nz%fill_slot, nz%pivot, keep, nz%lower_start, size(nz%lower_at), nz%lower_at, &
+         & nz%row_start, size(nz%row_slot), nz%row_slot, &
          & size(nz%update_target), nz%update_target, size(nz%values), nz%values, stopped)
       if (stopped == 0) then
          ipiv(1:nz%n) = nz%pivot
@@ -371,7 +422,8 @@ contains
    end subroutine refactor_nonzeros
 
    !> refactor_nonzeros's elimination on explicit-shape arrays, in the
-   !> factor's slots: values zero but for the matrix's entries (no row
+   !> factor's slots: the matrix's entries (nentry of them: 0 when the
+   !> caller has put them there), the fill zero (no row
    !> interchange is made: each value is at its slot from the start, where
    !> the interchanges would have taken it), then for each column j the
    !> pivot's check (the column's values before its interchange are its
@@ -382,9 +434,10 @@ contains
    !> times it taken from the slots of update_target in turn. A place that
    !> cannot be nonzero gets no product: b - t*0 is b to the bit (module
    !> header).
-   pure subroutine refactor_kernel(n, kv, ldab, nab, ab, nentry, entry_at, entry_slot, pivot, keep, lower_start, nlower, &
-      & lower_at, row_start, nrow, row_slot, nupdate, update_target, nvalues, values, stopped)
-      integer, intent(in) :: n, kv, ldab, nab, nentry, entry_at(nentry), entry_slot(nentry), pivot(n)
+   pure subroutine refactor_kernel(n, kv, ldab, nab, ab, nentry, mentry, entry_at, entry_slot, nfill, fill_slot, pivot, keep, &
+      & lower_start, nlower, lower_at, row_start, nrow, row_slot, nupdate, update_target, nvalues, values, stopped)
+      integer, intent(in) :: n, kv, ldab, nab, nentry, mentry, entry_at(mentry), entry_slot(mentry), nfill, fill_slot(nfill)
+      integer, intent(in) :: pivot(n)
       integer, intent(in) :: lower_start(n + 1), nlower, lower_at(nlower), row_start(n + 1), nrow, row_slot(nrow)
       integer, intent(in) :: nupdate, update_target(nupdate), nvalues
       real(dp), intent(in) :: ab(nab), keep
@@ -392,7 +445,11 @@ contains
       integer, intent(out) :: stopped
       real(dp) :: largest, temp, recip, diagonal
       integer :: j, k, m, t, first, last, row
-      values = 0
+      !GCC$ unroll 1
+      !GCC$ novector
+      do k = 1, nfill
+         values(fill_slot(k)) = 0
+      end do
       !GCC$ unroll 1
       !GCC$ novector
       do k = 1, nentry
@@ -608,25 +665,26 @@ contains
       nl = nz%lower_start(n + 1) - 1
       nu = nz%upper_start(n + 1) - 1
       upper = upper_slots(nz)
-      call solve_kernel(n, nl, nu, nz%pivot, nz%lower_column, nz%lower_row, nz%values(n + 1:n + nl), nz%upper_start, &
-         & nz%upper_row, nz%values(upper + 1:upper + nu), nz%values(1:n), b)
+      call solve_kernel(n, nl, nu, nz%pivot, size(nz%interchange), nz%interchange, nz%lower_column, nz%lower_row, &
+         & nz%values(n + 1:n + nl), nz%upper_start, nz%upper_row, nz%values(upper + 1:upper + nu), nz%values(1:n), b)
    end subroutine nonzeros_solve
 
    !> nonzeros_solve on explicit-shape arrays.
-   pure subroutine solve_kernel(n, nl, nu, pivot, lower_column, lower_row, lower, upper_start, upper_row, upper, &
-      & diagonal, b)
-      integer, intent(in) :: n, nl, nu, pivot(n), lower_column(nl), lower_row(nl), upper_start(n + 1), upper_row(nu)
+   pure subroutine solve_kernel(n, nl, nu, pivot, ni, interchange, lower_column, lower_row, lower, upper_start, upper_row, &
+      & upper, diagonal, b)
+      integer, intent(in) :: n, nl, nu, pivot(n), ni, interchange(ni), lower_column(nl), lower_row(nl), upper_start(n + 1)
+      integer, intent(in) :: upper_row(nu)
       real(dp), intent(in) :: lower(nl), upper(nu), diagonal(n)
       real(dp), intent(inout) :: b(n)
       real(dp) :: temp
-      integer :: j, l, k
-      do j = 1, n - 1
+      integer :: j, l, k, m
+      !GCC$ unroll 1
+      do m = 1, ni
+         j = interchange(m)
          l = pivot(j)
-         if (l /= j) then
-            temp = b(l)
-            b(l) = b(j)
-            b(j) = temp
-         end if
+         temp = b(l)
+         b(l) = b(j)
+         b(j) = temp
       end do
       !GCC$ unroll 1
       !GCC$ novector
@@ -657,18 +715,19 @@ contains
       nl = nz%lower_start(n + 1) - 1
       nu = nz%upper_start(n + 1) - 1
       upper = upper_slots(nz)
-      call solve_transposed_kernel(n, nl, nu, nz%pivot, nz%lower_start, nz%lower_row, nz%values(n + 1:n + nl), &
-         & nz%upper_start, nz%upper_row, nz%values(upper + 1:upper + nu), nz%values(1:n), b)
+      call solve_transposed_kernel(n, nl, nu, nz%pivot, size(nz%interchange), nz%interchange, nz%lower_start, nz%lower_row, &
+         & nz%values(n + 1:n + nl), nz%upper_start, nz%upper_row, nz%values(upper + 1:upper + nu), nz%values(1:n), b)
    end subroutine nonzeros_solve_transposed
 
    !> nonzeros_solve_transposed on explicit-shape arrays.
-   pure subroutine solve_transposed_kernel(n, nl, nu, pivot, lower_start, lower_row, lower, upper_start, upper_row, &
-      & upper, diagonal, b)
-      integer, intent(in) :: n, nl, nu, pivot(n), lower_start(n + 1), lower_row(nl), upper_start(n + 1), upper_row(nu)
+   pure subroutine solve_transposed_kernel(n, nl, nu, pivot, ni, interchange, lower_start, lower_row, lower, upper_start, &
+      & upper_row, upper, diagonal, b)
+      integer, intent(in) :: n, nl, nu, pivot(n), ni, interchange(ni), lower_start(n + 1), lower_row(nl), upper_start(n + 1)
+      integer, intent(in) :: upper_row(nu)
       real(dp), intent(in) :: lower(nl), upper(nu), diagonal(n)
       real(dp), intent(inout) :: b(n)
       real(dp) :: temp
-      integer :: j, l, k
+      integer :: j, l, k, m
       do j = 1, n
          temp = b(j)
          !GCC$ unroll 1
@@ -689,13 +748,13 @@ contains
             b(j) = b(j) + (-1.0_dp)*temp
          end if
       end do
-      do j = n - 1, 1, -1
+      !GCC$ unroll 1
+      do m = ni, 1, -1
+         j = interchange(m)
          l = pivot(j)
-         if (l /= j) then
-            temp = b(l)
-            b(l) = b(j)
-            b(j) = temp
-         end if
+         temp = b(l)
+         b(l) = b(j)
+         b(j) = temp
       end do
    end subroutine solve_transposed_kernel
 
