@@ -426,16 +426,17 @@ contains
                ! exact gradient), whose correction is the one applied: near a
                ! singular B_f the two corrections can fall on either side of
                ! the margin.
-               ! First Newton's own factor, where it serves at qt (carry_factor).
+               ! First Newton's own factor, where it serves at qt (carry_factor),
+               ! whether Newton stopped on its estimate or converged by the contract.
                root_solved = .false.
-               if (newton%by_estimate) then
-                  if (newton%root_solved) then
-                     call carry_factor(self, qt, root_solved)
-                     if (root_solved) then
-                        info = 0
-                        exit verification
-                     end if
+               if (newton%root_solved) then
+                  call carry_factor(self, qt, root_solved)
+                  if (root_solved) then
+                     info = 0
+                     exit verification
                   end if
+               end if
+               if (newton%by_estimate) then
                   call root_correction(self, qt, .true., correction, root_solved, system%section)
                   if (root_solved .and. correction <= estimate_margin*self%conv%length .and. &
                      & self%root%pivot_ratio >= near_singular_drop*self%state%reference_pivot) then
@@ -445,13 +446,6 @@ contains
                   call root_correction(self, qt, .true., correction, root_solved)
                end if
                if (.not. root_solved .or. correction <= estimate_margin*self%conv%length) then
-                  if (.not. newton%by_estimate .and. newton%root_solved) then ! converged by the contract
-                     call carry_factor(self, qt, root_solved)
-                     if (root_solved) then
-                        info = 0
-                        exit verification
-                     end if
-                  end if
                   call factor_root(self, qt, self%seg, info, system%section)
                   exit verification
                end if
