@@ -340,9 +340,9 @@ contains
       integer, intent(out), optional :: element
       !> (section_values, max_gauss, nelem): see above.
       real(dp), contiguous, intent(in), optional :: section(:, :, :)
-      real(dp) :: xe(6), rl, c, s, a1, a2, g1, g2, xs(2), x1(2)
+      real(dp) :: xe(6), rl, phi, c, s, a1, a2, g1, g2, xs(2), x1(2)
       real(dp) :: worst, values(element_entries)
-      integer :: e, i
+      integer :: e, i, k
       call clear_assembled(self, mesh)
       self%factored = .false.
       self%carried = .false.
@@ -350,8 +350,15 @@ contains
       if (present(element)) element = 0
       do e = 1, size(mesh%elements)
          associate (el => mesh%elements(e), dofs => mesh%edof(:, e), rows => self%element_row(:, e))
-            call element_frame(el%length, el%angle, e, q, dofs, section, xe, rl, c, s, a1, a2)
+            do k = 1, 6
+               xe(k) = q(dofs(k))
+            end do
+            rl = 1/el%length
+            phi = el%angle + (xe(3) + xe(6))/2
+            call section_of(phi, e, c, s, section)
             self%section(:, e) = [c, s]
+            a1 = (xe(4) - xe(1))*rl
+            a2 = (xe(5) - xe(2))*rl
             g1 = c*a1 + s*a2 - 1                               ! (27)
             g2 = -s*a1 + c*a2
             if (present(strain)) then
@@ -424,13 +431,20 @@ contains
       integer, intent(in) :: seg(:)
       real(dp), contiguous, intent(out) :: strain(:)
       real(dp), contiguous, intent(in), optional :: section(:, :, :)
-      real(dp) :: xe(6), rl, c, s, a1, a2, values(element_entries), xs(2), x1(2)
+      real(dp) :: xe(6), rl, phi, c, s, a1, a2, values(element_entries), xs(2), x1(2)
       integer :: e, i, k, nb
       do e = 1, size(mesh%elements)
          associate (el => mesh%elements(e), dofs => mesh%edof(:, e), rows => self%element_row(:, e))
-            call element_frame(el%length, el%angle, e, q, dofs, section, xe, rl, c, s, a1, a2)
+            do k = 1, 6
+               xe(k) = q(dofs(k))
+            end do
+            rl = 1/el%length
+            phi = el%angle + (xe(3) + xe(6))/2
+            call section_of(phi, e, c, s, section)
             self%section(1, e) = c
             self%section(2, e) = s
+            a1 = (xe(4) - xe(1))*rl
+            a2 = (xe(5) - xe(2))*rl
             ! (27), as assemble_strain_rate.
             strain(rows(1)) = c*a1 + s*a2 - 1
             strain(rows(2)) = -s*a1 + c*a2
@@ -461,28 +475,6 @@ contains
       end do
       self%carried = .true.
    end subroutine carry_geometry
-
-   !> Element e's dofs xe at q, its reciprocal length rl, the cosine and sine
-   !> of its section angle (section_of; `section` as assemble_strain_rate's)
-   !> and its chord over its length (a1, a2), from which (27) takes the
-   !> strains: what assemble_strain_rate and carry_geometry both need.
-   pure subroutine element_frame(length, angle, e, q, dofs, section, xe, rl, c, s, a1, a2)
-      real(dp), intent(in) :: length, angle
-      integer, intent(in) :: e, dofs(6)
-      real(dp), contiguous, intent(in) :: q(:)
-      real(dp), contiguous, intent(in), optional :: section(:, :, :)
-      real(dp), intent(out) :: xe(6), rl, c, s, a1, a2
-      real(dp) :: phi
-      integer :: k
-      do k = 1, 6
-         xe(k) = q(dofs(k))
-      end do
-      rl = 1/length
-      phi = angle + (xe(3) + xe(6))/2
-      call section_of(phi, e, c, s, section)
-      a1 = (xe(4) - xe(1))*rl
-      a2 = (xe(5) - xe(2))*rl
-   end subroutine element_frame
 
    !> An element's entries on the driven dofs into bd (taken as one array),
    !> replacing what was there: map, nb and nd as scatter_entries'.
