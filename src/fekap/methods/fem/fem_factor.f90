@@ -10,11 +10,11 @@ module fekap_fem_factor
    use fekap_kinds, only: dp
    use fekap_fem_linear_system, only: assemble_system, assemble_system_residual, factor_system, system_pivot, &
       & newton_correction, apply_correction, drive_response, system_rcond, phase_start, phase_end
-   use fekap_fem_rates, only: root_drive_response, near_singular_drop, plain_rates_rcond
+   use fekap_fem_rates, only: root_drive_response, root_refined_response, near_singular_drop, plain_rates_rcond
    use fekap_fem_convergence, only: estimate_margin
    use fekap_model, only: predictor_taylor
    use fekap_assembly_strain_rate, only: assemble_strain_rate, factor_strain_rate, solve_strain_rate, &
-      & strain_rate_rcond, carry_geometry, strain_rates, strain_rate_rcond_bounds
+      & strain_rate_rcond, carry_geometry, strain_rate_rcond_bounds
    use fekap_fem_state, only: fem_state_type, fem_core_type
    implicit none
    private
@@ -95,9 +95,12 @@ contains
       !> With the factor B_f holds, carried to qt (carry_geometry; carry_factor).
       logical, intent(in), optional :: carry
       integer :: info, k
+      logical :: carried
       correction = 0
       solved = .false.
-      if (present(carry)) then
+      carried = .false.
+      if (present(carry)) carried = carry
+      if (carried) then
          if (.not. self%root%factored) return
          call carry_geometry(self%root, self%mesh, qt, self%seg, self%root_work, section)
       else
@@ -164,39 +167,11 @@ contains
       if (self%root%pivot_ratio < near_singular_drop*self%state%reference_pivot) return
       call root_correction(self, qt, .false., correction, solved, self%system%section, carry=.true.)
       if (.not. solved .or. correction > estimate_margin*self%conv%length) return
-      call refined_response(self, self%jump_response_new, rho)
+      call root_refined_response(self%root, self%mesh, self%jump_response_new, self%root_work, rho)
       if (rho > carry_contraction) return
       carried = .true.
       call self%factor%carry()
    end subroutine carry_factor
-
-   !> The drive response with the factor B_f holds (root_drive_response),
-   !> refined once with its strain rates at B's geometry, and the largest
-   !> refinement correction against the response's largest entry (rho).
-   subroutine refined_response(self, resp, rho)
-      class(fem_core_type), intent(inout) :: self
-      real(dp), contiguous, intent(inout) :: resp(:, :)
-      real(dp), intent(out) :: rho
-      real(dp) :: size_resp, change
-      integer :: j, k
-      call root_drive_response(self%root, self%mesh, resp, self%root_work)
-      rho = 0
-      associate (work => self%root_work, mesh => self%mesh)
-         do j = 1, mesh%ndriven
-            call strain_rates(self%root, mesh, resp(:, j), work)
-            call negate(mesh%nfree, work)
-            call solve_strain_rate(self%root, work)
-            size_resp = 0
-            change = 0
-            do k = 1, mesh%nfree
-               size_resp = max(size_resp, abs(resp(mesh%eq_dof(k), j)))
-               change = max(change, abs(work(k)))
-               resp(mesh%eq_dof(k), j) = resp(mesh%eq_dof(k), j) + work(k)
-            end do
-            rho = max(rho, change/max(size_resp, 1.0_dp))
-         end do
-      end associate
-   end subroutine refined_response
 
    !> x = -x on an array of explicit shape (a loop the compiler vectorises;
    !> the assignment on the allocatable component checked its allocation and

@@ -9,7 +9,7 @@ module fekap_fem_predict
    use fekap_kinds, only: dp
    use fekap_model, only: predictor_previous, predictor_taylor
    use fekap_assembly_assemble, only: max_strain
-   use fekap_fem_setup, only: set_driven
+   use fekap_fem_setup, only: set_driven, put_driven_values
    use fekap_fem_linear_system, only: drive_load_rhs, apply_response
    use fekap_stepping_predictor, only: extrapolate_history, taylor_predict, prediction_none, prediction_smooth, &
       & predictor_margin
@@ -65,9 +65,7 @@ contains
       ! The driven dofs as set_driven puts them, from the laws at t, which
       ! the history's velocity and the rates of the step at t then take.
       call drive_laws_at(self, t)
-      do i = 1, self%mesh%ndriven
-         qt(self%mesh%driven_dof(i)) = self%mesh%q0(self%mesh%driven_dof(i)) + (self%law_value(i) - self%law0(i))
-      end do
+      call put_driven_values(self, self%law_value, qt)
       call self%prediction%record(qt, smooth)
    end subroutine predict
 

@@ -18,7 +18,7 @@ module fekap_fem_setup
    implicit none
    private
 
-   public :: fem_base_type, new_fem_base, start_configuration, set_driven, mesh_plan_line
+   public :: fem_base_type, new_fem_base, start_configuration, set_driven, put_driven_values, mesh_plan_line
 
    !> The model on its mesh, with the storage and scales every FEM stepper needs.
    type, abstract, extends(stepper_type) :: fem_base_type
@@ -81,14 +81,27 @@ contains
       class(fem_base_type), intent(in) :: self
       real(dp), intent(in) :: t
       real(dp), contiguous, intent(inout) :: q(:)
-      real(dp) :: f, df, ddf
+      real(dp) :: f(self%mesh%ndriven), df, ddf
+      integer :: i
+      do i = 1, self%mesh%ndriven
+         call self%model%drives(i)%law%eval(t, f(i), df, ddf)
+      end do
+      call put_driven_values(self, f, q)
+   end subroutine set_driven
+
+   !> Driven dofs from the drives' law values f: the initial value plus the
+   !> law's change since t_start (set_driven's, and the predictor's from the
+   !> laws it holds already).
+   pure subroutine put_driven_values(self, f, q)
+      class(fem_base_type), intent(in) :: self
+      real(dp), intent(in) :: f(:)
+      real(dp), contiguous, intent(inout) :: q(:)
       integer :: i, dof
       do i = 1, self%mesh%ndriven
-         call self%model%drives(i)%law%eval(t, f, df, ddf)
          dof = self%mesh%driven_dof(i)
-         q(dof) = self%mesh%q0(dof) + (f - self%law0(i))
+         q(dof) = self%mesh%q0(dof) + (f(i) - self%law0(i))
       end do
-   end subroutine set_driven
+   end subroutine put_driven_values
 
    !> The mesh's line of the listing's plan: its size and band.
    function mesh_plan_line(self) result(text)

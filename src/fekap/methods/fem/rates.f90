@@ -19,7 +19,8 @@ module fekap_fem_rates
    private
 
    public :: pivot_note, singular_pivot, solve_velocities, solve_accelerations
-   public :: root_velocities, root_accelerations, root_drive_response, root_drive_block, refine_rates
+   public :: root_velocities, root_accelerations, root_drive_response, root_refined_response, root_drive_block, &
+      & refine_rates
 
    !> Solves of a rate in the square-root form: the plain solve and one
    !> refinement whose residual is the element strain rates (one more gains
@@ -256,6 +257,36 @@ contains
          resp(mesh%driven_dof(j), j) = 1
       end do
    end subroutine root_drive_response
+
+   !> root_drive_response refined once as root_velocities refines v (the
+   !> response's strain rates at root's geometry, add_root_correction), and
+   !> the largest correction of a column against that column's largest entry
+   !> before it (against 1 where that is smaller): the factor's contraction
+   !> along the response (fekap_fem_factor's carry_factor).
+   subroutine root_refined_response(root, mesh, resp, work, rho)
+      type(strain_rate_type), intent(in) :: root
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(inout) :: resp(:, :)
+      real(dp), contiguous, intent(inout) :: work(:)
+      real(dp), intent(out) :: rho
+      real(dp) :: size_resp, change
+      integer :: j, k
+      call root_drive_response(root, mesh, resp, work)
+      rho = 0
+      do j = 1, mesh%ndriven
+         size_resp = 0
+         do k = 1, mesh%nfree
+            size_resp = max(size_resp, abs(resp(mesh%eq_dof(k), j)))
+         end do
+         call strain_rates(root, mesh, resp(:, j), work)
+         call add_root_correction(root, mesh, work, resp(:, j))
+         change = 0
+         do k = 1, mesh%nfree
+            change = max(change, abs(work(k)))
+         end do
+         rho = max(rho, change/max(size_resp, 1.0_dp))
+      end do
+   end subroutine root_refined_response
 
    !> K's free-driven block from B, K_fd = B_f^T W B_d (46), column by
    !> column: B_d's column (root%bd, by B's rows) weighted and gathered onto
