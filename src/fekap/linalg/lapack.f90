@@ -296,19 +296,44 @@ contains
    !> order), maxima (idamax's first largest) and stops in the same order as
    !> dlacn2, so the same estimate to the last bit, without its BLAS calls.
    !> isave(1) is the point to resume at, isave(2) the index of the last
-   !> unit vector, isave(3) the iteration, as dlacn2's.
-   subroutine norm_estimate_step(n, x, isgn, est, kase, isave)
+   !> unit vector (0 before the first), isave(3) the iteration, as dlacn2's.
+   !>
+   !> `start` (a column, 1 to n): begin instead at the unit vector e_start,
+   !> as dlacn2's second iteration begins at the column its first one chose,
+   !> with no sign vector to repeat: the column where the last estimate of a
+   !> nearby matrix ended (isave(2) on its return). Where that column still
+   !> maximises ||A^-1 e_j||_1 among the columns the gradient A^-T sign(A^-1
+   !> e_j) points to, the estimate ends after one solve with A^-T and two
+   !> with A^-1 (the last for the alternating vector), instead of dlacn2's
+   !> two and three; otherwise it iterates on as dlacn2 does, up to the same
+   !> itmax. It is then still a lower bound of ||A^-1||_1 from the same
+   !> local search (Higham, Accuracy and Stability of Numerical Algorithms,
+   !> 2002, sec. 15.3), from another start: not dlacn2's value to the bit.
+   subroutine norm_estimate_step(n, x, isgn, est, kase, isave, start)
       integer, intent(in) :: n
       real(dp), intent(inout) :: x(:)
       integer, intent(inout) :: isgn(:)
       real(dp), intent(inout) :: est
       integer, intent(inout) :: kase
       integer, intent(inout) :: isave(3)
+      integer, intent(in), optional :: start
       !> dlacn2's limit on its main iterations.
       integer, parameter :: itmax = 5
       real(dp) :: estold, altsgn
       integer :: i, jlast
       if (kase == 0) then
+         isave(2) = 0
+         if (present(start)) then
+            if (start >= 1 .and. start <= n .and. n > 1) then
+               ! No sign vector yet (0 matches no sign), no estimate to grow from.
+               isgn(1:n) = 0
+               est = 0
+               isave(2) = start
+               isave(3) = 2
+               call unit_vector()
+               return
+            end if
+         end if
          x(1:n) = 1/real(n, dp)
          kase = 1
          isave(1) = 1
