@@ -48,9 +48,22 @@ def test_sixteen_calls_at_once_all_run(tmp_path):
 def children(pid: int) -> list[int]:
     found = []
     for task in Path(f"/proc/{pid}/task").glob("*"):
-        text = (task / "children").read_text().split()
+        try:
+            text = (task / "children").read_text().split()
+        except OSError:  # the thread ended since the listing
+            continue
         found += [int(p) for p in text]
     return found
+
+
+def command_line(pid: int) -> str:
+    """The process's command line; empty if it has ended since it was listed
+    (the script's short-lived helpers: one ended between the two reads on a
+    loaded machine)."""
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_text()
+    except OSError:
+        return ""
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP])
@@ -60,7 +73,7 @@ def test_a_signal_to_the_script_stops_fekap_and_no_plots_follow(tmp_path, sig):
     fekap = []
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and not (out / "points.csv").exists():
-        fekap = [p for p in children(call.pid) if "fekap" in Path(f"/proc/{p}/cmdline").read_text()] or fekap
+        fekap = [p for p in children(call.pid) if "fekap" in command_line(p)] or fekap
         time.sleep(0.05)
     fekap = fekap or [p for p in children(call.pid)]
     assert fekap, "fekap did not start"
