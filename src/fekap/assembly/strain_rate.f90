@@ -755,8 +755,9 @@ contains
    !> LAPACK dlacn2, in loops (norm_estimate_step), with the factor's solves), squared to be on the tangent's
    !> scale like pivot_ratio (K = B^T W B); 0 without a factor. After the
    !> first, each estimate starts at the column where the last one ended
-   !> (estimate_column): three solves instead of five where that column
-   !> still serves (the scissor lift's every step). Change points
+   !> (estimate_column): three solves where that column still serves,
+   !> where dlacn2 makes four or five (five at the scissor lift's every
+   !> step). Change points
    !> compare it with the run's best. Not dgbcon: its careful triangular
    !> solves (dlatbs) rescan the whole vector per column when B_f is
    !> ill-conditioned, quadratic in the size (minutes for a link of 10^5

@@ -298,17 +298,19 @@ contains
    !> isave(1) is the point to resume at, isave(2) the index of the last
    !> unit vector (0 before the first), isave(3) the iteration, as dlacn2's.
    !>
-   !> `start` (a column, 1 to n): begin instead at the unit vector e_start,
-   !> as dlacn2's second iteration begins at the column its first one chose,
-   !> with no sign vector to repeat: the column where the last estimate of a
-   !> nearby matrix ended (isave(2) on its return). Where that column still
-   !> maximises ||A^-1 e_j||_1 among the columns the gradient A^-T sign(A^-1
-   !> e_j) points to, the estimate ends after one solve with A^-T and two
-   !> with A^-1 (the last for the alternating vector), instead of dlacn2's
-   !> two and three; otherwise it iterates on as dlacn2 does, up to the same
-   !> itmax. It is then still a lower bound of ||A^-1||_1 from the same
-   !> local search (Higham, Accuracy and Stability of Numerical Algorithms,
-   !> 2002, sec. 15.3), from another start: not dlacn2's value to the bit.
+   !> `start` (a column, 1 to n; ignored, dlacn2's start taken, outside
+   !> that or for n = 1): begin instead at the unit vector e_start, as
+   !> dlacn2's second iteration begins at the column its first one chose,
+   !> with no sign vector to repeat: the last unit vector of the last
+   !> estimate of a nearby matrix (isave(2) on its return). Where the
+   !> gradient z = A^-T sign(A^-1 e_start) has its largest entry at start,
+   !> the estimate ends after one solve with A^-T and two with A^-1 (the last
+   !> for the alternating vector), where dlacn2 makes four or five; otherwise
+   !> it iterates on as dlacn2 does, up to the same itmax. Each value it takes
+   !> is ||A^-1 v||_1 / ||v||_1 for a vector v, so it is still a lower bound
+   !> of ||A^-1||_1 from the same local search (Higham, Accuracy and
+   !> Stability of Numerical Algorithms, 2002, sec. 15.3), from another
+   !> start: not dlacn2's value to the bit.
    subroutine norm_estimate_step(n, x, isgn, est, kase, isave, start)
       integer, intent(in) :: n
       real(dp), intent(inout) :: x(:)
