@@ -428,6 +428,10 @@ contains
    !> residuals (strain_rates, strain_accelerations) and B_d q's (carried).
    !> Slidelines on the segments seg, which must be the factor's. `section`
    !> as assemble_strain_rate's, so that the geometry is its to the bit.
+   !> The element's frame (its xe, phi, cosine and sine, strains) is written
+   !> out as assemble_strain_rate writes it: a procedure shared by the two
+   !> loops was not inlined, and Example 1's step took 278 instructions more
+   !> (13,285 -> 13,563, docs/performance.md, the seventeenth session).
    subroutine carry_geometry(self, mesh, q, seg, strain, section)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
@@ -465,17 +469,9 @@ contains
       do i = 1, size(mesh%slides)
          call slide_geometry(self, mesh, i, seg(i), q, xs, x1)
          strain(self%slide_row(i)) = dot_product(xs - x1, self%slide_nm(1:2, i))
-         ! The gap's driven columns (scatter_row's, B_d's part only).
-         associate (row => self%slide_row(i), dofs => self%slide_dofs(:, i))
-            self%bd(row, :) = 0
-            do k = 1, size(dofs)
-               if (dofs(k) == 0) cycle
-               if (mesh%eq(dofs(k)) > 0) cycle
-               if (mesh%drive_col(dofs(k)) > 0) then
-                  self%bd(row, mesh%drive_col(dofs(k))) = self%bd(row, mesh%drive_col(dofs(k))) + self%slide_ns(k, i)
-               end if
-            end do
-         end associate
+         ! The gap's driven columns (scatter_row's B_d part).
+         self%bd(self%slide_row(i), :) = 0
+         call scatter_driven(self, mesh, self%slide_row(i), self%slide_dofs(:, i), self%slide_ns(:, i))
       end do
       self%carried = .true.
    end subroutine carry_geometry
@@ -683,7 +679,7 @@ contains
    end subroutine scatter_entries
 
    !> Row `row` of B on the dofs `dofs` (0: none): free columns into the
-   !> band, driven ones into B_d.
+   !> band, driven ones into B_d (scatter_driven).
    pure subroutine scatter_row(self, mesh, row, dofs, values)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
@@ -694,13 +690,26 @@ contains
       do k = 1, size(dofs)
          if (dofs(k) == 0) cycle
          eq = mesh%eq(dofs(k))
-         if (eq > 0) then
-            self%ab(band_row - eq, eq) = self%ab(band_row - eq, eq) + values(k)
-         else if (mesh%drive_col(dofs(k)) > 0) then
-            self%bd(row, mesh%drive_col(dofs(k))) = self%bd(row, mesh%drive_col(dofs(k))) + values(k)
-         end if
+         if (eq > 0) self%ab(band_row - eq, eq) = self%ab(band_row - eq, eq) + values(k)
       end do
+      call scatter_driven(self, mesh, row, dofs, values)
    end subroutine scatter_row
+
+   !> Row `row` of B's entries on driven dofs into B_d (added, in the order
+   !> of dofs; a fixed dof, or 0, has none).
+   pure subroutine scatter_driven(self, mesh, row, dofs, values)
+      type(strain_rate_type), intent(inout) :: self
+      type(mesh_type), intent(in) :: mesh
+      integer, intent(in) :: row, dofs(:)
+      real(dp), intent(in) :: values(:)
+      integer :: k, col
+      do k = 1, size(dofs)
+         if (dofs(k) == 0) cycle
+         if (mesh%eq(dofs(k)) > 0) cycle
+         col = mesh%drive_col(dofs(k))
+         if (col > 0) self%bd(row, col) = self%bd(row, col) + values(k)
+      end do
+   end subroutine scatter_driven
 
    !> Band LU of the assembled B_f (dgbtrf), in place, and its nonzeros
    !> for the solves (gather_nonzeros); info > 0: the band row where U has
