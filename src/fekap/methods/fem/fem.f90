@@ -45,7 +45,6 @@ module fekap_fem
    use fekap_fem_rates, only: near_singular_drop, root_drive_block
    use fekap_fem_branch, only: branch_accept, branch_verify, branch_unverifiable
    use fekap_fem_determinacy, only: check_free_motion
-   use fekap_assembly_strain_rate, only: rate_geometry_at
    implicit none
    private
 
@@ -385,17 +384,20 @@ contains
             if (self%loaded) exit verification
             if (newton%at_predictor) then
                ! The factor at the predictor serves (fem_correct). The square-root
-               ! form took its correction, of round-off size: the rates'
-               ! residuals are taken at the corrected configuration
-               ! (rate_geometry_at), and K's free-driven block (the next step's
-               ! residual scale, drive_increment_residual) is B_f^T W B_d from
-               ! the predictor's B_d and those section angles
-               ! (root_drive_block), round-off away from K's there: K is not
-               ! assembled, nor the residual at the corrected configuration.
-               ! The residual reported is the predictor's, from which the
-               ! correction of round-off size was solved (newton%residual).
+               ! form took its correction, of round-off size, and B's geometry
+               ! stays the predictor's, its factor's: K's free-driven block
+               ! (the next step's residual scale, drive_increment_residual) is
+               ! B_f^T W B_d from the predictor's B_d and section angles
+               ! (root_drive_block), round-off away from K's at the corrected
+               ! configuration, and so are the rates' residuals where they are
+               ! not refined (solve_rates moves the geometry there where they
+               ! are: root_geometry_pending); the velocities are the drive
+               ! response of the predictor's factor. K is not assembled, nor
+               ! the residual at the corrected configuration. The residual
+               ! reported is the predictor's, from which the correction of
+               ! round-off size was solved (newton%residual).
                if (self%root_form) then
-                  call rate_geometry_at(self%root, mesh, qt, self%seg, system%residual_section)
+                  self%root_geometry_pending = .true.
                   call root_drive_block(self%root, mesh, system%kfd, self%root_work)
                end if
                exit verification

@@ -137,6 +137,14 @@ contains
                call strain_rate_rcond_bounds(self%root, low, high)
                refine = .not. low >= plain_rates_rcond
             end if
+            if (self%root_geometry_pending) then
+               ! Accepted at its predictor (fekap_fem's solve_step): the
+               ! refinement's residuals need the geometry of q itself.
+               if (refine) then
+                  call rate_geometry_at(self%root, self%mesh, state%q, self%seg, self%system%residual_section)
+               end if
+               self%root_geometry_pending = .false.
+            end if
             if ((.not. refine .or. self%root%carried) .and. history%has_velocity(history%newest)) then
                ! Unrefined, (47) is R v_d with the drive response R of this
                ! factor, the plain solve of the same system: record_velocity

@@ -97,6 +97,11 @@ module fekap_fem_state
       logical :: root_form = .false.
       !> Scratch over the equations for the square-root form's solves.
       real(dp), allocatable :: root_work(:)
+      !> Whether root's geometry (the section angles and gap gradients that
+      !> the rates' residuals read) is still the predictor's, round-off away
+      !> from the accepted configuration: a step accepted at its predictor
+      !> leaves it so, and solve_rates moves it only where it refines.
+      logical :: root_geometry_pending = .false.
       !> Whether the K form's rates of a redundant mechanism are refined
       !> with its strain rates (root%refines, unloaded kinematics: see
       !> fekap_fem_rates' refine_rates), and its scratch over B's rows.
