@@ -941,15 +941,25 @@ contains
    !> (rate_geometry_at). W is the material tangent's (46): EA L, kGA L and
    !> EI / L for Gamma1, Gamma2 and kappa L at the one Gauss point (weight 2,
    !> Jacobian L/2), kp for a gap (65); so K = B^T W B at zero strain.
-   pure subroutine strain_forces(self, mesh, r, f)
+   !> `driven` (r a column of B_d): the elements with entries on driven
+   !> dofs only, r being zero on the others' rows, whose forces are zeros
+   !> that would add nothing (the same f to the bit).
+   pure subroutine strain_forces(self, mesh, r, f, driven)
       type(strain_rate_type), intent(in) :: self
       type(mesh_type), intent(in) :: mesh
       real(dp), contiguous, intent(in) :: r(:)
       real(dp), contiguous, intent(out) :: f(:)
+      logical, intent(in), optional :: driven
       real(dp) :: rl, c, s, p1, p2, p3, fe(6)
       integer :: e, i, k, eq
+      logical :: every
+      every = .true.
+      if (present(driven)) every = .not. driven
       f = 0
       do e = 1, size(mesh%elements)
+         if (.not. every) then
+            if (self%element_count(2, e) == 0) cycle
+         end if
          associate (el => mesh%elements(e), rows => self%element_row(:, e))
             rl = 1/el%length
             c = self%section(1, e)

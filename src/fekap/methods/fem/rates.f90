@@ -303,7 +303,7 @@ contains
       integer :: j
       do j = 1, mesh%ndriven
          rows = root%bd(:, j)
-         call strain_forces(root, mesh, rows, kfd(:, j))
+         call strain_forces(root, mesh, rows, kfd(:, j), driven=.true.)
       end do
    end subroutine root_drive_block
 
