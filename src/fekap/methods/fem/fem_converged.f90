@@ -138,8 +138,9 @@ contains
                refine = .not. low >= plain_rates_rcond
             end if
             if (self%root_geometry_pending) then
-               ! Accepted at its predictor (fekap_fem's solve_step): the
-               ! refinement's residuals need the geometry of q itself.
+               ! Accepted at its predictor (fekap_fem's solve_step): B's
+               ! geometry may be the predictor's; the refinement's residuals
+               ! need q's own.
                if (refine) then
                   call rate_geometry_at(self%root, self%mesh, state%q, self%seg, self%system%residual_section)
                end if
