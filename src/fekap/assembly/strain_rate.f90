@@ -952,12 +952,12 @@ contains
       logical, intent(in), optional :: driven
       real(dp) :: rl, c, s, p1, p2, p3, fe(6)
       integer :: e, i, k, eq
-      logical :: every
-      every = .true.
-      if (present(driven)) every = .not. driven
+      logical :: driven_only
+      driven_only = .false.
+      if (present(driven)) driven_only = driven
       f = 0
       do e = 1, size(mesh%elements)
-         if (.not. every) then
+         if (driven_only) then
             if (self%element_count(2, e) == 0) cycle
          end if
          associate (el => mesh%elements(e), rows => self%element_row(:, e))

@@ -7,7 +7,11 @@
 !> the free-motion probe and kinetostatics ask (is_current, is_singular).
 !> A factor carried to the accepted configuration from Newton's last
 !> iterate (fekap_fem_factor's carry_factor) comes with the drive response
-!> made there, which the branch check takes once (take_carried).
+!> made there, which the branch check takes once (take_carried). A factor
+!> made at the predictor and kept for the accepted configuration, a
+!> correction of round-off size away (a step accepted at its predictor),
+!> keeps B's geometry there too in the square-root form; rates that are
+!> refined ask once whether to move it (take_kept_predictor).
 module fekap_fem_factor_record
    implicit none
    private
@@ -16,7 +20,7 @@ module fekap_fem_factor_record
 
    type :: factor_record_type
       private
-      logical :: current = .false., singular = .false., carried = .false.
+      logical :: current = .false., singular = .false., carried = .false., kept_predictor = .false.
    contains
       !> Whether the system holds the factor of the tangent at the accepted configuration.
       procedure :: is_current => record_is_current
@@ -35,6 +39,11 @@ module fekap_fem_factor_record
       procedure :: carry => record_carry
       !> Whether a carried factor's drive response is waiting; it is taken once.
       procedure :: take_carried => record_take_carried
+      !> The factor held is the predictor's, kept for the accepted
+      !> configuration (its geometry with it, in the square-root form).
+      procedure :: keep_predictor => record_keep_predictor
+      !> Whether the factor held was kept from the predictor; asked once.
+      procedure :: take_kept_predictor => record_take_kept_predictor
    end type factor_record_type
 
 contains
@@ -60,6 +69,7 @@ contains
       class(factor_record_type), intent(inout) :: self
       self%current = .false.
       self%carried = .false.
+      self%kept_predictor = .false.
    end subroutine record_invalidate
 
    pure subroutine record_reset(self)
@@ -67,6 +77,7 @@ contains
       self%current = .false.
       self%singular = .false.
       self%carried = .false.
+      self%kept_predictor = .false.
    end subroutine record_reset
 
    pure subroutine record_carry(self)
@@ -80,5 +91,17 @@ contains
       carried = self%carried
       self%carried = .false.
    end subroutine record_take_carried
+
+   pure subroutine record_keep_predictor(self)
+      class(factor_record_type), intent(inout) :: self
+      self%kept_predictor = .true.
+   end subroutine record_keep_predictor
+
+   pure subroutine record_take_kept_predictor(self, kept)
+      class(factor_record_type), intent(inout) :: self
+      logical, intent(out) :: kept
+      kept = self%kept_predictor
+      self%kept_predictor = .false.
+   end subroutine record_take_kept_predictor
 
 end module fekap_fem_factor_record

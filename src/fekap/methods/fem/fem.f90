@@ -391,13 +391,14 @@ contains
                ! (root_drive_block), round-off away from K's at the corrected
                ! configuration, and so are the rates' residuals where they are
                ! not refined (solve_rates moves the geometry there where they
-               ! are: root_geometry_pending); unrefined velocities are the
-               ! drive response of the predictor's factor. K is not assembled, nor
-               ! the residual at the corrected configuration. The residual
-               ! reported is the predictor's, from which the correction of
-               ! round-off size was solved (newton%residual).
+               ! are: the factor record's keep_predictor); unrefined
+               ! velocities are the drive response of the predictor's factor.
+               ! K is not assembled, nor the residual at the corrected
+               ! configuration. The residual reported is the predictor's, from
+               ! which the correction of round-off size was solved
+               ! (newton%residual).
                if (self%root_form) then
-                  self%root_geometry_pending = .true.
+                  call self%factor%keep_predictor()
                   call root_drive_block(self%root, mesh, system%kfd, self%root_work)
                end if
                exit verification

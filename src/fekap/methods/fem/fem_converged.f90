@@ -105,7 +105,7 @@ contains
       class(fem_core_type), intent(inout) :: self
       real(dp) :: ratio, low, high
       integer :: info
-      logical :: regular, refine
+      logical :: regular, refine, kept
       ! The pivot ratio of the tangent at the configuration: a stationary one is
       ! noted also when only positions are computed (the tangent is factored
       ! for the branch-jump check anyway, so at no cost).
@@ -137,14 +137,11 @@ contains
                call strain_rate_rcond_bounds(self%root, low, high)
                refine = .not. low >= plain_rates_rcond
             end if
-            if (self%root_geometry_pending) then
-               ! Accepted at its predictor (fekap_fem's solve_step): B's
-               ! geometry may be the predictor's; the refinement's residuals
-               ! need q's own.
-               if (refine) then
-                  call rate_geometry_at(self%root, self%mesh, state%q, self%seg, self%system%residual_section)
-               end if
-               self%root_geometry_pending = .false.
+            ! A factor kept from the predictor (fekap_fem's solve_step) keeps
+            ! B's geometry there; the refinement's residuals need q's own.
+            call self%factor%take_kept_predictor(kept)
+            if (kept .and. refine) then
+               call rate_geometry_at(self%root, self%mesh, state%q, self%seg, self%system%residual_section)
             end if
             if ((.not. refine .or. self%root%carried) .and. history%has_velocity(history%newest)) then
                ! Unrefined, (47) is R v_d with the drive response R of this

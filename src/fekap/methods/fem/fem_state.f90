@@ -97,14 +97,6 @@ module fekap_fem_state
       logical :: root_form = .false.
       !> Scratch over the equations for the square-root form's solves.
       real(dp), allocatable :: root_work(:)
-      !> Whether root's geometry (the section angles and gap gradients that
-      !> the rates' residuals read) may still be the predictor's, round-off
-      !> away from the accepted configuration: set by a step accepted at its
-      !> predictor, cleared by solve_rates, which moves the geometry to the
-      !> configuration where it refines the rates. Left set where no rates
-      !> follow (a step rejected later reassembles B): the next refinement
-      !> then recomputes a geometry already there, to the same bits.
-      logical :: root_geometry_pending = .false.
       !> Whether the K form's rates of a redundant mechanism are refined
       !> with its strain rates (root%refines, unloaded kinematics: see
       !> fekap_fem_rates' refine_rates), and its scratch over B's rows.
