@@ -9,7 +9,7 @@ module fekap_fem_converged
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: predictor_taylor
    use fekap_assembly_tracking, only: check_gaps
-   use fekap_fem_linear_system, only: apply_response
+   use fekap_fem_linear_system, only: apply_response, phase_start, phase_end
    use fekap_fem_branch, only: drive_increment, branch_verdict, branch_reject, branch_verify, branch_unverifiable
    use fekap_fem_rates, only: pivot_note, solve_velocities, solve_accelerations, singular_floor, root_velocities, &
       & root_accelerations, refine_rates, plain_rates_rcond
@@ -103,7 +103,7 @@ contains
    !> note on how close to singular it is.
    subroutine solve_rates(self)
       class(fem_core_type), intent(inout) :: self
-      real(dp) :: ratio, low, high
+      real(dp) :: ratio, low, high, clock
       integer :: info
       logical :: regular, refine, kept
       ! The pivot ratio of the tangent at the configuration: a stationary one is
@@ -141,8 +141,12 @@ contains
             ! B's geometry there; the refinement's residuals need q's own.
             call self%factor%take_kept_predictor(kept)
             if (kept .and. refine) then
+               clock = phase_start(self%system)
                call rate_geometry_at(self%root, self%mesh, state%q, self%seg, self%system%residual_section)
+               call phase_end(self%system, clock, self%counts%seconds_assembly)
             end if
+            ! The rates' solves with B_f, timed with their refinements' residuals.
+            clock = phase_start(self%system)
             if ((.not. refine .or. self%root%carried) .and. history%has_velocity(history%newest)) then
                ! Unrefined, (47) is R v_d with the drive response R of this
                ! factor, the plain solve of the same system: record_velocity
@@ -156,10 +160,12 @@ contains
             end if
             self%counts%velocity_solves = self%counts%velocity_solves + 1
             state%has_velocity = .true.
-            if (.not. self%model%analysis%accelerations) return
-            call root_accelerations(self%root, self%mesh, state%v, self%law_rate2, state%a, self%root_work, refine)
-            self%counts%acceleration_solves = self%counts%acceleration_solves + 1
-            state%has_acceleration = .true.
+            if (self%model%analysis%accelerations) then
+               call root_accelerations(self%root, self%mesh, state%v, self%law_rate2, state%a, self%root_work, refine)
+               self%counts%acceleration_solves = self%counts%acceleration_solves + 1
+               state%has_acceleration = .true.
+            end if
+            call phase_end(self%system, clock, self%counts%seconds_solves)
             return
          end if
          if (history%has_velocity(history%newest)) then
@@ -178,7 +184,9 @@ contains
          end if
          if (self%refined_rates) then
             ! B's geometry at q, for the strain rates of a redundant mechanism.
+            clock = phase_start(self%system)
             call rate_geometry_at(self%root, self%mesh, state%q, self%seg, self%system%section)
+            call phase_end(self%system, clock, self%counts%seconds_assembly)
             call refine_rates(self%root, self%mesh, self%system, state%v, self%strain_work, self%counts)
          end if
          self%counts%velocity_solves = self%counts%velocity_solves + 1

@@ -21,6 +21,7 @@ module fekap_fem_factor
 
    public :: refactor_at_accepted, newton_assembly, root_correction, factor_root, accepted_pivot
    public :: accepted_rcond, accepted_response, fill_tangent, take_correction, restore_state, carry_factor
+   public :: root_rcond
 
    !> The largest contraction (the drive response's refinement correction
    !> against the response, see carry_factor) at which a factor made one
@@ -65,13 +66,16 @@ contains
       class(fem_core_type), intent(inout) :: self
       real(dp), contiguous, intent(in) :: qt(:)
       real(dp), intent(in) :: t, kg_above
+      real(dp) :: clock
       if (.not. self%root_form) then
          call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
          return
       end if
       call assemble_system_residual(self%system, self%mesh, qt, t, self%seg, self%counts, sections=.true.)
+      clock = phase_start(self%system)
       call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work, &
          & self%system%assembled_strain, self%system%assembled_element, self%system%residual_section)
+      call phase_end(self%system, clock, self%counts%seconds_assembly)
       if (self%system%assembled_strain >= kg_above) then
          call assemble_system(self%system, self%mesh, qt, t, self%seg, kg_above, self%counts)
       end if
@@ -97,6 +101,7 @@ contains
       !> its own for the shared solve: that procedure was not inlined, and
       !> Example 1's step took 61 instructions more (13,209 -> 13,270).
       logical, intent(in), optional :: carry
+      real(dp) :: clock
       integer :: info, k
       logical :: carried
       correction = 0
@@ -105,21 +110,27 @@ contains
       if (present(carry)) carried = carry
       if (carried) then
          if (.not. self%root%factored) return
+         clock = phase_start(self%system)
          call carry_geometry(self%root, self%mesh, qt, self%seg, self%root_work, section)
+         call phase_end(self%system, clock, self%counts%seconds_assembly)
       else
          if (assemble) then
+            clock = phase_start(self%system)
             if (present(section)) then
                call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .true., self%root_work, section=section)
             else
                call assemble_strain_rate(self%root, self%mesh, qt, self%seg, .false., self%root_work)
             end if
+            call phase_end(self%system, clock, self%counts%seconds_assembly)
          end if
          call timed_root_factor(self, info)
          if (info /= 0) return
       end if
       solved = .true.
+      clock = phase_start(self%system)
       call negate(self%mesh%nfree, self%root_work)
       call solve_strain_rate(self%root, self%root_work)
+      call phase_end(self%system, clock, self%counts%seconds_solves)
       ! The correction into rhs and its length in one pass (B_f square: nfree rows).
       associate (dq => self%root_work, rhs => self%system%rhs)
          do k = 1, self%mesh%nfree
@@ -156,7 +167,7 @@ contains
       class(fem_core_type), intent(inout) :: self
       real(dp), contiguous, intent(in) :: qt(:)
       logical, intent(out) :: carried
-      real(dp) :: correction, rho, low, high
+      real(dp) :: correction, rho, low, high, clock
       logical :: solved
       carried = .false.
       ! Not under the Taylor predictor, whose positions come from the rates
@@ -171,7 +182,9 @@ contains
       if (self%root%pivot_ratio < near_singular_drop*self%state%reference_pivot) return
       call root_correction(self, qt, .false., correction, solved, self%system%section, carry=.true.)
       if (.not. solved .or. correction > estimate_margin*self%conv%length) return
+      clock = phase_start(self%system)
       call root_refined_response(self%root, self%mesh, self%jump_response_new, self%root_work, rho)
+      call phase_end(self%system, clock, self%counts%seconds_solves)
       if (rho > carry_contraction) return
       carried = .true.
       call self%factor%carry()
@@ -196,7 +209,10 @@ contains
       integer, intent(in) :: seg(:)
       integer, intent(out) :: info
       real(dp), contiguous, intent(in), optional :: section(:, :, :)
+      real(dp) :: clock
+      clock = phase_start(self%system)
       call assemble_strain_rate(self%root, self%mesh, q, seg, .true., section=section)
+      call phase_end(self%system, clock, self%counts%seconds_assembly)
       call timed_root_factor(self, info)
    end subroutine factor_root
 
@@ -229,11 +245,23 @@ contains
       class(fem_core_type), intent(inout) :: self
       real(dp), intent(out) :: rcond
       if (self%root_form) then
-         call strain_rate_rcond(self%root, rcond)
+         call root_rcond(self, rcond)
       else
          call system_rcond(self%system, rcond, self%counts)
       end if
    end subroutine accepted_rcond
+
+   !> The condition estimate of B_f's factor, squared (strain_rate_rcond),
+   !> timed with the solves as the K form's (system_rcond): its work is
+   !> the factor's solves.
+   subroutine root_rcond(self, rcond)
+      class(fem_core_type), intent(inout) :: self
+      real(dp), intent(out) :: rcond
+      real(dp) :: clock
+      clock = phase_start(self%system)
+      call strain_rate_rcond(self%root, rcond)
+      call phase_end(self%system, clock, self%counts%seconds_solves)
+   end subroutine root_rcond
 
    !> The drive response at the accepted configuration, whose factor the
    !> system (or root) holds: from B_f in the square-root form, else from K_ff.
@@ -242,13 +270,16 @@ contains
    subroutine accepted_response(self, resp)
       class(fem_core_type), intent(inout) :: self
       real(dp), contiguous, intent(inout) :: resp(:, :)
+      real(dp) :: clock
       logical :: carried
       if (self%root_form) then
          if (self%root%carried) then
             call self%factor%take_carried(carried)
             if (carried) return
          end if
+         clock = phase_start(self%system)
          call root_drive_response(self%root, self%mesh, resp, self%root_work)
+         call phase_end(self%system, clock, self%counts%seconds_solves)
       else
          call drive_response(self%system, self%mesh, resp, self%counts)
       end if
@@ -271,7 +302,7 @@ contains
       if (self%root_form) then
          ! On the scale of the run's best, which is B_f's in the square-root form.
          call factor_root(self, q, self%seg, root_info, self%system%section)
-         if (root_info == 0) call strain_rate_rcond(self%root, rcond)
+         if (root_info == 0) call root_rcond(self, rcond)
       else if (info == 0) then
          call system_rcond(self%system, rcond, self%counts)
       end if

@@ -12,12 +12,12 @@ module fekap_fem_fill
    use fekap_fem_linear_system, only: system_rcond
    use fekap_stepping_predictor, only: predictor_margin
    use fekap_fem_rates, only: solve_velocities, solve_accelerations
-   use fekap_assembly_strain_rate, only: strain_rate_rcond, strain_rate_rcond_bounds
+   use fekap_assembly_strain_rate, only: strain_rate_rcond_bounds
    use fekap_stepping_change_point, only: uniform_next_time => next_output_time
    use fekap_fem_change_point, only: hermite_fill, correct_fill, fill_order, &
       & rates_drop, fill_shift, estimate_needed
    use fekap_fem_state, only: fem_state_type, fem_core_type
-   use fekap_fem_factor, only: fill_tangent
+   use fekap_fem_factor, only: fill_tangent, root_rcond
    use fekap_fem_predict, only: drive_laws_at
    implicit none
    private
@@ -43,7 +43,7 @@ contains
       if (root_solved) then
          call strain_rate_rcond_bounds(self%root, rcond, high)
          if (estimate_needed(rcond, high, self%state%reference_rcond)) then
-            call strain_rate_rcond(self%root, rcond)
+            call root_rcond(self, rcond)
             self%counts%condition_estimates = self%counts%condition_estimates + 1
          end if
       else if (info == 0) then
