@@ -90,11 +90,13 @@ contains
 
    !> Whether a note text (left-aligned, as every note is written) holds a
    !> note: its first character is not blank. (len_trim would scan all
-   !> note_length characters of an empty note, every step.)
+   !> note_length characters of an empty note, every step; so did the
+   !> comparison note(1:1) /= ' ', through the run-time library's
+   !> len_trim, four times a step: the character's code is compared.)
    pure logical function has_note(note)
       character(*), intent(in) :: note
       has_note = len(note) > 0
-      if (has_note) has_note = note(1:1) /= ' '
+      if (has_note) has_note = iachar(note(1:1)) /= iachar(' ')
    end function has_note
 
    !> Which of a step's results is not a finite number (NaN or infinity: a
