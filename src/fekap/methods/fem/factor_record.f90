@@ -74,10 +74,8 @@ contains
 
    pure subroutine record_reset(self)
       class(factor_record_type), intent(inout) :: self
-      self%current = .false.
+      call record_invalidate(self)
       self%singular = .false.
-      self%carried = .false.
-      self%kept_predictor = .false.
    end subroutine record_reset
 
    pure subroutine record_carry(self)
