@@ -3,7 +3,7 @@
 !> extrapolations through them that give the starting point at a new time.
 !> Where the velocities of the last configurations are known, Hermite through
 !> their positions and velocities, or, when its estimated error is below
-!> predictor_margin times the length tolerance, Adams-Bashforth through the
+!> adams_margin times the length tolerance, Adams-Bashforth through the
 !> newest position and the velocities; where they are not, Lagrange through
 !> the positions. Hermite is of the higher order, Adams-Bashforth the less
 !> sensitive to round-off (docs/performance.md has the measurements).
@@ -22,13 +22,25 @@ module fekap_stepping_predictor
    !> up to lagrange_points positions (quadratic) where velocities are not
    !> known. The Hermite degree is measured in docs/performance.md.
    integer, parameter, public :: history_depth = 5, hermite_points = 4, lagrange_points = 3
+
+   !> A step whose first Newton correction is at most predictor_margin times
+   !> the length tolerance is accepted at its predictor (see the FEM's
+   !> solve_step).
+   real(dp), parameter, public :: predictor_margin = 1.0e-3_dp
+
    !> The Adams-Bashforth predictor is taken when its error, estimated by
    !> the difference between its predictions through the newest
    !> history_depth - 1 and history_depth velocities, is at most
-   !> predictor_margin times the length tolerance; and a step whose first
-   !> Newton correction is that small is accepted at its predictor (see the
-   !> FEM's solve_step).
-   real(dp), parameter, public :: predictor_margin = 1.0e-3_dp
+   !> adams_margin times the length tolerance. Above predictor_margin: the
+   !> alternative, Hermite, extrapolates the positions with weights whose
+   !> magnitudes add up to 158 at equal steps, so its own round-off is some
+   !> 80 eps |q|, about 1e-2 of the default length tolerance on Example 1
+   !> (eps |q| 9e-16, tolerance 5.6e-12). Below that Adams-Bashforth is the
+   !> nearer, and a first correction from it more often at round-off: on
+   !> Example 1 at dt = 1e-4, 13 % of the steps took a second factorisation
+   !> (a first correction above predictor_margin) with this margin at
+   !> predictor_margin, 1 % at 1e-2 (docs/performance.md).
+   real(dp), parameter, public :: adams_margin = 1.0e-2_dp
 
    !> What extrapolate_history made: nothing (fewer than two configurations),
    !> a Lagrange extrapolation of positions, or a smooth one (Hermite or
@@ -133,7 +145,7 @@ contains
    !> velocities into qt (see adams_weights), if all of them are known
    !> (columns) and its error, estimated as its distance from the prediction
    !> through one velocity fewer (weighted by dof_length), is at most
-   !> predictor_margin times the length tolerance.
+   !> adams_margin times the length tolerance.
    logical function adams_prediction(self, t, columns, length, dof_length, qt) result(taken)
       type(predictor_history_type), intent(in) :: self
       real(dp), intent(in) :: t
@@ -150,7 +162,7 @@ contains
       call adams_sums(size(qt), beta, drop, self%q(:, columns(1)), self%velocity(:, columns(1)), &
          & self%velocity(:, columns(2)), self%velocity(:, columns(3)), self%velocity(:, columns(4)), &
          & self%velocity(:, columns(5)), dof_length, qt, estimate)
-      taken = estimate <= predictor_margin*length
+      taken = estimate <= adams_margin*length
    end function adams_prediction
 
    !> adams_prediction's sums over the unknowns (history_depth = 5 velocities
