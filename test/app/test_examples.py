@@ -56,9 +56,10 @@ def test_fourbar():
 
 
 def test_fourbar_rates_of_steps_accepted_at_their_predictor():
-    """Example 1 at dt = 1e-4: four steps in five end at their predictor and
-    keep its factor of B_f (fewer than 1.5 factorisations a configuration;
-    two or more otherwise), and their velocities and accelerations are those
+    """Example 1 at dt = 1e-4: all but a few steps end at their predictor and
+    keep its factor of B_f (fewer than 1.05 factorisations a configuration:
+    10,033 for 10,001 measured; 11,934 before Adams-Bashforth was taken up
+    to adams_margin, two or more with no factor kept), and their velocities and accelerations are those
     of the predictor's factor and geometry, round-off from the accepted
     configuration's (fekap_fem's solve_step): B and C and their rates to
     1e-13 of the closed form over the revolution (errors of 5e-15 and less
@@ -67,7 +68,7 @@ def test_fourbar_rates_of_steps_accepted_at_their_predictor():
     listing = (out / "fourbar.lis").read_text()
     configurations = int(re.search(r"configurations solved\s+(\d+)", listing).group(1))
     factorisations = int(re.search(r"LU factorisations of B_f\s+(\d+)", listing).group(1))
-    check(configurations == 10001 and factorisations < 1.5 * configurations,
+    check(configurations == 10001 and factorisations < 1.05 * configurations,
           f"{factorisations} factorisations of B_f for {configurations} configurations")
     compare(out, "B", lambda t: fourbar_exact(t)[0], 1e-13)
     compare(out, "C", lambda t: fourbar_exact(t)[1], 1e-13)

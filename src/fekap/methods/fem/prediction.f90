@@ -19,7 +19,8 @@ module fekap_fem_prediction
       !> Whether it was a smooth (Hermite or Adams) extrapolation of the history.
       logical :: smooth = .false.
       !> The length tolerance of the step's predictor (the Adams-Bashforth
-      !> choice and the acceptance at the predictor, see predictor_margin): the
+      !> choice, see adams_margin, and the acceptance at the predictor, see
+      !> predictor_margin): the
       !> length tolerance, or the round-off of the dofs over predictor_margin
       !> where that is larger (fem_predict's roundoff_length).
       real(dp) :: length = 0
