@@ -18,10 +18,11 @@ module fekap_stepping_predictor
    !> Configurations kept for the extrapolating predictor: Hermite
    !> extrapolation through up to hermite_points positions and velocities
    !> (degree 7, error of order h**8), Adams-Bashforth through the newest
-   !> position and history_depth velocities, or Lagrange extrapolation through
-   !> up to lagrange_points positions (quadratic) where velocities are not
-   !> known. The Hermite degree is measured in docs/performance.md.
-   integer, parameter, public :: history_depth = 5, hermite_points = 4, lagrange_points = 3
+   !> position and adams_points velocities, or one more (history_depth), or
+   !> Lagrange extrapolation through up to lagrange_points positions
+   !> (quadratic) where velocities are not known. The Hermite degree is
+   !> measured in docs/performance.md.
+   integer, parameter, public :: history_depth = 6, adams_points = 5, hermite_points = 4, lagrange_points = 3
 
    !> A step whose first Newton correction is at most predictor_margin times
    !> the length tolerance is accepted at its predictor (see the FEM's
@@ -30,7 +31,7 @@ module fekap_stepping_predictor
 
    !> The Adams-Bashforth predictor is taken when its error, estimated by
    !> the difference between its predictions through the newest
-   !> history_depth - 1 and history_depth velocities, is at most
+   !> adams_points - 1 and adams_points velocities, is at most
    !> adams_margin times the length tolerance. Why above predictor_margin:
    !> the alternative, Hermite, extrapolates the positions with weights whose
    !> magnitudes add up to 158 at equal steps, which amplify their round-off
@@ -40,6 +41,15 @@ module fekap_stepping_predictor
    !> length tolerance and a second factorisation each, 1,933 steps of
    !> 10,000; with this margin 32 (docs/performance.md).
    real(dp), parameter, public :: adams_margin = 1.0e-2_dp
+
+   !> The prediction through history_depth velocities is made only where the
+   !> first one's estimate is at most step_up_reach times its margin: its
+   !> own estimate is smaller by a factor of about the step over the
+   !> motion's time scale. On Example 1 at dt = 5e-4 it passed where the
+   !> first's was up to 61 times the margin (none above 61); at the scissor
+   !> lift of N = 1,000 (dt = 0.01) the first estimates are 1e7 times it,
+   !> and the second prediction would only add its sums (1 % of the step).
+   real(dp), parameter :: step_up_reach = 1.0e3_dp
 
    !> What extrapolate_history made: nothing (fewer than two configurations),
    !> a Lagrange extrapolation of positions, or a smooth one (Hermite or
@@ -140,11 +150,19 @@ contains
       end if
    end subroutine extrapolate_history
 
-   !> The Adams-Bashforth prediction at t through the history_depth newest
+   !> The Adams-Bashforth prediction at t through the adams_points newest
    !> velocities into qt (see adams_weights), if all of them are known
    !> (columns) and its error, estimated as its distance from the prediction
    !> through one velocity fewer (weighted by dof_length), is at most
-   !> adams_margin times the length tolerance.
+   !> adams_margin times the length tolerance; else the prediction through
+   !> history_depth velocities, if they are known, with its distance from
+   !> the first as the first's error estimate, under the same bound. The
+   !> higher order serves larger steps: on Example 1 at dt = 5e-4 the first
+   !> prediction's estimate is above the margin at every step, and so are
+   !> Hermite's first corrections above predictor_margin, where the second
+   !> prediction passes at seven steps in ten (docs/performance.md). It is
+   !> made only where the first does not serve, so that the smaller steps'
+   !> predictions stay the first's.
    logical function adams_prediction(self, t, columns, length, dof_length, qt) result(taken)
       type(predictor_history_type), intent(in) :: self
       real(dp), intent(in) :: t
@@ -154,22 +172,50 @@ contains
       real(dp), contiguous, intent(inout) :: qt(:)
       real(dp) :: beta(history_depth), drop(history_depth), estimate
       taken = .false.
-      if (size(columns) < history_depth) return
-      call full_adams_weights(self%t, columns, t, beta, drop)
+      if (size(columns) < adams_points) return
+      call full_adams_weights(self%t, columns(1:adams_points), t, beta, drop)
       ! The columns as arrays of their own (contiguous: not copied), whose
       ! addresses the loop need not compute from columns(k) at each unknown.
       call adams_sums(size(qt), beta, drop, self%q(:, columns(1)), self%velocity(:, columns(1)), &
          & self%velocity(:, columns(2)), self%velocity(:, columns(3)), self%velocity(:, columns(4)), &
          & self%velocity(:, columns(5)), dof_length, qt, estimate)
       taken = estimate <= adams_margin*length
+      if (taken .or. size(columns) < history_depth .or. estimate > step_up_reach*adams_margin*length) return
+      call adams_weights(self%t, columns(1:history_depth), t, beta, drop)
+      call adams_step_up(size(qt), beta, self%q(:, columns(1)), self%velocity, columns(1:history_depth), dof_length, &
+         & qt, estimate)
+      taken = estimate <= adams_margin*length
    end function adams_prediction
 
-   !> adams_prediction's sums over the unknowns (history_depth = 5 velocities
+   !> The prediction through history_depth velocities (q1 + sum beta(k) v_k,
+   !> k = 1 to history_depth, in that order) into qt, which holds the one
+   !> through a velocity fewer on entry, and the largest distance between
+   !> the two (weighted by dof_length): the latter's error estimate.
+   pure subroutine adams_step_up(n, beta, q1, velocity, columns, dof_length, qt, estimate)
+      integer, intent(in) :: n
+      real(dp), intent(in) :: beta(history_depth), q1(n), velocity(:, :), dof_length(n)
+      integer, intent(in) :: columns(history_depth)
+      real(dp), intent(inout) :: qt(n)
+      real(dp), intent(out) :: estimate
+      real(dp) :: higher
+      integer :: i, k
+      estimate = 0
+      do i = 1, n
+         higher = q1(i)
+         do k = 1, history_depth
+            higher = higher + beta(k)*velocity(i, columns(k))
+         end do
+         estimate = max(estimate, abs(higher - qt(i))*dof_length(i))
+         qt(i) = higher
+      end do
+   end subroutine adams_step_up
+
+   !> adams_prediction's sums over the unknowns (adams_points = 5 velocities
    !> v1, newest, to v5): qt = q1 + sum beta(k) v_k and the largest
    !> |sum drop(k) v_k| dof_length, each sum in the order k = 1 to 5.
    pure subroutine adams_sums(n, beta, drop, q1, v1, v2, v3, v4, v5, dof_length, qt, estimate)
       integer, intent(in) :: n
-      real(dp), intent(in) :: beta(history_depth), drop(history_depth)
+      real(dp), intent(in) :: beta(adams_points), drop(adams_points)
       real(dp), intent(in) :: q1(n), v1(n), v2(n), v3(n), v4(n), v5(n), dof_length(n)
       real(dp), intent(inout) :: qt(n)
       real(dp), intent(out) :: estimate
@@ -326,16 +372,16 @@ contains
       end do
    end subroutine adams_weights
 
-   !> adams_weights through history_depth nodes (the only depth the
-   !> prediction takes): the same operations in the same order on arrays of
+   !> adams_weights through adams_points nodes (the prediction's usual
+   !> depth): the same operations in the same order on arrays of
    !> fixed size, which the compiler unrolls (adams_weights' loops of
    !> run-time length cost three times their arithmetic). Each difference
    !> t_k - t_m is formed once: t_m - t_k is its negative to the bit.
    pure subroutine full_adams_weights(tk, columns, t, beta, drop)
       real(dp), intent(in) :: tk(:), t
-      integer, intent(in) :: columns(history_depth)
-      real(dp), intent(out) :: beta(history_depth), drop(history_depth)
-      integer, parameter :: n = history_depth
+      integer, intent(in) :: columns(adams_points)
+      real(dp), intent(out) :: beta(adams_points), drop(adams_points)
+      integer, parameter :: n = adams_points
       ! Gauss points on [-1, 1] and weights as adams_weights' (3 points: n = 5).
       real(dp), parameter :: xg(3) = [-sqrt(0.6_dp), 0.0_dp, sqrt(0.6_dp)]
       real(dp), parameter :: wg(3) = [5.0_dp/9, 8.0_dp/9, 5.0_dp/9]
