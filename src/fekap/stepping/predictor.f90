@@ -21,7 +21,8 @@ module fekap_stepping_predictor
    !> position and adams_points velocities, or one more (history_depth), or
    !> Lagrange extrapolation through up to lagrange_points positions
    !> (quadratic) where velocities are not known. The Hermite degree is
-   !> measured in docs/performance.md.
+   !> measured in docs/performance.md. (adams_weights takes up to six nodes:
+   !> its Gauss rule is exact through them.)
    integer, parameter, public :: history_depth = 6, adams_points = 5, hermite_points = 4, lagrange_points = 3
 
    !> A step whose first Newton correction is at most predictor_margin times
@@ -39,13 +40,14 @@ module fekap_stepping_predictor
    !> the two margins it is the nearer: on Example 1 at dt = 1e-4 the steps
    !> that took Hermite then had first corrections of up to a fifth of the
    !> length tolerance and a second factorisation each, 1,933 steps of
-   !> 10,000; with this margin 32 (docs/performance.md).
+   !> 10,000; with this margin 32 (docs/performance.md). The prediction
+   !> through history_depth velocities is held to the same bound.
    real(dp), parameter, public :: adams_margin = 1.0e-2_dp
 
    !> The prediction through history_depth velocities is made only where the
    !> first one's estimate is at most step_up_reach times its margin: its
-   !> own estimate is smaller by a factor of about the step over the
-   !> motion's time scale. On Example 1 at dt = 5e-4 it passed where the
+   !> own (its distance from the first) is smaller by a factor of about the
+   !> step over the motion's time scale. On Example 1 at dt = 5e-4 it passed where the
    !> first's was up to 61 times the margin (none above 61); at the scissor
    !> lift of N = 1,000 (dt = 0.01) the first estimates are 1e7 times it,
    !> and the second prediction would only add its sums (1 % of the step).
@@ -156,7 +158,8 @@ contains
    !> through one velocity fewer (weighted by dof_length), is at most
    !> adams_margin times the length tolerance; else the prediction through
    !> history_depth velocities, if they are known, with its distance from
-   !> the first as the first's error estimate, under the same bound. The
+   !> the first as its error estimate (the first's error: it errs on the
+   !> safe side), under the same bound. The
    !> higher order serves larger steps: on Example 1 at dt = 5e-4 the first
    !> prediction's estimate is above the margin at every step, and so are
    !> Hermite's first corrections above predictor_margin, where the second
@@ -189,8 +192,9 @@ contains
 
    !> The prediction through history_depth velocities (q1 + sum beta(k) v_k,
    !> k = 1 to history_depth, in that order) into qt, which holds the one
-   !> through a velocity fewer on entry, and the largest distance between
-   !> the two (weighted by dof_length): the latter's error estimate.
+   !> through adams_points velocities on entry, and the largest distance
+   !> between the two (weighted by dof_length), its error estimate. Indexed
+   !> through columns: made only at the steps the first does not serve.
    pure subroutine adams_step_up(n, beta, q1, velocity, columns, dof_length, qt, estimate)
       integer, intent(in) :: n
       real(dp), intent(in) :: beta(history_depth), q1(n), velocity(:, :), dof_length(n)
