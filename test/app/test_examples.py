@@ -59,11 +59,11 @@ def test_fourbar_rates_of_steps_accepted_at_their_predictor():
     """Example 1 at dt = 1e-4: all but a few steps end at their predictor and
     keep its factor of B_f (fewer than 1.05 factorisations a configuration:
     10,033 for 10,001 measured; 11,934 before Adams-Bashforth was taken up
-    to adams_margin, two or more with no factor kept), and their velocities and accelerations are those
-    of the predictor's factor and geometry, round-off from the accepted
-    configuration's (fekap_fem's solve_step): B and C and their rates to
-    1e-13 of the closed form over the revolution (errors of 5e-15 and less
-    measured)."""
+    to adams_margin, two or more with no factor kept), and their velocities
+    and accelerations are those of the predictor's factor and geometry,
+    round-off from the accepted configuration's (fekap_fem's solve_step):
+    B and C and their rates to 1e-13 of the closed form over the revolution
+    (errors of 5e-15 and less measured)."""
     out = run_deck("decks/fourbar.deck", "--dt", "1e-4")
     listing = (out / "fourbar.lis").read_text()
     configurations = int(re.search(r"configurations solved\s+(\d+)", listing).group(1))

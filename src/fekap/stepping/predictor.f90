@@ -47,10 +47,11 @@ module fekap_stepping_predictor
    !> The prediction through history_depth velocities is made only where the
    !> first one's estimate is at most step_up_reach times its margin: its
    !> own (its distance from the first) is smaller by a factor of about the
-   !> step over the motion's time scale. On Example 1 at dt = 5e-4 it passed where the
-   !> first's was up to 61 times the margin (none above 61); at the scissor
-   !> lift of N = 1,000 (dt = 0.01) the first estimates are 1e7 times it,
-   !> and the second prediction would only add its sums (1 % of the step).
+   !> step over the motion's time scale. On Example 1 at dt = 5e-4 it passed
+   !> where the first's was up to 61 times the margin (none above 61); at
+   !> the scissor lift of N = 1,000 (dt = 0.01) the first estimates are 1e7
+   !> times it, and the second prediction would only add its sums (1 % of
+   !> the step).
    real(dp), parameter :: step_up_reach = 1.0e3_dp
 
    !> What extrapolate_history made: nothing (fewer than two configurations),
@@ -159,13 +160,12 @@ contains
    !> adams_margin times the length tolerance; else the prediction through
    !> history_depth velocities, if they are known, with its distance from
    !> the first as its error estimate (the first's error: it errs on the
-   !> safe side), under the same bound. The
-   !> higher order serves larger steps: on Example 1 at dt = 5e-4 the first
-   !> prediction's estimate is above the margin at every step, and so are
-   !> Hermite's first corrections above predictor_margin, where the second
-   !> prediction passes at seven steps in ten (docs/performance.md). It is
-   !> made only where the first does not serve, so that the smaller steps'
-   !> predictions stay the first's.
+   !> safe side), under the same bound. The higher order serves larger
+   !> steps: on Example 1 at dt = 5e-4 the first prediction's estimate is
+   !> above the margin at every step, and so are Hermite's first corrections
+   !> above predictor_margin, where the second prediction passes at seven
+   !> steps in ten (docs/performance.md). It is made only where the first
+   !> does not serve, so that the smaller steps' predictions stay the first's.
    logical function adams_prediction(self, t, columns, length, dof_length, qt) result(taken)
       type(predictor_history_type), intent(in) :: self
       real(dp), intent(in) :: t

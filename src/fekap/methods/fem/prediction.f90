@@ -20,9 +20,9 @@ module fekap_fem_prediction
       logical :: smooth = .false.
       !> The length tolerance of the step's predictor (the Adams-Bashforth
       !> choice, see adams_margin, and the acceptance at the predictor, see
-      !> predictor_margin): the
-      !> length tolerance, or the round-off of the dofs over predictor_margin
-      !> where that is larger (fem_predict's roundoff_length).
+      !> predictor_margin): the length tolerance, or the round-off of the
+      !> dofs over predictor_margin where that is larger (fem_predict's
+      !> roundoff_length).
       real(dp) :: length = 0
    contains
       !> A prediction begins with this length tolerance, not smooth (yet).
