@@ -111,6 +111,13 @@ module fekap_assembly_strain_rate
       real(dp), allocatable :: column_max(:)
       !> Whether ab holds a factor.
       logical :: factored = .false.
+      !> Whether ab holds more than B_f's entries at their places: the factor
+      !> of the band's loops or of dgbtrf, made in ab itself, which the next
+      !> assembly zeroes first (clear_assembled). A factor made in the
+      !> nonzeros' slots (refactor_nonzeros) leaves ab as assembled, zero at
+      !> every other place, and the next assembly writes its entries over
+      !> the last's (scatter_entries) and zeroes the slidelines' rows only.
+      logical :: band_factored = .false.
       !> Whether the factor is of B_f at another configuration than the
       !> geometry and B_d held (carry_geometry moved them on since the last
       !> assembly): its condition bounds are then not known.
@@ -546,14 +553,21 @@ contains
    !> Zero what the last assembly and factorisation can have left nonzero in
    !> ab and bd, before an assembly (not the whole storage: at 10^4 cells it
    !> is megabytes a step, two assemblies a step).
-   !> - ab, with the band LU's loops (not lu_blocked): rows kl + 1 to
+   !> - ab, after the band's loops or dgbtrf factored in it (band_factored):
+   !>   with the band LU's loops (not lu_blocked), rows kl + 1 to
    !>   2 kl + ku + 1 of each column only. Rows 1 to kl are the factor's fill,
    !>   which the factorisation itself sets to zero before it adds into them
    !>   (dgbtf2's order, as band_lu_factor_loops: columns ku + 2 to kv at its
    !>   start, column j + kv at column j), and which nothing reads before: the
    !>   entries' places (entry_places) are below them. dgbtrf's blocked code
    !>   reads no fill either, but every place of the band is an entry place
-   !>   there (column_sizes reads them all): the whole band then.
+   !>   there (column_sizes reads them all): the whole band then. Otherwise ab
+   !>   holds the last assembly's entries alone: the elements' are written
+   !>   over (scatter_entries), and only the slidelines' rows are zeroed,
+   !>   at every place of the band (their dofs change with the segment). At
+   !>   the scissor lift of 10^4 cells, B's assembly had 15 % of the run's
+   !>   time samples (perf), four fifths of them at the sums into the band
+   !>   zeroed just before (docs/performance.md, the twenty-second session).
    !> A band of at most small_band places is zeroed whole, with bd: one
    !> short block costs fewer instructions than a loop over the columns.
    !> - bd: the places the elements' entries go (element_map's second lists)
@@ -563,12 +577,21 @@ contains
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       integer :: i
+      if (self%band_factored) then
+         if (self%lu_blocked .or. size(self%ab) <= small_band) then
+            call zero(self%ab, size(self%ab))
+         else
+            call zero_rows(size(self%ab, 1), self%n, self%kl + 1, self%ab)
+         end if
+         self%band_factored = .false.
+      else
+         do i = 1, size(self%slide_row)
+            call zero_band_row(self, self%slide_row(i))
+         end do
+      end if
       if (self%lu_blocked .or. size(self%ab) <= small_band) then
-         call zero(self%ab, size(self%ab))
          call zero(self%bd, size(self%bd))
          return
-      else
-         call zero_rows(size(self%ab, 1), self%n, self%kl + 1, self%ab)
       end if
       if (size(self%bd) == 0) return
       call zero_driven(size(mesh%elements), self%element_map, self%element_count, size(self%bd), self%bd)
@@ -576,6 +599,17 @@ contains
          self%bd(self%slide_row(i), :) = 0
       end do
    end subroutine clear_assembled
+
+   !> Row `row` of B_f zero at every place of the band (entry_places' of a
+   !> slideline's row).
+   pure subroutine zero_band_row(self, row)
+      type(strain_rate_type), intent(inout) :: self
+      integer, intent(in) :: row
+      integer :: eq
+      do eq = max(1, row - self%kl), min(self%n, row + self%ku)
+         self%ab(self%kl + self%ku + 1 + row - eq, eq) = 0
+      end do
+   end subroutine zero_band_row
 
    !> a(first:, :) = 0 of an (m, n) array, column by column.
    pure subroutine zero_rows(m, n, first, a)
@@ -653,25 +687,29 @@ contains
       end do
    end subroutine column_sizes
 
-   !> Add an element's entries of B through its lists of destinations
-   !> (element_map): nb into the band storage ab, then nd into B_d, each
-   !> array taken in memory order.
+   !> An element's entries of B through its lists of destinations
+   !> (element_map): nb into the band storage ab (written), then nd added
+   !> into B_d, each array taken in memory order.
    pure subroutine scatter_entries(map, nb, nd, values, nab, ab, nbd, bd)
       integer, intent(in) :: map(2, element_entries), nb, nd, nab, nbd
       real(dp), intent(in) :: values(element_entries)
       !> ab and bd as arrays of their sizes (one index per entry).
       real(dp), intent(inout) :: ab(nab), bd(nbd)
       integer :: m
+      ! Each place of ab takes one entry (an element's rows are its own):
+      ! written over the last assembly's, so that ab is not zeroed first
+      ! (clear_assembled). + 0 gives what adding to a zeroed place gave: a
+      ! -0 becomes +0, every other value stays.
       if (nb == element_entries) then
          ! An element on free dofs only (most of a large mesh): its entries
          ! in their own order (map(1, m) = m), in a loop of fixed length.
          do m = 1, element_entries
-            ab(map(2, m)) = ab(map(2, m)) + values(m)
+            ab(map(2, m)) = values(m) + 0
          end do
          return
       end if
       do m = 1, nb
-         ab(map(2, m)) = ab(map(2, m)) + values(map(1, m))
+         ab(map(2, m)) = values(map(1, m)) + 0
       end do
       do m = nb + 1, nb + nd
          bd(map(2, m)) = bd(map(2, m)) + values(map(1, m))
@@ -746,6 +784,7 @@ contains
          call refactor_nonzeros(self%nonzeros, self%ab, self%ipiv, keep_pivot, stopped, loaded=.true.)
          if (stopped > 0) call band_lu_factor_loops(self%ab, self%kl, self%ku, self%ipiv, info, stopped)
       end if
+      self%band_factored = self%lu_blocked .or. stopped > 0
       self%factored = info == 0
       self%pivot_ratio = 0
       if (.not. self%factored) return
