@@ -564,10 +564,8 @@ contains
    !>   there (column_sizes reads them all): the whole band then. Otherwise ab
    !>   holds the last assembly's entries alone: the elements' are written
    !>   over (scatter_entries), and only the slidelines' rows are zeroed,
-   !>   at every place of the band (their dofs change with the segment). At
-   !>   the scissor lift of 10^4 cells, B's assembly had 15 % of the run's
-   !>   time samples (perf), four fifths of them at the sums into the band
-   !>   zeroed just before (docs/performance.md, the twenty-second session).
+   !>   at every place of the band (their dofs change with the segment;
+   !>   docs/performance.md, the twenty-second session).
    !> A band of at most small_band places is zeroed whole, with bd: one
    !> short block costs fewer instructions than a loop over the columns.
    !> - bd: the places the elements' entries go (element_map's second lists)
