@@ -111,12 +111,15 @@ module fekap_assembly_strain_rate
       real(dp), allocatable :: column_max(:)
       !> Whether ab holds a factor.
       logical :: factored = .false.
-      !> Whether ab holds more than B_f's entries at their places: the factor
-      !> of the band's loops or of dgbtrf, made in ab itself, which the next
+      !> Whether rows kl + 1 on of ab hold more than B_f's entries at their
+      !> places: the factor of the band's loops or of dgbtrf, made in ab
+      !> itself (whether or not it is regular: `factored`), which the next
       !> assembly zeroes first (clear_assembled). A factor made in the
-      !> nonzeros' slots (refactor_nonzeros) leaves ab as assembled, zero at
-      !> every other place, and the next assembly writes its entries over
-      !> the last's (scatter_entries) and zeroes the slidelines' rows only.
+      !> nonzeros' slots (refactor_nonzeros) leaves those rows as assembled,
+      !> zero at every other place, and the next assembly writes its entries
+      !> over the last's (scatter_entries) and zeroes the slidelines' rows
+      !> only. (Rows 1 to kl, the fill, may hold an older factor's; nothing
+      !> reads them before the band's loops zero them.)
       logical :: band_factored = .false.
       !> Whether the factor is of B_f at another configuration than the
       !> geometry and B_d held (carry_geometry moved them on since the last
@@ -561,22 +564,26 @@ contains
    !>   start, column j + kv at column j), and which nothing reads before: the
    !>   entries' places (entry_places) are below them. dgbtrf's blocked code
    !>   reads no fill either, but every place of the band is an entry place
-   !>   there (column_sizes reads them all): the whole band then. Otherwise ab
-   !>   holds the last assembly's entries alone: the elements' are written
-   !>   over (scatter_entries), and only the slidelines' rows are zeroed,
-   !>   at every place of the band (their dofs change with the segment;
-   !>   docs/performance.md, the twenty-second session).
-   !> A band of at most small_band places is zeroed whole, with bd: one
-   !> short block costs fewer instructions than a loop over the columns.
+   !>   there (column_sizes reads them all): the whole band then. A band of
+   !>   at most small_band places is zeroed whole: one short block costs
+   !>   fewer instructions than a loop over the columns.
+   !> - ab, after a factorisation in the nonzeros' slots (not band_factored):
+   !>   rows kl + 1 on hold the last assembly's entries alone. The elements'
+   !>   are written over (scatter_entries); the slidelines' rows are zeroed
+   !>   at every place of the band, their dofs changing with the segment
+   !>   (docs/performance.md, the twenty-second session).
    !> - bd: the places the elements' entries go (element_map's second lists)
-   !>   and the slidelines' rows (their dofs change with the segment); bd is
-   !>   zero elsewhere from its allocation.
+   !>   and the slidelines' rows (their dofs change with the segment), or the
+   !>   whole block with a whole band; bd is zero elsewhere from its
+   !>   allocation.
    pure subroutine clear_assembled(self, mesh)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       integer :: i
+      logical :: whole
+      whole = self%lu_blocked .or. size(self%ab) <= small_band
       if (self%band_factored) then
-         if (self%lu_blocked .or. size(self%ab) <= small_band) then
+         if (whole) then
             call zero(self%ab, size(self%ab))
          else
             call zero_rows(size(self%ab, 1), self%n, self%kl + 1, self%ab)
@@ -587,7 +594,7 @@ contains
             call zero_band_row(self, self%slide_row(i))
          end do
       end if
-      if (self%lu_blocked .or. size(self%ab) <= small_band) then
+      if (whole) then
          call zero(self%bd, size(self%bd))
          return
       end if
@@ -694,10 +701,14 @@ contains
       !> ab and bd as arrays of their sizes (one index per entry).
       real(dp), intent(inout) :: ab(nab), bd(nbd)
       integer :: m
-      ! Each place of ab takes one entry (an element's rows are its own):
-      ! written over the last assembly's, so that ab is not zeroed first
-      ! (clear_assembled). + 0 gives what adding to a zeroed place gave: a
-      ! -0 becomes +0, every other value stays.
+      ! Each place of ab takes one entry: an element's rows are its own, and
+      ! its six dofs are distinct (its two nodes are; the test
+      ! assembly_over_the_last_is_a_fresh_one checks the places of the
+      ! example decks). So an entry is written over the last assembly's, and
+      ! ab is not zeroed first (clear_assembled). + 0 gives what adding to a
+      ! zeroed place gave: a -0 becomes +0, every other value stays (IEEE
+      ! addition, which the compiler keeps while signed zeros are honoured,
+      ! as without -ffast-math).
       if (nb == element_entries) then
          ! An element on free dofs only (most of a large mesh): its entries
          ! in their own order (map(1, m) = m), in a loop of fixed length.
@@ -759,8 +770,7 @@ contains
       real(dp) :: ratio
       integer :: j, stopped
       ! The matrix kept for strain_rate_rcond_bounds and the next estimate
-      ! (rows 1 to kl are the factor's fill, zero here, as is the rest of
-      ! the storage outside the band).
+      ! (read at B_f's places, below rows 1 to kl, the factor's fill).
       self%estimate_current = .false.
       self%unfactored_kept = allocated(self%unfactored)
       ! The same pass puts B_f's entries at their slots in the factor
