@@ -116,10 +116,10 @@ module fekap_assembly_strain_rate
       !> itself (whether or not it is regular: `factored`), which the next
       !> assembly zeroes first (clear_assembled). A factor made in the
       !> nonzeros' slots (refactor_nonzeros) leaves those rows as assembled,
-      !> zero at every other place, and the next assembly writes its entries
-      !> over the last's (scatter_entries) and zeroes the slidelines' rows
-      !> only. (Rows 1 to kl, the fill, may hold an older factor's; nothing
-      !> reads them before the band's loops zero them.)
+      !> zero at every other place, and the next assembly writes each of its
+      !> places over the last's (scatter_entries; scatter_row zeroes a
+      !> slideline's row first). (Rows 1 to kl, the fill, may hold an older
+      !> factor's; nothing reads them before the band's loops zero them.)
       logical :: band_factored = .false.
       !> Whether the factor is of B_f at another configuration than the
       !> geometry and B_d held (carry_geometry moved them on since the last
@@ -568,18 +568,17 @@ contains
    !>   at most small_band places is zeroed whole: one short block costs
    !>   fewer instructions than a loop over the columns.
    !> - ab, after a factorisation in the nonzeros' slots (not band_factored):
-   !>   rows kl + 1 on hold the last assembly's entries alone. The elements'
-   !>   are written over (scatter_entries); the slidelines' rows are zeroed
-   !>   at every place of the band, their dofs changing with the segment
-   !>   (docs/performance.md, the twenty-second session).
-   !> - bd: the places the elements' entries go (element_map's second lists)
-   !>   and the slidelines' rows (their dofs change with the segment), or the
-   !>   whole block with a whole band; bd is zero elsewhere from its
-   !>   allocation.
+   !>   nothing. Rows kl + 1 on hold the last assembly's entries alone, and
+   !>   the next writes each of its places: the elements' are written over
+   !>   (scatter_entries), a slideline's row is zeroed at every place of the
+   !>   band before its entries are added (scatter_row: its dofs change with
+   !>   the segment; docs/performance.md, the twenty-second session).
+   !> - bd: the places the elements' entries go (element_map's second
+   !>   lists), or the whole block with a whole band (scatter_row zeroes a
+   !>   slideline's row); bd is zero elsewhere from its allocation.
    pure subroutine clear_assembled(self, mesh)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
-      integer :: i
       logical :: whole
       whole = self%lu_blocked .or. size(self%ab) <= small_band
       if (self%band_factored) then
@@ -589,10 +588,6 @@ contains
             call zero_rows(size(self%ab, 1), self%n, self%kl + 1, self%ab)
          end if
          self%band_factored = .false.
-      else
-         do i = 1, size(self%slide_row)
-            call zero_band_row(self, self%slide_row(i))
-         end do
       end if
       if (whole) then
          call zero(self%bd, size(self%bd))
@@ -600,9 +595,6 @@ contains
       end if
       if (size(self%bd) == 0) return
       call zero_driven(size(mesh%elements), self%element_map, self%element_count, size(self%bd), self%bd)
-      do i = 1, size(self%slide_row)
-         self%bd(self%slide_row(i), :) = 0
-      end do
    end subroutine clear_assembled
 
    !> Row `row` of B_f zero at every place of the band (entry_places' of a
@@ -725,14 +717,19 @@ contains
       end do
    end subroutine scatter_entries
 
-   !> Row `row` of B on the dofs `dofs` (0: none): free columns into the
-   !> band, driven ones into B_d (scatter_driven).
+   !> Row `row` of B on the dofs `dofs` (0: none), a slideline's: free
+   !> columns into the band, driven ones into B_d (scatter_driven), after
+   !> the row is zeroed at every place of the band and of B_d (its dofs
+   !> change with the segment, and the band is not zeroed before every
+   !> assembly: clear_assembled).
    pure subroutine scatter_row(self, mesh, row, dofs, values)
       type(strain_rate_type), intent(inout) :: self
       type(mesh_type), intent(in) :: mesh
       integer, intent(in) :: row, dofs(:)
       real(dp), intent(in) :: values(:)
       integer :: k, eq, band_row
+      call zero_band_row(self, row)
+      self%bd(row, :) = 0
       band_row = self%kl + self%ku + 1 + row
       do k = 1, size(dofs)
          if (dofs(k) == 0) cycle
