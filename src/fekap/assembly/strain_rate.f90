@@ -42,7 +42,7 @@ module fekap_assembly_strain_rate
 
    public :: strain_rate_type, new_strain_rate, assemble_strain_rate, factor_strain_rate, solve_strain_rate
    public :: strain_rates, strain_accelerations, strain_rate_rcond, strain_rate_rcond_bounds, rate_geometry_at
-   public :: strain_forces, strain_rows, carry_geometry
+   public :: strain_forces, strain_rows, carry_geometry, solve_material_tangent
 
    !> The bounds from the last estimate hold while x = ||B_0^-1|| ||B_f - B_0||
    !> is below this (within ((1 + x)/(1 - x))**2 < 2.8 of each other).
@@ -902,6 +902,30 @@ contains
       real(dp), contiguous, intent(inout) :: x(:)
       call nonzeros_solve(self%nonzeros, x)
    end subroutine solve_strain_rate
+
+   !> Solve K_ff x = b, K = B^T W B the material tangent (46) at zero
+   !> strain (W as strain_forces'), with B_f's factor: x = B_f^-1 W^-1
+   !> B_f^-T b (b and x by equations; W^-1 by band rows). The error is then
+   !> of the condition of B_f, not of its square as with K's own factor:
+   !> kinetostatics' deflection under the loads of its masses.
+   pure subroutine solve_material_tangent(self, mesh, x)
+      type(strain_rate_type), intent(in) :: self
+      type(mesh_type), intent(in) :: mesh
+      real(dp), contiguous, intent(inout) :: x(:)
+      integer :: e, i
+      call nonzeros_solve_transposed(self%nonzeros, x)
+      do e = 1, size(mesh%elements)
+         associate (el => mesh%elements(e), rows => self%element_row(:, e))
+            x(rows(1)) = x(rows(1))/(el%ea*el%length)
+            x(rows(2)) = x(rows(2))/(el%kga*el%length)
+            x(rows(3)) = x(rows(3))/(el%ei/el%length)
+         end associate
+      end do
+      do i = 1, size(mesh%slides)
+         x(self%slide_row(i)) = x(self%slide_row(i))/mesh%slides(i)%kp
+      end do
+      call nonzeros_solve(self%nonzeros, x)
+   end subroutine solve_material_tangent
 
    !> r = B v by band rows, the strain and gap rates of the velocities v over
    !> all dofs (zero on fixed dofs), with the stress-free B at the section

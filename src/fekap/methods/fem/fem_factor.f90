@@ -172,8 +172,11 @@ contains
       carried = .false.
       ! Not under the Taylor predictor, whose positions come from the rates
       ! (a change of their round-off is amplified near a change point; as
-      ! solve_rates' refinement there), nor loaded (the full tangent's factor).
-      if (self%loaded .or. self%model%analysis%predictor == predictor_taylor) return
+      ! solve_rates' refinement there), nor loaded (the full tangent's
+      ! factor), nor in kinetostatics, whose deflection takes the factor
+      ! unrefined (solve_at_accepted: a carried one would leave up to
+      ! carry_contraction of it).
+      if (self%loaded .or. self%kinetostatic .or. self%model%analysis%predictor == predictor_taylor) return
       ! Nor where the rates take the plain solve (B_f's bounds from the last
       ! estimate show it well conditioned: plain_rates_rcond), which needs
       ! the factor at qt itself; a carried factor's rates are refined.

@@ -6,7 +6,8 @@
 !> mass of fekap_element_inertia, point masses at nodes). The elastic links
 !> answer with a small deflection u: K_ff u_f = f_f on the free dofs (u = 0 on
 !> the supported and driven ones), K the material tangent at q, which the
-!> stepper has factored for the rates already; the constrained dofs carry the
+!> stepper has factored for the rates already (or B_f, K = B^T W B, in the
+!> square-root form: fekap_fem_state's solve_at_accepted); the constrained dofs carry the
 !> reactions r_c = (K u)_c - f_c: the drive torques and forces (the driven
 !> dofs) and the support reactions. The force a joint exerts on a link end is
 !> the end force of the link's element there, g_e = K_e u_e - f_e, with f_e the

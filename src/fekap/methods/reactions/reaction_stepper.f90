@@ -5,8 +5,9 @@
 !>
 !> Kinetostatics: the FEM gives the motion (positions, velocities,
 !> accelerations); the loads of the masses and gravity along it, the
-!> elastic deflection they cause (solved with the FEM's factor of the
-!> material tangent at the accepted configuration, the one its rates used)
+!> elastic deflection they cause (solved with the FEM's factor at the
+!> accepted configuration, the one its rates used: of the material tangent,
+!> or of B_f in the square-root form)
 !> and the reactions follow (fekap_reactions_kinetostatics). The external loads
 !> (LOADs) act in kinetostatics' loads, not on the motion: the stepper takes
 !> them from the FEM's mesh, whose kinematics then runs unloaded.
