@@ -102,7 +102,7 @@ module fekap_fem_state
       !> Scratch over the equations for the square-root form's solves.
       real(dp), allocatable :: root_work(:)
       !> Whether the K form's rates of a redundant mechanism are refined
-      !> with its strain rates (root%refines, unloaded kinematics: see
+      !> with its strain rates (root%refines, unloaded kinematics or kinetostatics: see
       !> fekap_fem_rates' refine_rates), and its scratch over B's rows.
       logical :: refined_rates = .false.
       real(dp), allocatable :: strain_work(:)
@@ -169,18 +169,14 @@ contains
    !> The form of the linear systems: the square-root form where B_f is
    !> square and the motion unstressed (kinematics, and kinetostatics, whose
    !> loads act on its deflection, not on its motion: release_loads); a
-   !> redundant mechanism's K-form rates refined with its strain rates in
-   !> kinematics. Stressed configurations (loads, statics) have no such
-   !> residual. (A redundant mechanism's kinetostatics keeps unrefined
-   !> rates: refined, the drive torque of decks/double-crank.deck with
-   !> rho = 1 moved from -5.3 to 7.0 at its second step; not understood.)
+   !> redundant mechanism's K-form rates refined with its strain rates
+   !> there. Stressed configurations (loads, statics) have no such residual.
    subroutine choose_form(self)
       class(fem_core_type), intent(inout) :: self
-      logical :: kinematics
-      kinematics = planned_effects(self%model) == effects_kinematics
-      self%root_form = self%root%applies .and. .not. self%loaded .and. (kinematics .or. self%kinetostatic) .and. &
-         & self%model%analysis%solver /= solver_dense
-      self%refined_rates = self%root%refines .and. .not. self%loaded .and. kinematics
+      logical :: unstressed
+      unstressed = .not. self%loaded .and. (self%kinetostatic .or. planned_effects(self%model) == effects_kinematics)
+      self%root_form = self%root%applies .and. unstressed .and. self%model%analysis%solver /= solver_dense
+      self%refined_rates = self%root%refines .and. unstressed
       if (self%refined_rates .and. .not. allocated(self%strain_work)) then
          allocate (self%strain_work(strain_rows(self%mesh)), source=0.0_dp)
       end if
