@@ -53,9 +53,11 @@ def test_reactions_written_per_step(tmp_path):
 def test_motion_is_the_kinematic_one(tmp_path):
     """Kinetostatics' motion is the unloaded kinematics (its loads act on the deflection): the
     same rates as the deck run as kinematics, and the crank at its drive's 2 pi rad/s, to
-    round-off. Measured: velocities 1.1e-14 and accelerations 2.6e-13 apart, the crank's omega
-    2.7e-15 off and alpha 2.8e-14; with K's factor (before the square-root form took
-    kinetostatics) 5.7e-10, 1.6e-8, 1.8e-10 and 3.4e-9, which these bounds reject."""
+    round-off. Measured: velocities 1.1e-14 and accelerations 2.6e-13 apart (of 24 and 268),
+    the crank's omega 2.7e-15 off and alpha 2.8e-14; with K's factor (before the square-root
+    form took kinetostatics) 5.7e-10, 1.6e-8, 1.8e-10 and 3.4e-9, which these bounds reject.
+    1e-12 of each column: the two runs may take different Newton paths (kinematics may carry a
+    factor, kinetostatics does not), each within the length tolerance."""
     out = tmp_path / "ks"
     run = run_fekap("-q", "-o", str(out), DECK)
     assert run.returncode == 0, run.stderr
@@ -67,13 +69,13 @@ def test_motion_is_the_kinematic_one(tmp_path):
     for column in ("x", "y", "vx", "vy", "ax", "ay"):
         largest = max(abs(float(r[column])) for r in want)
         worst = max(abs(float(a[column]) - float(b[column])) for a, b in zip(got, want))
-        assert worst <= 1e-13 * largest, (column, worst, largest)
+        assert worst <= 1e-12 * largest, (column, worst, largest)
     links = read_rows(out / "links.csv")
     crank = [r for r in links if r["link"] == "AB"]
     assert len(crank) == 101
     largest_alpha = max(abs(float(r["alpha"])) for r in links)
-    assert max(abs(float(r["omega"]) - 2 * math.pi) for r in crank) <= 1e-13 * 2 * math.pi
-    assert max(abs(float(r["alpha"])) for r in crank) <= 1e-13 * largest_alpha
+    assert max(abs(float(r["omega"]) - 2 * math.pi) for r in crank) <= 1e-12 * 2 * math.pi
+    assert max(abs(float(r["alpha"])) for r in crank) <= 1e-12 * largest_alpha
 
 
 def test_redundant_slender_mechanism_rates_refined(tmp_path):

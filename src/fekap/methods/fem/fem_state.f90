@@ -65,7 +65,9 @@ module fekap_fem_state
       logical :: loaded = .false.
       !> Whether the run is kinetostatics, which solves the deflection of its
       !> loads with the factor at the accepted configuration
-      !> (solve_at_accepted): never a factor carried there (carry_factor).
+      !> (solve_at_accepted): never a factor carried there (carry_factor; a
+      !> step accepted at its predictor keeps the predictor's, a round-off
+      !> correction away).
       logical :: kinetostatic = .false.
       !> Work over the dofs: a change or rate of the loads (mesh%loads).
       real(dp), allocatable :: load_work(:)
