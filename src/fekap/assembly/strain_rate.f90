@@ -33,6 +33,7 @@ module fekap_assembly_strain_rate
    use fekap_kinds, only: dp
    use fekap_model, only: joint_prismatic
    use fekap_assembly_mesh, only: mesh_type
+   use fekap_element_beam, only: beam_type
    use fekap_assembly_tracking, only: slide_position
    use fekap_linalg_lapack, only: band_lu_factor, band_lu_factor_loops, band_lu_blocked, norm_estimate_step
    use fekap_linalg_band_lu, only: band_lu_nonzeros_type, new_band_lu_nonzeros, gather_nonzeros, nonzeros_solve, &
@@ -904,10 +905,10 @@ contains
    end subroutine solve_strain_rate
 
    !> Solve K_ff x = b, K = B^T W B the material tangent (46) at zero
-   !> strain (W as strain_forces'), with B_f's factor: x = B_f^-1 W^-1
-   !> B_f^-T b (b and x by equations; W^-1 by band rows). The error is then
-   !> of the condition of B_f, not of its square as with K's own factor:
-   !> kinetostatics' deflection under the loads of its masses.
+   !> strain (W: row_weights, kp for a gap), with B_f's factor: x = B_f^-1
+   !> W^-1 B_f^-T b (b and x by equations; W^-1 by band rows). The error is
+   !> then of the condition of B_f, not of its square as with K's own
+   !> factor: kinetostatics' deflection under the loads of its masses.
    pure subroutine solve_material_tangent(self, mesh, x)
       type(strain_rate_type), intent(in) :: self
       type(mesh_type), intent(in) :: mesh
@@ -915,10 +916,8 @@ contains
       integer :: e, i
       call nonzeros_solve_transposed(self%nonzeros, x)
       do e = 1, size(mesh%elements)
-         associate (el => mesh%elements(e), rows => self%element_row(:, e))
-            x(rows(1)) = x(rows(1))/(el%ea*el%length)
-            x(rows(2)) = x(rows(2))/(el%kga*el%length)
-            x(rows(3)) = x(rows(3))/(el%ei/el%length)
+         associate (rows => self%element_row(:, e))
+            x(rows) = x(rows)/row_weights(mesh%elements(e))
          end associate
       end do
       do i = 1, size(mesh%slides)
@@ -1003,12 +1002,20 @@ contains
       end do
    end subroutine strain_accelerations
 
+   !> The material tangent's (46) weights W of an element's rows: EA L, kGA
+   !> L and EI / L for Gamma1, Gamma2 and kappa L at the one Gauss point
+   !> (weight 2, Jacobian L/2); a gap's is kp (65). So K = B^T W B at zero
+   !> strain.
+   pure function row_weights(el) result(w)
+      type(beam_type), intent(in) :: el
+      real(dp) :: w(3)
+      w = [el%ea*el%length, el%kga*el%length, el%ei*(1/el%length)]
+   end function row_weights
+
    !> f = B_f^T W r over the free equations: the nodal forces of the
    !> stresses W r of strain and gap rates r (by rows, as strain_rates gives
    !> them), element by element with the stress-free B of the last assembly
-   !> (rate_geometry_at). W is the material tangent's (46): EA L, kGA L and
-   !> EI / L for Gamma1, Gamma2 and kappa L at the one Gauss point (weight 2,
-   !> Jacobian L/2), kp for a gap (65); so K = B^T W B at zero strain.
+   !> (rate_geometry_at); W as row_weights', kp for a gap.
    !> `driven` (r a column of B_d): the elements with entries on driven
    !> dofs only, r being zero on the others' rows, whose forces are zeros
    !> that would add nothing (the same f to the bit).
@@ -1018,7 +1025,7 @@ contains
       real(dp), contiguous, intent(in) :: r(:)
       real(dp), contiguous, intent(out) :: f(:)
       logical, intent(in), optional :: driven
-      real(dp) :: rl, c, s, p1, p2, p3, fe(6)
+      real(dp) :: rl, c, s, p1, p2, p3, fe(6), w(3)
       integer :: e, i, k, eq
       logical :: driven_only
       driven_only = .false.
@@ -1032,9 +1039,10 @@ contains
             rl = 1/el%length
             c = self%section(1, e)
             s = self%section(2, e)
-            p1 = el%ea*el%length*r(rows(1))
-            p2 = el%kga*el%length*r(rows(2))
-            p3 = el%ei*rl*r(rows(3))
+            w = row_weights(el)
+            p1 = w(1)*r(rows(1))
+            p2 = w(2)*r(rows(2))
+            p3 = w(3)*r(rows(3))
             ! The rows of B (see assemble_strain_rate's values at zero strain).
             fe(1) = (-c*p1 + s*p2)*rl
             fe(2) = (-s*p1 - c*p2)*rl
