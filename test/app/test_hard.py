@@ -87,6 +87,27 @@ def test_legitimate_large_steps_not_rejected(deck, predictor):
     check(JUMP not in listing(out), f"{deck} --predictor {predictor}: a legitimate step was rejected")
 
 
+@pytest.mark.parametrize("options", ((), ("--method", "cartesian"), ("--method", "angles"), ("--spatial",)))
+def test_drive_held_still_is_no_jump(options):
+    """Example 1 with its crank held still (rate 0): every step moves by
+    round-off only, which nothing explains (the drive increment and the
+    responses to it are 0). That is not a jump (fekap_stepping_jump: changes
+    within Newton's length tolerance are round-off); each method and the
+    spatial one ran to t = 1 with C at its start, at rest. Before, the planar
+    methods rejected step 1 as a jump and stopped with exit 3."""
+    deck = OUT / "fourbar-held.deck"
+    text = (ROOT / FOURBAR).read_text()
+    assert "rotation AB  rate 2*pi" in text
+    deck.write_text(text.replace("rotation AB  rate 2*pi", "rotation AB  rate 0"))
+    out, stderr = run_case(str(deck), *options, name="held" + "".join(options))
+    check(JUMP not in listing(out) and stderr == "", f"{options}: {stderr}")
+    series = point_series(out, "C")
+    check(len(series["t"]) == 41 and series["t"][-1] == 1.0, f"{options}: rows {series['t'][:3]}...")
+    for key, want in (("x", 3.0), ("y", math.sqrt(15)), ("vx", 0.0), ("vy", 0.0), ("ax", 0.0), ("ay", 0.0)):
+        worst = max(abs(v - want) for v in series[key])
+        check(worst <= 1e-12, f"{options}: C {key} off {want} by {worst:.2e}")
+
+
 def test_branch_jumps_caught():
     """Combinations that landed on the lower branch before the jump check
     (measured: C = (3, -3.873) at t = 1) now reject the jump, cut the step and

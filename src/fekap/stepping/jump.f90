@@ -45,13 +45,17 @@ module fekap_stepping_jump
 contains
 
    !> The ratio of the change of a coordinate over a step to what explains it:
-   !> max(|dq_old|, |dq_new|, floor), the linear responses to the drive
-   !> increment at the two ends of the step and the increment itself (huge
-   !> for a change that nothing explains).
-   elemental real(dp) function jump_bound_ratio(change, dq_old, dq_new, floor_) result(ratio)
-      real(dp), intent(in) :: change, dq_old, dq_new, floor_
+   !> max(|dq_old|, |dq_new|, floor, resolution), the linear responses to
+   !> the drive increment at the two ends of the step, the increment itself,
+   !> and the least rotation the method's Newton resolves (its length
+   !> tolerance, relative to the model size: radians). A change within
+   !> Newton's resolution is round-off, not a jump: a drive held still
+   !> (rate 0) explains nothing, yet its steps move by round-off (huge for a
+   !> change that nothing explains, were resolution 0).
+   elemental real(dp) function jump_bound_ratio(change, dq_old, dq_new, floor_, resolution) result(ratio)
+      real(dp), intent(in) :: change, dq_old, dq_new, floor_, resolution
       real(dp) :: bound
-      bound = max(floor_, abs(dq_new), abs(dq_old))
+      bound = max(floor_, abs(dq_new), abs(dq_old), resolution)
       if (bound > 0) then
          ratio = abs(change)/bound
       else

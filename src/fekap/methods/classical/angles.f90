@@ -253,7 +253,7 @@ contains
       increment = self%theta1(1) - f0
       call branch_state(self, self%d, new)
       call magnitude_ratio(self%d - self%history%q(:, self%history%newest), increment*self%branch%response(:, 1), &
-         & increment*new%response(:, 1), abs(increment), worst, where_)
+         & increment*new%response(:, 1), abs(increment), self%analysis%length_tol, worst, where_)
       self%reference = max(self%reference, new%measure)
       where_ = max(1, where_)
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, &

@@ -315,7 +315,7 @@ contains
          dq_new(b) = dot_product(new%response(3*b, :), dd)
       end do
       call magnitude_ratio(self%q(3:self%system%n:3) - self%history%q(3:self%system%n:3, self%history%newest), dq_old, dq_new, &
-         & step_floor, worst, where_)
+         & step_floor, self%analysis%length_tol, worst, where_)
       where_ = max(1, where_)
       jump = branch_jump_text(t, self%branch, new, self%reference, worst, &
          & self%q(3*where_) - self%history%q(3*where_, self%history%newest), 'the angle of link '//trim(self%body_name(where_)))

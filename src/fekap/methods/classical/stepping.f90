@@ -378,12 +378,15 @@ contains
    !> Magnitude part of the jump check: the largest ratio of |change| of an
    !> angle coordinate over the step to max(|dq_old|, |dq_new|, floor), the
    !> linear responses to the drive increment at the two ends and the drive
-   !> increment itself; and the coordinate where it occurs (0 if none moved).
-   pure subroutine magnitude_ratio(change, dq_old, dq_new, drive_floor, worst, where_)
+   !> increment itself (or Newton's resolution, jump_bound_ratio's); and the
+   !> coordinate where it occurs (0 if none moved).
+   pure subroutine magnitude_ratio(change, dq_old, dq_new, drive_floor, resolution, worst, where_)
       !> Changes of the angle coordinates and their linear responses.
       real(dp), intent(in) :: change(:), dq_old(:), dq_new(:)
       !> The drive increment (radians, or lengths of the shortest link).
       real(dp), intent(in) :: drive_floor
+      !> The length tolerance, relative to the model size (radians).
+      real(dp), intent(in) :: resolution
       real(dp), intent(out) :: worst
       integer, intent(out) :: where_
       real(dp) :: ratio
@@ -391,7 +394,7 @@ contains
       worst = 0
       where_ = 0
       do i = 1, size(change)
-         ratio = jump_bound_ratio(change(i), dq_old(i), dq_new(i), drive_floor)
+         ratio = jump_bound_ratio(change(i), dq_old(i), dq_new(i), drive_floor, resolution)
          if (ratio > worst) then
             worst = ratio
             where_ = i

@@ -124,7 +124,7 @@ contains
       worst_dof = 0
       do j = 1, size(self%rotations)
          i = self%rotations(j)
-         ratio = jump_bound_ratio(qt(i) - q(i), dq_old(i), dq_new(i), floor_)
+         ratio = jump_bound_ratio(qt(i) - q(i), dq_old(i), dq_new(i), floor_, model%analysis%length_tol)
          if (ratio > worst) then
             worst = ratio
             worst_dof = i

@@ -127,14 +127,17 @@ contains
    !> (fekap_stepping_jump): the largest ratio of a rotation over the step to
    !> what explains it, max(|dq_old|, |dq_new|, floor), dq_old and dq_new
    !> the linear responses to the drive increment at the two ends (zero
-   !> where not known), floor the increment's size. A joint angle is one
+   !> where not known), floor the increment's size, resolution Newton's
+   !> (jump_bound_ratio). A joint angle is one
    !> unknown; a free frame's rotation is the angle of R0^T R1 against the
    !> norms of its responses (frame-independent). Also which dof (the first of
    !> a free frame) has the largest ratio, and its rotation.
-   pure subroutine rotation_jump(m, s0, s1, dq_old, dq_new, floor_, worst, worst_dof, turn)
+   pure subroutine rotation_jump(m, s0, s1, dq_old, dq_new, floor_, resolution, worst, worst_dof, turn)
       type(spatial_mechanism_type), intent(in) :: m
       type(spatial_state_type), intent(in) :: s0, s1
       real(dp), intent(in) :: dq_old(:), dq_new(:), floor_
+      !> Newton's resolution of a rotation (jump_bound_ratio's).
+      real(dp), intent(in) :: resolution
       real(dp), intent(out) :: worst, turn
       integer, intent(out) :: worst_dof
       logical :: frame_dof(m%ndof)
@@ -149,7 +152,7 @@ contains
          d = m%frames(i)%dof
          frame_dof(d:d + 2) = .true.
          change = norm2(so3_log(matmul(transpose(s0%r(:, :, i)), s1%r(:, :, i))))
-         ratio = jump_bound_ratio(change, norm2(dq_old(d:d + 2)), norm2(dq_new(d:d + 2)), floor_)
+         ratio = jump_bound_ratio(change, norm2(dq_old(d:d + 2)), norm2(dq_new(d:d + 2)), floor_, resolution)
          if (ratio > worst) then
             worst = ratio
             worst_dof = d
@@ -159,7 +162,7 @@ contains
       do i = 1, m%ndof
          if (m%is_length(i) .or. frame_dof(i)) cycle
          change = s1%q(i) - s0%q(i)
-         ratio = jump_bound_ratio(change, dq_old(i), dq_new(i), floor_)
+         ratio = jump_bound_ratio(change, dq_old(i), dq_new(i), floor_, resolution)
          if (ratio > worst) then
             worst = ratio
             worst_dof = i

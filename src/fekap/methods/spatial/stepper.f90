@@ -448,7 +448,7 @@ contains
       allocate (dq_old(self%m%ndof), dq_new(self%m%ndof), source=0.0_dp)
       if (saved%has_response) dq_old = matmul(saved%response, dd)
       if (response_trusted(self%try_rcond, self%reference_rcond)) dq_new = matmul(self%try_response, dd)
-      call rotation_jump(self%m, saved%s, self%s, dq_old, dq_new, floor_, worst, worst_dof, rotation)
+      call rotation_jump(self%m, saved%s, self%s, dq_old, dq_new, floor_, self%tol, worst, worst_dof, rotation)
       if (worst > jump_ratio) then
          verdict = jump_reject
          write (text, '(a,es12.5,a,f9.4,a,es9.2,a,i0)') 't = ', t, ': assembly-mode jump rejected (rotation ', &
