@@ -500,6 +500,29 @@ def test_welded_chain_between_spherical_joints_is_input_error(tmp_path):
         check(not written, f"{name}: files were written: {written}")
 
 
+@pytest.mark.parametrize("deck, joint, links", (
+    ("fourbar-3d", "  JB  revolute  B       B2  0 0 1", "links BC, DC"),
+    ("bricard", "  R1  revolute  J1      J1b     0 0 1", "links L1, L2, L3, L4")))
+def test_loose_part_is_input_error(tmp_path, deck, joint, links):
+    """A joint left out of a closed loop leaves a part that moves at every
+    configuration (Grubler's count over the part: more free dofs than its
+    beams can hold): refused naming its links, as the planar FEM refuses a
+    loose part, and nothing is written. Before, the tangent's zero pivot
+    was hidden by round-off and the run ended with exit 0, the loose part
+    written at rest."""
+    text = (DECKS / f"{deck}.deck").read_text()
+    check(joint + "\n" in text, f"{deck}: the joint line changed")
+    bad = tmp_path / f"{deck}-loose.deck"
+    bad.write_text(text.replace(joint + "\n", ""))
+    out = tmp_path / "out"
+    done = run_fekap("-o", str(out), str(bad))
+    check(done.returncode == 2, f"exit {done.returncode}, not 2 (input error): {done.stderr}")
+    for phrase in ("the mechanism is not determined by its joints, drives and links", links):
+        check(phrase in done.stderr, f"the message does not say {phrase!r}: {done.stderr}")
+    written = sorted(p.name for p in out.iterdir()) if out.exists() else []
+    check(not written, f"files were written: {written}")
+
+
 def test_sleeve_on_a_turning_arm_matches_closed_form(tmp_path, spread=None):
     """A cylindrical joint between two moving links (decks/spatial/sleeve.deck):
     the sleeve S slides along and turns about the axis of an arm turning

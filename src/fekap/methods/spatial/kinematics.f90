@@ -21,6 +21,7 @@
 module fekap_spatial_kinematics
    use fekap_kinds, only: dp
    use fekap_vectors, only: cross
+   use fekap_union_find, only: find_root, join
    use fekap_error, only: error_type, analysis_error
    use fekap_spatial_tangent, only: spatial_tangent_type, new_spatial_tangent
    use fekap_element_se3, only: so3_exp, so3_update
@@ -33,7 +34,7 @@ module fekap_spatial_kinematics
 
    public :: spatial_state_type, new_spatial_state, spatial_configuration_type, configure, frame_curvature
    public :: assemble_spatial, set_drives, update_state, spatial_rates
-   public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular, tangent_for
+   public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular, tangent_for, free_part
    public :: strain_operator_type, convective_strains, operator_load
 
    !> Where a mechanism is: its generalized dofs and its free frames' rotations.
@@ -300,8 +301,20 @@ contains
    subroutine tangent_for(m, kt)
       type(spatial_mechanism_type), intent(in) :: m
       type(spatial_tangent_type), intent(out) :: kt
+      integer, allocatable :: group_start(:), group_dof(:)
+      call element_groups(m, group_start, group_dof)
+      call new_spatial_tangent(kt, m%ndof, free_dofs(m), group_start, group_dof)
+   end subroutine tangent_for
+
+   !> The dofs each element's strains depend on (a beam's include its
+   !> frames' ancestors' in the frame tree): element e's are
+   !> group_dof(group_start(e):group_start(e + 1) - 1), the beams first, then
+   !> the trusses, then the slides.
+   subroutine element_groups(m, group_start, group_dof)
+      type(spatial_mechanism_type), intent(in) :: m
+      integer, allocatable, intent(out) :: group_start(:), group_dof(:)
       type(spatial_configuration_type) :: c
-      integer, allocatable :: group_start(:), group_dof(:), dofs(:)
+      integer, allocatable :: dofs(:)
       integer :: i, ne
       call configure(m, new_spatial_state(m), c)
       ne = 0
@@ -330,14 +343,85 @@ contains
             call add_group()
          end do
       end if
-      call new_spatial_tangent(kt, m%ndof, free_dofs(m), group_start, group_dof)
    contains
       subroutine add_group()
          ne = ne + 1
          group_dof = [group_dof, dofs]
          group_start(ne + 1) = size(group_dof) + 1
       end subroutine add_group
-   end subroutine tangent_for
+   end subroutine element_groups
+
+   !> Grubler's count over each part of the mechanism that its elements
+   !> join through their free dofs, as the planar FEM's check_determined
+   !> counts: the part's free dofs less the equations that can hold them, a
+   !> beam at most 6 (a rigid body in space), a truss 1 (its elongation), a
+   !> slide 3 (its gap), each at most as many as its own free dofs. The
+   !> equations' rank is at most their count, so a part with more free dofs
+   !> than equations moves at every configuration, for any geometry: its
+   !> tangent is singular, and round-off hides the zero pivot (a four-bar
+   !> without one of its joints ran to its end with the loose part at rest).
+   !> excess: 0 when every part is held, else the first loose part's free
+   !> dofs less its equations, with its elements (in_part, numbered as
+   !> element_groups numbers them); a free dof no element holds is a part of
+   !> its own, with no elements.
+   subroutine free_part(m, excess, in_part)
+      type(spatial_mechanism_type), intent(in) :: m
+      integer, intent(out) :: excess
+      logical, allocatable, intent(out) :: in_part(:)
+      integer, allocatable :: group_start(:), group_dof(:), fdof(:), element_root(:)
+      integer :: part(m%ndof), dofs_of(m%ndof), held_by(m%ndof)
+      logical :: free(m%ndof)
+      integer :: e, i, nb, nt, capacity, nfree, root
+      call element_groups(m, group_start, group_dof)
+      fdof = free_dofs(m)
+      free = .false.
+      free(fdof) = .true.
+      part = [(i, i=1, m%ndof)]
+      nb = 0
+      nt = 0
+      if (allocated(m%beams)) nb = size(m%beams)
+      if (allocated(m%trusses)) nt = size(m%trusses)
+      do e = 1, size(group_start) - 1
+         associate (dofs => group_dof(group_start(e):group_start(e + 1) - 1))
+            root = 0
+            do i = 1, size(dofs)
+               if (.not. free(dofs(i))) cycle
+               if (root == 0) root = dofs(i)
+               call join(part, root, dofs(i))
+            end do
+         end associate
+      end do
+      dofs_of = 0
+      held_by = 0
+      do i = 1, size(fdof)
+         root = find_root(part, fdof(i))
+         dofs_of(root) = dofs_of(root) + 1
+      end do
+      allocate (element_root(size(group_start) - 1), source=0)
+      do e = 1, size(group_start) - 1
+         associate (dofs => group_dof(group_start(e):group_start(e + 1) - 1))
+            nfree = count(free(dofs))
+            if (nfree == 0) cycle
+            capacity = 3
+            if (e <= nb) then
+               capacity = 6
+            else if (e <= nb + nt) then
+               capacity = 1
+            end if
+            element_root(e) = find_root(part, dofs(findloc(free(dofs), .true., 1)))
+            held_by(element_root(e)) = held_by(element_root(e)) + min(capacity, nfree)
+         end associate
+      end do
+      excess = 0
+      do i = 1, size(fdof)
+         root = find_root(part, fdof(i))
+         if (dofs_of(root) <= held_by(root)) cycle
+         excess = dofs_of(root) - held_by(root)
+         in_part = element_root == root
+         return
+      end do
+      allocate (in_part(size(element_root)), source=.false.)
+   end subroutine free_part
 
    !> The body angular acceleration each frame has along q (+) s v at s = 0
    !> with no dof acceleration: zero for free and fixed frames; for a child,

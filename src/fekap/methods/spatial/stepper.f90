@@ -34,7 +34,7 @@
 !> fekap_spatial_change_point's.
 module fekap_spatial_stepper
    use fekap_kinds, only: dp
-   use fekap_error, only: error_type, analysis_error
+   use fekap_error, only: error_type, analysis_error, input_error
    use fekap_model, only: model_type
    use fekap_model_results, only: step_result_type, note_length
    use fekap_stepping_stepper, only: stepper_type
@@ -44,7 +44,7 @@ module fekap_spatial_stepper
    use fekap_spatial_mechanism, only: spatial_mechanism_type, passes_a_segment_end
    use fekap_spatial_kinematics, only: spatial_state_type, new_spatial_state, spatial_configuration_type, &
       & configure, assemble_spatial, set_drives, update_state, free_dofs, spatial_rates_factored, point_rate, &
-      & spatial_rates, tangent_for
+      & spatial_rates, tangent_for, free_part
    use fekap_spatial_tangent, only: spatial_tangent_type
    use fekap_spatial_change_point, only: drive_response, rotation_jump, fill_state, correct_state, shortest_element, &
       & spatial_hinge_type, find_hinges, hinge_check, state_distance, predicted_step
@@ -176,6 +176,8 @@ contains
       self%t = model%analysis%t_start
       self%tol = model%analysis%length_tol
       self%max_iter = model%analysis%max_iter
+      call check_determined(self%m, model, error)
+      if (allocated(error)) return
       self%fdof = free_dofs(self%m)
       call tangent_for(self%m, self%kt)
       ! A quarter of the run's step (curve_rates), and of the run where the
@@ -196,6 +198,44 @@ contains
       allocate (self%v(self%m%ndof), self%a(self%m%ndof), self%jerk(self%m%ndof), self%snap(self%m%ndof), &
          & self%jerk1(self%m%ndof), self%jerk2(self%m%ndof), source=0.0_dp)
    end subroutine new_spatial_stepper
+
+   !> A mechanism with a part that moves freely at every configuration
+   !> (free_part: more free dofs than its links and slides can hold) is
+   !> refused, naming the part's links, as the planar FEM refuses one
+   !> (fekap_fem_determinacy's check_determined, with the same message):
+   !> its tangent is singular, but round-off hides the zero pivot, and the
+   !> run wrote the loose part at rest.
+   subroutine check_determined(m, model, error)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(model_type), intent(in) :: model
+      type(error_type), allocatable, intent(out) :: error
+      logical, allocatable :: in_part(:)
+      integer, allocatable :: element_link(:)
+      integer :: excess, k
+      character(len=12) :: num
+      character(:), allocatable :: names
+      call free_part(m, excess, in_part)
+      if (excess == 0) return
+      ! The beams, then the trusses, each in the links' order (build_spatial_mechanism).
+      element_link = [pack([(k, k=1, size(model%links))], .not. model%spatial%truss), &
+         & pack([(k, k=1, size(model%links))], model%spatial%truss)]
+      names = ''
+      do k = 1, size(element_link)
+         if (.not. in_part(k)) cycle
+         if (len(names) > 0) names = names//', '
+         names = names//model%links(element_link(k))%name
+      end do
+      if (len(names) > 0) then
+         names = 'links '//names
+      else
+         names = 'a joint''s angle or stroke that no link depends on'
+      end if
+      write (num, '(i0)') excess
+      call input_error(error, model%file//': the mechanism is not determined by its joints, drives and '// &
+         & 'links: a part of it can move freely, at every configuration (at least '//trim(num)// &
+         & ' degree'//trim(merge('s', ' ', excess > 1))//' of freedom that no joints, supports, drives or '// &
+         & 'links hold): '//names//'; join, support or drive the part that moves, or remove it')
+   end subroutine check_determined
 
    !> The mechanism's hinges (find_hinges), named by the model's links and
    !> nodes: beams are made one a link that is not a truss, in the links'
