@@ -53,8 +53,9 @@ contains
          & '  --spatial           run a planar kinematics deck as a spatial mechanism: z = 0,'//nl// &
          & '                      every hinge and pin a revolute joint about +z, SE(3) beams'//nl// &
          & '                      (see docs/deck-format.md, "Planar decks in 3D")'//nl// &
-         & '  --force             replace files of the names FEKAP writes that no earlier run'//nl// &
-         & '                      recorded in the output directory''s .fekap-manifest'//nl// &
+         & '  --force             remove files of FEKAP''s output names (any run''s CSV files,'//nl// &
+         & '                      listing, pictures) that no earlier run recorded in the output'//nl// &
+         & '                      directory''s .fekap-manifest, even those this run does not write'//nl// &
          & '  --print-outdir      print the output directory and exit'//nl// &
          & '  --version           print the version and exit'//nl// &
          & '  --help              print this help and exit'//nl//nl// &

@@ -230,11 +230,13 @@ def test_runs_started_together_into_one_directory_never_mix(tmp_path):
 def test_files_of_fekaps_names_without_a_manifest_are_refused_unless_forced(tmp_path):
     # Issue #31: only the files a run's manifest lists are removed; files of
     # the names a run writes that no manifest lists stop the run (exit 2)
-    # unless --force, which replaces them. Other files are kept either way.
+    # unless --force, which removes them (energy.csv too, which a kinematics
+    # run does not write: plot.py would read it as the run's). Other files are
+    # kept either way.
     out = tmp_path / "reused"
     (out / "vtk").mkdir(parents=True)
-    stale = ["old.pvd", "old.lis", "paths.png", "history_P.png", "angles.png", "iterations.png", "motion.gif",
-             "links.csv", "x.pvd.fekap-tmp", "vtk/old_000001.vtu"]
+    stale = ["old.pvd", "old.lis", "paths.png", "history_P.png", "energy.csv", "angles.png", "iterations.png",
+             "motion.gif", "links.csv", "x.pvd.fekap-tmp", "vtk/old_000001.vtu"]
     for name in stale:
         (out / name).write_text("stale\n")
     (out / "notes.txt").write_text("mine\n")

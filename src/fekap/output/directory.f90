@@ -184,10 +184,10 @@ contains
          end associate
       end do
       if (foreign%count > 0 .and. .not. plan%force) then
-         call input_error(error, 'fekap: '//outdir//'/ holds '//named(foreign)//', of the names this run '// &
-            & 'writes, which no earlier run recorded in '//manifest_name//' (they are not FEKAP''s, or '// &
-            & 'were written before FEKAP kept a manifest): move them away, give another directory with -o, '// &
-            & 'or give --force to replace them')
+         call input_error(error, 'fekap: '//outdir//'/ holds '//named(foreign)//', of the names FEKAP''s '// &
+            & 'runs and plots write (the plots would read them as this run''s), which no earlier run recorded in '// &
+            & manifest_name//' (they are not FEKAP''s, or were written before FEKAP kept a manifest): move them '// &
+            & 'away, give another directory with -o, or give --force to remove them')
          return
       end if
 
