@@ -5,7 +5,7 @@ program fekap_main
    use, intrinsic :: iso_c_binding, only: c_int
    use fekap, only: error_type, error_output, model_type, read_deck, stepper_type, settle_model, make_stepper, &
       & writer_list_type, open_outputs, run_analysis, step_count, plan_text, catch_interrupts, interrupt_reads, &
-      & os_ignore_sigpipe, spatial_from_planar
+      & os_ignore_write_signals, spatial_from_planar
    use fekap_app_cli, only: cli_type, parse_command_line, apply_overrides, usage_text, fekap_version
    use fekap_app_report, only: say, finish, stop_if_interrupted, c_exit
    implicit none
@@ -17,8 +17,9 @@ program fekap_main
    type(writer_list_type) :: writers
 
    ! A closed standard output (`fekap ... | head -1`) is not a failed
-   ! analysis: its writes fail quietly instead of killing the run.
-   call os_ignore_sigpipe()
+   ! analysis: its writes fail quietly instead of killing the run; a write
+   ! past the file-size limit fails as on a full disk (exit 4).
+   call os_ignore_write_signals()
    ! From the start: a signal while the deck is read or the model is set up
    ! ends the run with exit 1 and a message, before any file is written.
    call catch_interrupts()

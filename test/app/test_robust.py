@@ -132,6 +132,24 @@ def test_nearly_full_disk_never_reports_success_with_cut_files():
             fs.close()
 
 
+def test_file_size_limit_stops_with_exit_4_and_keeps_whole_rows(tmp_path):
+    # `ulimit -f`: a write past the limit fails with EFBIG as on a full disk.
+    # Before, the Fortran runtime's SIGXFSZ handler ended the run (exit 153,
+    # a backtrace, points.csv cut inside a row).
+    import resource
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (16384, 16384))
+
+    out = tmp_path / "run"
+    done = fekap("-q", "-o", out, "--dt", "1e-4", FOURBAR, preexec_fn=limit)
+    assert done.returncode == 4, (done.returncode, done.stderr)
+    assert "File too large" in done.stderr and "cannot write" in done.stderr, done.stderr
+    assert "Program received signal" not in done.stderr and "Backtrace" not in done.stderr, done.stderr
+    for name in ("points.csv", "links.csv", "steps.csv", "mesh.csv"):
+        whole_rows(out / name)
+
+
 def test_full_disk_leaves_no_cut_vtk_file(tmp_path):
     fs = SmallFileSystem(192 * 1024)
     try:

@@ -1,7 +1,7 @@
 !> The few POSIX calls FEKAP needs that Fortran does not offer, through
 !> ISO_C_BINDING: directories made without a shell, renames, removals and
 !> truncations with the OS error, an advisory lock, a directory listing, and
-!> SIGPIPE ignored. Each call returns the C `errno` of its failure (0 on
+!> SIGPIPE and SIGXFSZ ignored. Each call returns the C `errno` of its failure (0 on
 !> success), which os_error_text turns into the system's message.
 !>
 !> The constants (open flags, flock operations) and the layout of `struct
@@ -13,7 +13,7 @@ module fekap_posix
    private
 
    public :: os_mkdir, os_make_path, os_is_directory, os_rename, os_unlink, os_rmdir, os_truncate
-   public :: os_open_lock, os_close, os_append_probe, os_error_text, os_ignore_sigpipe
+   public :: os_open_lock, os_close, os_append_probe, os_error_text, os_ignore_write_signals
    public :: os_list_directory, name_list_type, os_read_all, os_file_size, os_file_kind, os_same_file
    ! The C library's signal(2), for the interrupt module.
    public :: c_signal
@@ -23,7 +23,7 @@ module fekap_posix
    integer(c_int), parameter :: eexist = 17, eintr = 4, enotdir = 20, efbig = 27
    !> Most bytes os_read_all reads (256 MiB).
    integer, parameter :: max_read = 268435456
-   integer(c_int), parameter :: sigpipe = 13
+   integer(c_int), parameter :: sigpipe = 13, sigxfsz = 25
    !> Kinds of file (os_file_kind): the S_IFMT bits of st_mode.
    integer, parameter, public :: kind_regular = 32768, kind_directory = 16384, kind_fifo = 4096, &
       & kind_character_device = 8192, kind_block_device = 24576, kind_socket = 49152
@@ -435,12 +435,16 @@ contains
    end function os_same_file
 
    !> Writes to a closed pipe (`fekap ... | head -1`) then fail with EPIPE
-   !> instead of killing the process with SIGPIPE.
-   subroutine os_ignore_sigpipe()
+   !> instead of killing the process with SIGPIPE, and writes past the
+   !> file-size limit (`ulimit -f`) with EFBIG (exit 4, the rows before kept
+   !> whole) instead of SIGXFSZ, for which the Fortran runtime installs a
+   !> handler that prints a backtrace and leaves half a row.
+   subroutine os_ignore_write_signals()
       type(c_funptr) :: previous
       ! SIG_IGN is the handler address 1.
       previous = c_signal(sigpipe, transfer(1_c_intptr_t, previous))
-   end subroutine os_ignore_sigpipe
+      previous = c_signal(sigxfsz, transfer(1_c_intptr_t, previous))
+   end subroutine os_ignore_write_signals
 
    !> The names in directory `path` (without . and ..). 0 or the errno of opendir.
    integer function os_list_directory(path, list) result(code)

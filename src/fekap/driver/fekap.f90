@@ -7,7 +7,7 @@ module fekap
    use fekap_deck, only: read_deck
    use fekap_stepping_stepper, only: stepper_type
    use fekap_stepping_interrupt, only: catch_interrupts, interrupt_signal, interrupt_reads
-   use fekap_posix, only: os_ignore_sigpipe
+   use fekap_posix, only: os_ignore_write_signals
    use fekap_output_writer, only: writer_list_type
    use fekap_output_listing, only: plan_text
    use fekap_driver_factory, only: settle_model, make_stepper
@@ -21,6 +21,6 @@ module fekap
    public :: model_type, read_deck
    public :: stepper_type, settle_model, make_stepper, spatial_from_planar
    public :: writer_list_type, open_outputs, run_analysis, step_count, plan_text
-   public :: catch_interrupts, interrupt_signal, interrupt_reads, os_ignore_sigpipe
+   public :: catch_interrupts, interrupt_signal, interrupt_reads, os_ignore_write_signals
 
 end module fekap
