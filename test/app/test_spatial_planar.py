@@ -156,6 +156,30 @@ def test_rates_match_planar(runs, deck):
                 check(err[kind] <= OUT_OF_PLANE_TOL, f"{deck}: {kind} up to {err[kind]:.2e} of the in-plane scale")
 
 
+@pytest.mark.parametrize("deck, dt", (("decks/double-crank.deck", "1e-4"), ("decks/hard/a02-n2-dt0p01.deck", "1e-3")))
+def test_refined_steps_write_only_mechanism_rows(tmp_path, deck, dt):
+    """At a step ten times finer than the deck's, the spatial stepper does not
+    pass these change points (the double crank's collinear cranks at t =
+    0.25, the A02 chain's flat configuration at t = 0.25), while the planar
+    one does; it stops there (exit 3), and every row it wrote is the planar
+    run's. Before, the double crank went on past t = 0.25 on self-stressed
+    configurations (links up to 0.42 off their lengths, the residual at
+    round-off) and the chain wrote row 0.249 from a quintic fill through the
+    unbounded rates of the change point (a residual of 2.5e12, T1 at
+    y = 1.3e5)."""
+    planar, spatial = tmp_path / "planar", tmp_path / "spatial"
+    done = run_fekap("-q", "--dt", dt, "-o", str(planar), deck)
+    check(done.returncode == 0, f"{deck} planar: exit {done.returncode}: {done.stderr}")
+    done = run_fekap("-q", "--spatial", "--dt", dt, "-o", str(spatial), deck)
+    check(done.returncode in (0, 3), f"{deck} spatial: exit {done.returncode}: {done.stderr}")
+    p, s = table(planar), table(spatial)
+    rows = len(s["t"])
+    check(rows > 0 and np.array_equal(p["t"][:rows], s["t"]), f"{deck}: the spatial rows are not the planar ones")
+    size = max(np.max(np.abs(p["x"])), np.max(np.abs(p["y"])))
+    worst = max(np.max(np.abs(p[c][:rows] - s[c])) for c in "xy") / size
+    check(worst <= 1e-9, f"{deck}: a spatial row is {worst:.2e} model sizes off the planar run's")
+
+
 def test_joint_angles_of_large_steps(runs):
     """fourbar-quarter-turn (a quarter of a crank turn a step) has, at each of
     its times, the unwrapped joint angles of fourbar (Example 1 at dt = 0.025),

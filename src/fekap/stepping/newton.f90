@@ -23,7 +23,7 @@ module fekap_stepping_newton
    private
 
    public :: newton_system_type, newton_contract_type, newton_report_type, newton_solve
-   public :: reuse_policy_type, always_refactor_type, kept_factor_type
+   public :: reuse_policy_type, always_refactor_type, kept_factor_type, admissible_strain
 
    !> Why newton_solve stopped (newton_report_type's stopped).
    integer, parameter, public :: stop_converged = 1, stop_at_floor = 2, stop_spent = 3, stop_diverged = 4, &
@@ -198,7 +198,23 @@ module fekap_stepping_newton
       procedure :: observe => kept_observe
    end type kept_factor_type
 
+
+   !> Element strain above which a converged configuration is not a mechanism
+   !> configuration but a self-stressed equilibrium (admissible_strain).
+   !> It follows the Newton tolerance (a loose paper-style test leaves strains
+   !> near the tolerance) but never reaches the strains of a self-stressed
+   !> state, which are of order 0.1.
+   real(dp), parameter :: min_admissible_strain = 1.0e-8_dp, max_admissible_strain = 1.0e-3_dp
+
 contains
+
+   !> The largest element strain of a mechanism configuration under the
+   !> Newton tolerance tol (the planar FEM's and the spatial stepper's check
+   !> for a self-stressed equilibrium).
+   pure real(dp) function admissible_strain(tol)
+      real(dp), intent(in) :: tol
+      admissible_strain = min(max_admissible_strain, max(min_admissible_strain, 100*tol))
+   end function admissible_strain
 
    !> Newton on `system` from its current iterate until the contract holds.
    !> Each iterate's residual is assembled alone when the factor in hand is

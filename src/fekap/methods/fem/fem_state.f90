@@ -18,6 +18,7 @@ module fekap_fem_state
    use fekap_fem_setup, only: fem_base_type, new_fem_base, mesh_plan_line
    use fekap_fem_convergence, only: convergence_type
    use fekap_stepping_predictor, only: new_predictor_history
+   use fekap_stepping_newton, only: admissible_strain
    use fekap_fem_branch, only: branch_check_type, new_branch_check
    use fekap_fem_accepted, only: fem_state_type
    use fekap_fem_verification, only: verification_stack_type
@@ -35,13 +36,6 @@ module fekap_fem_state
 
    public :: fem_state_type, fem_core_type, new_fem_core, accept, fill_result
    public :: note_response_pivot, prepend_cuts_note, model_distance, no_convergence_error
-
-   !> Element strain above which a converged configuration is not a mechanism
-   !> configuration but a self-stressed equilibrium.
-   !> It follows the Newton tolerance (a loose paper-style test leaves strains
-   !> near the tolerance) but never reaches the strains of a self-stressed
-   !> state, which are of order 0.1.
-   real(dp), parameter :: min_admissible_strain = 1.0e-8_dp, max_admissible_strain = 1.0e-3_dp
 
    !> The model, mesh, linear system, drives' start values and scales are
    !> fem_base_type's (new_fem_base), as the dynamics stepper's.
@@ -91,7 +85,7 @@ module fekap_fem_state
       integer :: last_cuts = 0
       !> Element strain (and gap per model size) above which a converged
       !> configuration is rejected: min(1e-3, max(1e-8, 100 tol)).
-      real(dp) :: admissible_strain = min_admissible_strain
+      real(dp) :: admissible_strain = 1.0e-8_dp
       !> The steps awaiting step-doubling verification, one per halving.
       type(verification_stack_type) :: verification
       !> Steps advanced so far.
@@ -154,7 +148,7 @@ contains
       self%conv%mode = model%analysis%convergence
       self%conv%tol = model%analysis%tol
       self%conv%length = model%analysis%length_tol*self%model_length
-      self%admissible_strain = min(max_admissible_strain, max(min_admissible_strain, 100*model%analysis%tol))
+      self%admissible_strain = admissible_strain(model%analysis%tol)
       call new_branch_check(self%branch, model, self%mesh)
       self%conv%residual_floor = self%residual_floor
    end subroutine new_fem_core

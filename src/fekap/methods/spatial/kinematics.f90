@@ -25,7 +25,8 @@ module fekap_spatial_kinematics
    use fekap_error, only: error_type, analysis_error
    use fekap_spatial_tangent, only: spatial_tangent_type, new_spatial_tangent
    use fekap_element_se3, only: so3_exp, so3_update
-   use fekap_element_se3_beam, only: se3_beam_residual, se3_beam_convective, truss_residual, truss_convective
+   use fekap_element_se3_beam, only: se3_beam_residual, se3_beam_convective, truss_residual, truss_convective, &
+      & se3_beam_strain
    use fekap_spatial_mechanism, only: spatial_mechanism_type, point_free, point_line, frame_free, frame_revolute, &
       & frame_universal, spatial_slide_type, slide_on_segment
    use fekap_spatial_slideline, only: slide_gap, slide_convective
@@ -34,7 +35,7 @@ module fekap_spatial_kinematics
 
    public :: spatial_state_type, new_spatial_state, spatial_configuration_type, configure, frame_curvature
    public :: assemble_spatial, set_drives, update_state, spatial_rates
-   public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular, tangent_for, free_part
+   public :: point_position, point_rate, free_dofs, spatial_rates_factored, singular, tangent_for, free_part, largest_strain
    public :: strain_operator_type, convective_strains, operator_load
 
    !> Where a mechanism is: its generalized dofs and its free frames' rotations.
@@ -575,6 +576,49 @@ contains
          end do
       end if
    end subroutine assemble_spatial
+
+   !> The largest element strain at configuration c, as the planar FEM
+   !> measures it (beam_max_strain: |Gamma|, |kappa| L): a beam's
+   !> translational strain over its length and its rotational strain, a
+   !> truss's elongation over its length; and its element (beams, then
+   !> trusses, as element_groups numbers them; 0 if none).
+   pure subroutine largest_strain(m, c, strain, element)
+      type(spatial_mechanism_type), intent(in) :: m
+      type(spatial_configuration_type), intent(in) :: c
+      real(dp), intent(out) :: strain
+      integer, intent(out) :: element
+      real(dp) :: x(3, 2), r(3, 3, 2), e(6), size_
+      integer :: i, n, nb
+      strain = 0
+      element = 0
+      nb = 0
+      if (allocated(m%beams)) then
+         nb = size(m%beams)
+         do i = 1, nb
+            do n = 1, 2
+               x(:, n) = c%x(:, m%nodes(m%beams(i)%nodes(n))%point)
+               r(:, :, n) = c%r(:, :, m%nodes(m%beams(i)%nodes(n))%frame)
+            end do
+            e = se3_beam_strain(m%beams(i)%element, x, r)
+            size_ = max(maxval(abs(e(1:3)))/m%beams(i)%element%length, maxval(abs(e(4:6))))
+            if (size_ > strain) then
+               strain = size_
+               element = i
+            end if
+         end do
+      end if
+      if (allocated(m%trusses)) then
+         do i = 1, size(m%trusses)
+            associate (tr => m%trusses(i))
+               size_ = abs(norm2(c%x(:, tr%points(2)) - c%x(:, tr%points(1))) - tr%element%length)/tr%element%length
+            end associate
+            if (size_ > strain) then
+               strain = size_
+               element = nb + i
+            end if
+         end do
+      end if
+   end subroutine largest_strain
 
    !> The number of elements: beams, trusses and slides.
    pure integer function element_count(m) result(ne)

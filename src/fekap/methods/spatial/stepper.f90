@@ -44,15 +44,15 @@ module fekap_spatial_stepper
    use fekap_spatial_mechanism, only: spatial_mechanism_type, passes_a_segment_end
    use fekap_spatial_kinematics, only: spatial_state_type, new_spatial_state, spatial_configuration_type, &
       & configure, assemble_spatial, set_drives, update_state, free_dofs, spatial_rates_factored, point_rate, &
-      & spatial_rates, tangent_for, free_part
+      & spatial_rates, tangent_for, free_part, largest_strain
    use fekap_spatial_tangent, only: spatial_tangent_type
    use fekap_spatial_change_point, only: drive_response, rotation_jump, fill_state, correct_state, shortest_element, &
       & spatial_hinge_type, find_hinges, hinge_check, state_distance, predicted_step
    use fekap_spatial_build, only: spatial_map_type, build_spatial_mechanism
    use fekap_spatial_link_motion, only: link_motion_type, new_link_motion, fill_link_motion
    use fekap_spatial_newton, only: spatial_newton_type, spatial_contract, spatial_force_scale
-   use fekap_stepping_newton, only: newton_contract_type, newton_report_type, newton_solve, always_refactor_type, &
-      & stop_interrupted
+   use fekap_stepping_newton, only: admissible_strain, newton_contract_type, newton_report_type, newton_solve, &
+      & always_refactor_type, stop_interrupted
    implicit none
    private
 
@@ -85,6 +85,11 @@ module fekap_spatial_stepper
 
    !> What the stepper keeps of an accepted configuration: to try a step from
    !> it again, and the two regular states on either side of a change point.
+   !> A name for messages.
+   type :: label_type
+      character(:), allocatable :: text
+   end type label_type
+
    type :: accepted_type
       type(spatial_state_type) :: s
       real(dp) :: t = 0
@@ -144,6 +149,11 @@ module fekap_spatial_stepper
       real(dp) :: shortest = 1
       !> The hinges of the branch check's orientation rule.
       type(spatial_hinge_type), allocatable :: hinges(:)
+      !> Each element's link (beams, then trusses, as element_groups numbers
+      !> them), for messages.
+      type(label_type), allocatable :: element_link(:)
+      !> The largest element strain of a mechanism configuration (check_mechanism).
+      real(dp) :: admissible_strain = 0
       !> The run's uniform steps, for the time after a change point.
       real(dp) :: t_start = 0, t_end = 1, dt = 0
       !> A change point stepped over: the regular states on either side, the
@@ -170,13 +180,19 @@ contains
       type(model_type), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: force_scale, floor
+      integer :: k
       call build_spatial_mechanism(model, self%m, self%map, error)
       if (allocated(error)) return
       self%s = new_spatial_state(self%m)
       self%t = model%analysis%t_start
       self%tol = model%analysis%length_tol
       self%max_iter = model%analysis%max_iter
-      call check_determined(self%m, model, error)
+      ! The beams, then the trusses, each in the links' order (build_spatial_mechanism).
+      self%element_link = [(label_type(model%links(k)%name), k=1, size(model%links))]
+      self%element_link = [pack(self%element_link, .not. model%spatial%truss), &
+         & pack(self%element_link, model%spatial%truss)]
+      self%admissible_strain = admissible_strain(model%analysis%tol)
+      call check_determined(self, model%file, error)
       if (allocated(error)) return
       self%fdof = free_dofs(self%m)
       call tangent_for(self%m, self%kt)
@@ -205,25 +221,22 @@ contains
    !> (fekap_fem_determinacy's check_determined, with the same message):
    !> its tangent is singular, but round-off hides the zero pivot, and the
    !> run wrote the loose part at rest.
-   subroutine check_determined(m, model, error)
-      type(spatial_mechanism_type), intent(in) :: m
-      type(model_type), intent(in) :: model
+   subroutine check_determined(self, file, error)
+      type(spatial_stepper_type), intent(in) :: self
+      !> The deck's path, for the message.
+      character(*), intent(in) :: file
       type(error_type), allocatable, intent(out) :: error
       logical, allocatable :: in_part(:)
-      integer, allocatable :: element_link(:)
       integer :: excess, k
       character(len=12) :: num
       character(:), allocatable :: names
-      call free_part(m, excess, in_part)
+      call free_part(self%m, excess, in_part)
       if (excess == 0) return
-      ! The beams, then the trusses, each in the links' order (build_spatial_mechanism).
-      element_link = [pack([(k, k=1, size(model%links))], .not. model%spatial%truss), &
-         & pack([(k, k=1, size(model%links))], model%spatial%truss)]
       names = ''
-      do k = 1, size(element_link)
+      do k = 1, size(self%element_link)
          if (.not. in_part(k)) cycle
          if (len(names) > 0) names = names//', '
-         names = names//model%links(element_link(k))%name
+         names = names//self%element_link(k)%text
       end do
       if (len(names) > 0) then
          names = 'links '//names
@@ -231,7 +244,7 @@ contains
          names = 'a joint''s angle or stroke that no link depends on'
       end if
       write (num, '(i0)') excess
-      call input_error(error, model%file//': the mechanism is not determined by its joints, drives and '// &
+      call input_error(error, file//': the mechanism is not determined by its joints, drives and '// &
          & 'links: a part of it can move freely, at every configuration (at least '//trim(num)// &
          & ' degree'//trim(merge('s', ' ', excess > 1))//' of freedom that no joints, supports, drives or '// &
          & 'links hold): '//names//'; join, support or drive the part that moves, or remove it')
@@ -371,6 +384,7 @@ contains
             return
          end if
          verdict = jump_accept
+         if (converged) call check_mechanism(self, converged, why)
          if (converged) call check_jump(self, saved, t_try, predicted, .true., verify, depth, verdict, why, crossing, turn)
          converged = converged .and. verdict /= jump_reject .and. verdict /= jump_unverifiable
          if (.not. converged .and. verdict /= jump_unverifiable) then
@@ -385,6 +399,7 @@ contains
                return
             end if
             iterations = iterations + its
+            if (converged) call check_mechanism(self, converged, why)
             if (converged) call check_jump(self, saved, t_try, predicted, .false., verify, depth, verdict, why, crossing, turn)
             converged = converged .and. verdict /= jump_reject .and. verdict /= jump_unverifiable
             if (.not. converged .and. detect .and. cuts == 0) then
@@ -634,26 +649,43 @@ contains
       self%ahead_cuts = cuts
       self%has_ahead = .true.
       associate (bf => self%before, n => self%ahead)
-         order = fill_order(.true., .true.)
-         filled = fill_state(self%m, order, bf%t, bf%s, bf%v, bf%a, n%t, n%s, n%v, n%a, t)
-         call correct_state(self%m, self%fdof, t, self%tol, fill_shift, filled, its, residual, rcond)
-         singular = rcond < rates_drop*bf%reference_rcond
-         if (.not. singular) then
-            ! Near, not on, a change point: solve the row itself as without the
-            ! detection, from the state before it; the state ahead stays.
-            call restore(self, bf)
-            call step_to(self, t, .false., .true., 0, iterations, cuts, found, near_error)
-            if (.not. allocated(near_error)) then
-               self%counts%steps = self%counts%steps + 1
-               result%t = t
-               result%iterations = iterations
-               result%cuts = cuts
-               call fill_result(self, result)
-               return
+         ! Through both sides' rates (quintic), or where the correction does
+         ! not put the fill on the mechanism, through fewer of them: the
+         ! double step may have ended on the change point itself (a02-n2
+         ! --spatial at dt 0.001 ended at t = 0.25), whose rates are
+         ! unbounded, and the quintic through them was written as row 0.249
+         ! with a residual of 2.5e12. A fill that no order puts on the
+         ! mechanism is no row.
+         do order = fill_order(.true., .true.), 1, -2
+            filled = fill_state(self%m, order, bf%t, bf%s, bf%v, bf%a, n%t, n%s, n%v, n%a, t)
+            call correct_state(self%m, self%fdof, t, self%tol, fill_shift, filled, its, residual, rcond)
+            singular = rcond < rates_drop*bf%reference_rcond
+            if (.not. singular) then
+               ! Near, not on, a change point: solve the row itself as without the
+               ! detection, from the state before it; the state ahead stays.
+               call restore(self, bf)
+               call step_to(self, t, .false., .true., 0, iterations, cuts, found, near_error)
+               if (.not. allocated(near_error)) then
+                  self%counts%steps = self%counts%steps + 1
+                  result%t = t
+                  result%iterations = iterations
+                  result%cuts = cuts
+                  call fill_result(self, result)
+                  return
+               end if
+               call restore(self, bf)
+               call correct_state(self%m, self%fdof, t, self%tol, 0.0_dp, filled, iterations, residual, rcond)
+               its = its + iterations
             end if
-            call restore(self, bf)
-            call correct_state(self%m, self%fdof, t, self%tol, 0.0_dp, filled, iterations, residual, rcond)
-            its = its + iterations
+            if (fill_holds(self%contract, residual)) exit
+         end do
+         if (.not. fill_holds(self%contract, residual)) then
+            write (text, '(a,es12.5,a,es12.5,a,es12.5,a,es9.2,a)') 't = ', t, ': the row of the change point '// &
+               & 'stepped over from t = ', bf%t, ' to ', n%t, ' could not be filled (the positions interpolated '// &
+               & 'from both sides and corrected leave a residual of ', residual, '): take another time step, '// &
+               & 'or end the run before it'
+            call analysis_error(error, trim(text), t=t)
+            return
          end if
          self%s = filled
          self%t = t
@@ -680,6 +712,38 @@ contains
       result%cuts = 0
       call fill_result(self, result)
    end subroutine step_over
+
+   !> Whether the configuration Newton converged to is a mechanism
+   !> configuration, not a self-stressed equilibrium: every element's strain
+   !> within the admissible strain (the planar FEM's check_mechanism, with
+   !> its bound). A redundant loop past a change point can converge onto
+   !> one with its residual at round-off: the double crank --spatial at dt
+   !> 1e-4 went on past t = 0.25 with its links 1e-6 to 0.42 off their
+   !> lengths, written as converged rows. Else converged is set .false. and
+   !> why says so (the step is cut, as for a jump).
+   subroutine check_mechanism(self, converged, why)
+      type(spatial_stepper_type), intent(in) :: self
+      logical, intent(inout) :: converged
+      character(:), allocatable, intent(inout) :: why
+      type(spatial_configuration_type) :: c
+      real(dp) :: strain
+      integer :: element
+      character(len=80) :: text
+      call configure(self%m, self%s, c)
+      call largest_strain(self%m, c, strain, element)
+      if (strain <= self%admissible_strain) return
+      converged = .false.
+      write (text, '(a,es9.2,a)') 'Newton converged to a self-stressed configuration (strain ', strain, ' in link '
+      why = trim(text)//' '//self%element_link(element)%text//'), not a mechanism configuration'
+   end subroutine check_mechanism
+
+   !> Whether a filled row's residual passes the run's Newton contract (the
+   !> tolerance times the forces in play, or the round-off floor).
+   pure logical function fill_holds(contract, residual)
+      type(newton_contract_type), intent(in) :: contract
+      real(dp), intent(in) :: residual
+      fill_holds = residual <= max(contract%tolerance*contract%force_scale, contract%floor)
+   end function fill_holds
 
    !> The accepted configuration, its rates and its predictor's history.
    function snapshot(self) result(x)
