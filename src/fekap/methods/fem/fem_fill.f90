@@ -17,7 +17,7 @@ module fekap_fem_fill
    use fekap_fem_change_point, only: hermite_fill, correct_fill, fill_order, &
       & rates_drop, fill_shift, estimate_needed
    use fekap_fem_state, only: fem_state_type, fem_core_type
-   use fekap_fem_factor, only: fill_tangent, root_rcond
+   use fekap_fem_factor, only: fill_tangent, root_rcond, factor_root
    use fekap_fem_predict, only: drive_laws_at
    implicit none
    private
@@ -39,6 +39,7 @@ contains
       logical, intent(in) :: root_solved
       integer, intent(in) :: info
       real(dp) :: rcond, high
+      integer :: root_info
       rcond = 0
       if (root_solved) then
          call strain_rate_rcond_bounds(self%root, rcond, high)
@@ -46,6 +47,17 @@ contains
             call root_rcond(self, rcond)
             self%counts%condition_estimates = self%counts%condition_estimates + 1
          end if
+      else if (self%root_form) then
+         ! Newton's first step took K's (a predictor strained beyond kg_above):
+         ! the estimate is still B_f's, the scale of the run's best. K's own
+         ! is off B_f's squared by the spread of the weights W (1e6 times
+         ! larger on a four-bar of 3,500 elements a link, where it became the
+         ! run's best and every later estimate looked near singular against
+         ! it: the responses untrusted, the rocker's dead point rejected as a
+         ! flip). B_f at the predictor is factored as root_correction would.
+         call factor_root(self, self%qt, self%seg, root_info, self%system%section)
+         if (root_info == 0) call root_rcond(self, rcond)
+         self%counts%condition_estimates = self%counts%condition_estimates + 1
       else if (info == 0) then
          call system_rcond(self%system, rcond, self%counts)
       end if
