@@ -201,3 +201,17 @@ def test_include_depth_limit_is_the_documented_one(tmp_path):
     assert proc.returncode == 0, proc.stderr
     proc = fekap("-q", "-o", str(tmp_path / "deep"), str(chain(limit + 1)))
     assert proc.returncode == 2 and "INCLude nested too deeply" in proc.stderr, proc.stderr
+
+
+def test_a_slave_thrown_far_off_its_line_gets_a_number(tmp_path):
+    # The flexible slider-crank with E = G = 1e3 (its rod 1e8 times softer):
+    # the consistent start's deflection throws the slider off its guide at
+    # once. The message gave "alpha = ********" (f8.4 overflowed).
+    text = (ROOT / "decks/dynamics/slider-crank.deck").read_text()
+    old = "steel  E=2e11  G=7.7e10"
+    assert old in text
+    deck = write(tmp_path / "soft.deck", text.replace(old, "steel  E=1e3  G=1e3"))
+    done = fekap("-q", "-o", str(tmp_path / "out"), str(deck))
+    assert done.returncode == 3, done.stderr
+    found = re.search(r"left the slideline past its end \(alpha = (\S+)\)", done.stderr)
+    assert found and abs(float(found[1])) > 1, done.stderr

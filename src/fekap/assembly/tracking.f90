@@ -7,6 +7,7 @@ module fekap_assembly_tracking
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error
    use fekap_model, only: model_type
+   use fekap_strings, only: short_real_text
    use fekap_assembly_mesh, only: mesh_type, slide_type
    use fekap_contact_slideline, only: slide_geometry, slide_locate, slide_on_element, slide_off_end
    implicit none
@@ -88,8 +89,10 @@ contains
          call slide_geometry(xs, x1, x2, g, alpha, s1)
          call slide_locate(alpha, seg(i), size(mesh%slides(i)%seg, 2), next, status)
          if (status == slide_off_end) then
-            write (msg, '(a,es12.5,a,f8.4,a)') 't = ', t, ': the slave left the slideline past its end (alpha = ', &
-               & alpha, ') '
+            ! alpha as short_real_text writes it: far past the end (a slave
+            ! thrown off by a huge deflection) it overflowed f8.4.
+            write (msg, '(a,es12.5,a)') 't = ', t, ': the slave left the slideline past its end (alpha = '// &
+               & short_real_text(alpha)//') '
             call analysis_error(error, trim(msg)//': slave node '//model%nodes(mesh%slides(i)%slave)%name// &
                & ', slideline '//model%slidelines(i)%name//'; lengthen the master line or shorten the run', t=t)
             return
