@@ -215,3 +215,38 @@ def test_a_slave_thrown_far_off_its_line_gets_a_number(tmp_path):
     assert done.returncode == 3, done.stderr
     found = re.search(r"left the slideline past its end \(alpha = (\S+)\)", done.stderr)
     assert found and abs(float(found[1])) > 1, done.stderr
+
+
+def test_a_failed_dynamic_step_does_not_say_a_smaller_step_will_not_help(tmp_path):
+    # The pendulum at dt = 0.25 fails at t = 0.75 (the step creates energy);
+    # at dt = 0.1 it runs. The message said a smaller time step would not
+    # help and blamed a limit load (the advice of kinematics and statics,
+    # rewritten for runs without drives after the listing was written).
+    out = tmp_path / "out"
+    done = fekap("-q", "-o", str(out), "--dt", "0.25", str(ROOT / "decks/dynamics/pendulum.deck"))
+    assert done.returncode == 3, done.stderr
+    assert "a smaller time step for the whole run (--dt) may help" in done.stderr, done.stderr
+    assert "will not help" not in done.stderr and "limit load" not in done.stderr, done.stderr
+    listing = next(out.glob("*.lis")).read_text()
+    assert "a smaller time step for the whole run (--dt) may help" in listing, listing[-2000:]
+    done = fekap("-q", "-o", str(tmp_path / "fine"), "--dt", "0.1", str(ROOT / "decks/dynamics/pendulum.deck"))
+    assert done.returncode == 0, done.stderr
+
+
+def test_statics_listing_and_stderr_give_the_same_advice(tmp_path):
+    # A statics failure (the roll-up meshed by 50 elements: Newton does not
+    # converge at t = 0.15) was a "limit load" on stderr but a drive's dead
+    # point in the listing's RUN STOPPED.
+    text = (ROOT / "decks/cantilever-rollup.deck").read_text()
+    found = re.search(r"^(\s*\w+\s+\w+\s+\w+\s+\w+\s+)16\b", text, re.MULTILINE)
+    assert found, "the roll-up's link line changed"
+    deck = write(tmp_path / "rollup-50.deck", text[:found.start()] + found[1] + "50" + text[found.end():])
+    out = tmp_path / "out"
+    done = fekap("-q", "-o", str(out), str(deck))
+    # Its failure is itself a defect left open (a pure end moment has no
+    # limit load; 16, 32, 64 elements run): when statics passes it, this
+    # test needs another statics run that fails.
+    assert done.returncode == 3, done.stderr
+    listing = next(out.glob("*.lis")).read_text()
+    for text_ in (done.stderr, listing):
+        assert "cannot carry its loads" in text_ and "dead point" not in text_, text_[-1500:]

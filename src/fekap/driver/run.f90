@@ -160,7 +160,6 @@ contains
       summary%step_files = writers%step_files()
       ! Whatever stopped the run is told in the listing before its summary.
       call writers%close(summary, error)
-      if (allocated(error)) error%message = without_drive_advice(model, error%message)
    end subroutine run_analysis
 
    !> Say after which step an output file failed.
@@ -186,24 +185,5 @@ contains
          & '); the files hold whole rows of the steps written before'
       error%message = error%message//trim(where_)
    end subroutine tell_step
-
-   !> The step control's advice on a failure is about a drive's dead point;
-   !> a run without drives (statics: the loads grow with time) has none, and
-   !> its failure is a limit of the load.
-   function without_drive_advice(model, message) result(text)
-      type(model_type), intent(in) :: model
-      character(*), intent(in) :: message
-      character(:), allocatable :: text
-      character(*), parameter :: drive_advice = ' of the time step: the mechanism cannot follow its drive'
-      integer :: k, drives
-      text = message
-      drives = 0
-      if (allocated(model%drives)) drives = size(model%drives)
-      k = index(message, drive_advice)
-      if (drives > 0 .or. k == 0) return
-      text = message(:k - 1)//' of the time step: the structure cannot carry its loads past this point '// &
-         & '(a limit load, where it buckles or snaps through, or a part left free to move); a smaller time '// &
-         & 'step will not help: lower the loads, or support the structure where it gives way)'
-   end function without_drive_advice
 
 end module fekap_driver_run

@@ -26,6 +26,24 @@ module fekap_stepping_step_control
    !> Step cuts (halvings) allowed within one step before it is given up.
    integer, parameter, public :: max_cuts = 8
 
+   !> What a step given up after max_cuts cuts means, and what to try: the
+   !> method's (advance_by_cuts' `advice`), after "down to 1/256 of the time
+   !> step: ". A kinematic step restarts from an exact configuration, so a
+   !> step that fails at 1/256 of dt is not too long: a dead point of the
+   !> drive is the usual cause. Loads without drives (statics): a limit
+   !> load. A dynamic step restarts from a state the run's steps made: a
+   !> smaller time step from the start may well help (the flexible
+   !> slider-crank failed at dt 0.01 and ran at 1e-3).
+   character(*), parameter, public :: dead_point_advice = 'the mechanism cannot follow its drive past this '// &
+      & 'point, as at a dead point, where the driven link reaches a limit; a smaller time step will not help: '// &
+      & 'drive another link, end the run before this point, or try another predictor'
+   character(*), parameter, public :: limit_load_advice = 'the structure cannot carry its loads past this '// &
+      & 'point (a limit load, where it buckles or snaps through, or a part left free to move); a smaller '// &
+      & 'time step will not help: lower the loads, or support the structure where it gives way'
+   character(*), parameter, public :: dynamics_advice = 'the integrator cannot follow the motion from the '// &
+      & 'state the run reached here; a smaller time step for the whole run (--dt) may help, and so may the '// &
+      & 'other integrator; if neither does, look for a part left free to move or a load the structure cannot carry'
+
    !> The halvings of one step: the sub-step length, its growth back after a
    !> success, and the first and last reasons for a rejection (for the listing).
    type :: step_cuts_type
@@ -83,12 +101,14 @@ contains
    !> its reason is the error), an accepted one lets it grow back; `cuts`
    !> keeps the count and the reasons for the listing, iterations sums the
    !> tries' iterations.
-   recursive subroutine advance_by_cuts(stepper, try, between, t_from, t, depth, cuts, iterations, error)
+   recursive subroutine advance_by_cuts(stepper, try, between, t_from, t, depth, advice, cuts, iterations, error)
       class(stepper_type), intent(inout) :: stepper
       procedure(try_interface) :: try
       procedure(between_interface) :: between
       real(dp), intent(in) :: t_from, t
       integer, intent(in) :: depth
+      !> What a step given up after max_cuts means (dead_point_advice, ...).
+      character(*), intent(in) :: advice
       type(step_cuts_type), intent(out) :: cuts
       integer, intent(out) :: iterations
       type(error_type), allocatable, intent(out) :: error
@@ -112,7 +132,7 @@ contains
                call move_alloc(reason, error)
                return
             end if
-            call cuts%reject(reason, error)
+            call cuts%reject(reason, error, advice)
             if (allocated(error)) return
             cycle
          case (try_replaced)
@@ -149,20 +169,23 @@ contains
    end function cuts_next
 
    !> A try failed with `reason`: halve the sub-step; after max_cuts cuts,
-   !> the reason with what to try becomes the step's analysis error.
-   pure subroutine cuts_reject(self, reason, error)
+   !> the reason with what it means (`advice`, dead_point_advice if absent)
+   !> becomes the step's analysis error.
+   pure subroutine cuts_reject(self, reason, error, advice)
       class(step_cuts_type), intent(inout) :: self
       type(error_type), intent(in) :: reason
       type(error_type), allocatable, intent(out) :: error
-      character(len=400) :: advice
+      character(*), intent(in), optional :: advice
+      character(len=60) :: after
       self%cuts = self%cuts + 1
       if (self%cuts > max_cuts) then
-         ! A step that fails at 1/256 of dt is not too long: a dead point is the usual cause.
-         write (advice, '(a,i0,a,i0,a)') ' (after ', max_cuts, ' step cuts, down to 1/', 2**max_cuts, &
-            & ' of the time step: the mechanism cannot follow its drive past this point, as at a dead point, '// &
-            & 'where the driven link reaches a limit; a smaller time step will not help: drive another link, '// &
-            & 'end the run before this point, or try another predictor)'
-         call analysis_error(error, reason%message//trim(advice))
+         write (after, '(a,i0,a,i0,a)') ' (after ', max_cuts, ' step cuts, down to 1/', 2**max_cuts, &
+            & ' of the time step: '
+         if (present(advice)) then
+            call analysis_error(error, reason%message//trim(after)//' '//advice//')')
+         else
+            call analysis_error(error, reason%message//trim(after)//' '//dead_point_advice//')')
+         end if
          if (allocated(reason%time)) call at_time(error, reason%time)
          return
       end if

@@ -14,7 +14,8 @@ module fekap_classical_stepping
    use fekap_fem_convergence, only: convergence_type, newton_contract
    use fekap_stepping_predictor, only: predictor_history_type, new_predictor_history, extrapolate_history, extrapolate, &
       & taylor_predict, prediction_none
-   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
+   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, dead_point_advice, try_accepted, try_failed, &
+      & try_ended
    use fekap_fem_branch, only: jump_ratio, jump_bound_ratio
    use fekap_stepping_newton, only: newton_system_type, newton_contract_type, newton_report_type, newton_solve, &
       & always_refactor_type, stop_spent, stop_diverged, stop_at_floor
@@ -225,8 +226,8 @@ contains
       self%step = self%step + 1
       self%counts%steps = self%counts%steps + 1
       self%step_floor = 0
-      call advance_by_cuts(self, classical_try, classical_between, self%history%t(self%history%newest), t, 0, cuts, &
-         & total, error)
+      call advance_by_cuts(self, classical_try, classical_between, self%history%t(self%history%newest), t, 0, &
+         & dead_point_advice, cuts, total, error)
       if (allocated(error)) return
       call self%finish_step(t, total, result, error)
       result%cuts = cuts%cuts

@@ -26,7 +26,8 @@ module fekap_dynamics_dynamic_stepper
    use fekap_assembly_tracking, only: relocate
    use fekap_stepping_stepper, only: clock_seconds, phase_timed
    use fekap_fem_setup, only: new_fem_base, mesh_plan_line
-   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_failed, try_ended
+   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, dynamics_advice, try_accepted, try_failed, &
+      & try_ended
    use fekap_stepping_stepper, only: stepper_type
    use fekap_dynamics_generalized_alpha, only: alpha_coefficients_type, new_alpha_coefficients
    use fekap_dynamics_dynamic_system, only: new_dynamic_system, kinetic_energy, strain_energy, has_damping, &
@@ -138,7 +139,8 @@ contains
          call adaptive_advance(self, t, result%iterations, result%cuts, error)
          if (allocated(error)) return
       else
-         call advance_by_cuts(self, dynamic_try, no_between, self%state%t, t, 0, cuts, result%iterations, error)
+         call advance_by_cuts(self, dynamic_try, no_between, self%state%t, t, 0, dynamics_advice, cuts, &
+            & result%iterations, error)
          if (allocated(error)) return
          result%cuts = cuts%cuts
       end if

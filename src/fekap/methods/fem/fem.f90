@@ -32,7 +32,8 @@ module fekap_fem
       & factor_system, residual_norm, newton_correction
    use fekap_stepping_newton, only: newton_contract_type, newton_report_type, always_refactor_type, newton_solve, &
       & stop_spent, stop_diverged, stop_singular, stop_at_floor
-   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
+   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, dead_point_advice, limit_load_advice, &
+      & try_accepted, try_replaced, try_failed, &
       & try_ended
    use fekap_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
       & prepend_cuts_note, model_distance, no_convergence_error
@@ -258,8 +259,16 @@ contains
       type(step_cuts_type), intent(out) :: cuts
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: t_from
+      logical :: driven
       t_from = self%state%t
-      call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, cuts, iterations, error)
+      driven = .false.
+      if (allocated(self%model%drives)) driven = size(self%model%drives) > 0
+      ! Loads without drives (statics) fail at a limit load, not a dead point.
+      if (driven) then
+         call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, dead_point_advice, cuts, iterations, error)
+      else
+         call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, limit_load_advice, cuts, iterations, error)
+      end if
       if (.not. allocated(error) .and. self%state%t > t_from) residual = self%try_residual
       if (depth == 0) call check_free_motion(self, t_from, error)
    end subroutine advance_to

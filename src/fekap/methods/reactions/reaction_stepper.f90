@@ -31,7 +31,7 @@ module fekap_reactions_reaction_stepper
    use fekap_model_reactions, only: reaction_count
    use fekap_stepping_stepper, only: stepper_type
    use fekap_fem, only: fem_stepper_type
-   use fekap_stepping_step_control, only: step_cuts_type, max_cuts, advance_by_cuts, try_accepted, try_failed, &
+   use fekap_stepping_step_control, only: step_cuts_type, max_cuts, advance_by_cuts, limit_load_advice, try_accepted, try_failed, &
       & try_ended
    use fekap_strings, only: es_text
    use fekap_assembly_loads, only: load_set_type
@@ -162,13 +162,14 @@ contains
          steps%last = steps%failure%message
          steps%result = result
          steps%first_iterations = result%iterations
-         call advance_by_cuts(self, load_try, load_between, 0.0_dp, 1.0_dp, 0, cuts, iterations, error)
+         call advance_by_cuts(self, load_try, load_between, 0.0_dp, 1.0_dp, 0, limit_load_advice, cuts, iterations, &
+            & error)
          call self%fem%set_start(q_start)
          call self%fem%set_loads(steps%full)
          result = steps%result
          if (allocated(error)) then
             if (error%kind == error_analysis) then
-               ! The step control's advice is about drives: the load steps' reason stands alone.
+               ! The load steps' reason stands alone, with what was reached.
                if (len(steps%factors) == 0) steps%factors = ' none'
                write (smallest, '(i0)') 2**max_cuts
                call analysis_error(error, 'the start''s loads did not converge at once, nor in load steps '// &
