@@ -233,14 +233,19 @@ def test_a_failed_dynamic_step_does_not_say_a_smaller_step_will_not_help(tmp_pat
     assert done.returncode == 0, done.stderr
 
 
+def rollup_50(tmp_path: Path) -> Path:
+    """The roll-up meshed by 50 elements, a statics run that stops (exit 3)."""
+    text = (ROOT / "decks/cantilever-rollup.deck").read_text()
+    found = re.search(r"^(\s*\w+\s+\w+\s+\w+\s+\w+\s+)16\b", text, re.MULTILINE)
+    assert found, "the roll-up's link line changed"
+    return write(tmp_path / "rollup-50.deck", text[:found.start()] + found[1] + "50" + text[found.end():])
+
+
 def test_statics_listing_and_stderr_give_the_same_advice(tmp_path):
     # A statics failure (the roll-up meshed by 50 elements: Newton does not
     # converge at t = 0.15) was a "limit load" on stderr but a drive's dead
     # point in the listing's RUN STOPPED.
-    text = (ROOT / "decks/cantilever-rollup.deck").read_text()
-    found = re.search(r"^(\s*\w+\s+\w+\s+\w+\s+\w+\s+)16\b", text, re.MULTILINE)
-    assert found, "the roll-up's link line changed"
-    deck = write(tmp_path / "rollup-50.deck", text[:found.start()] + found[1] + "50" + text[found.end():])
+    deck = rollup_50(tmp_path)
     out = tmp_path / "out"
     done = fekap("-q", "-o", str(out), str(deck))
     # Its failure is itself a defect left open (a pure end moment has no
@@ -250,3 +255,20 @@ def test_statics_listing_and_stderr_give_the_same_advice(tmp_path):
     listing = next(out.glob("*.lis")).read_text()
     for text_ in (done.stderr, listing):
         assert "cannot carry its loads" in text_ and "dead point" not in text_, text_[-1500:]
+
+
+def test_a_stopped_run_splits_no_more_time_than_it_took(tmp_path):
+    # The summary's phases are timed on sampled steps and scaled to the run
+    # by the sampled steps' time; a failed step's phases were timed but its
+    # time not sampled: the roll-up of 50 elements under --predictor previous
+    # (it stops at step 1) listed 0.73 s of assembly and 1.6 s of
+    # factorisation in an analysis of 0.008 s.
+    out = tmp_path / "out"
+    done = fekap("-q", "-o", str(out), "--predictor", "previous", str(rollup_50(tmp_path)))
+    assert done.returncode == 3, done.stderr
+    listing = next(out.glob("*.lis")).read_text()
+    value = {name: float(re.search(rf"{name} \(s\) +(\S+)", listing)[1])
+             for name in ("time in analysis", "of which assembly", "of which factorisation", "of which solves")}
+    parts = value["of which assembly"] + value["of which factorisation"] + value["of which solves"]
+    # Each figure is rounded to 1e-4 s.
+    assert parts <= value["time in analysis"] + 2e-4, value

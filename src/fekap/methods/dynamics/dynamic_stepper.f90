@@ -137,18 +137,20 @@ contains
       self%advance_estimate = 0
       if (self%model%analysis%adaptive) then
          call adaptive_advance(self, t, result%iterations, result%cuts, error)
-         if (allocated(error)) return
       else
          call advance_by_cuts(self, dynamic_try, no_between, self%state%t, t, 0, dynamics_advice, cuts, &
             & result%iterations, error)
-         if (allocated(error)) return
          result%cuts = cuts%cuts
       end if
-      result%residual = self%try_residual
-      call fill_result(self, result)
-      ! The result lives through the run: a note of an earlier step must not stay.
-      if (has_note(result%note)) result%note = ''
-      if (allocated(cuts%first)) result%note = cuts%note()
+      if (.not. allocated(error)) then
+         result%residual = self%try_residual
+         call fill_result(self, result)
+         ! The result lives through the run: a note of an earlier step must not stay.
+         if (has_note(result%note)) result%note = ''
+         if (allocated(cuts%first)) result%note = cuts%note()
+      end if
+      ! A failed step's phases were timed too: its time is sampled with them
+      ! (else the summary scales them to many times the run's).
       if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
    end subroutine dynamic_advance
 
