@@ -470,6 +470,24 @@ def test_element_count_above_the_limit_names_the_limit(tmp_path):
     assert "at most 100000" in done.stderr and "at least 1" not in done.stderr, done.stderr
 
 
+def test_elements_in_all_above_the_limit_name_the_link(tmp_path):
+    # 11 links of 100,000 elements each: 1,100,000 in all, above the deck's
+    # 1,000,000. Before, 200 such links ended in the runtime's "Error
+    # allocating ... bytes" and a backtrace (exit 1), or in the system's
+    # out-of-memory killer; the error is now the reader's, at the eleventh.
+    lines = [f"  L{k}  N{k}  N{k + 1}  bar 100000" for k in range(11)]
+    nodes = [f"  N{k}  {k}  0" for k in range(12)]
+    text = ("TITLe t\nSECTions\n  bar E=1 G=1 A=1 I=1 k=1\nNODEs\n" + "\n".join(nodes) + "\nLINKs\n"
+            + "\n".join(lines) + "\nSUPPorts\n  N0 clamp\nANALysis\n  time 0 1 0.1\nEND\n")
+    deck = write_deck(tmp_path / "big.deck", text)
+    done = fekap("-q", "-o", tmp_path / "o", deck)
+    assert done.returncode == 2, done.stderr
+    line = 6 + 12 + 10
+    assert f"{deck}:{line}:" in done.stderr and "1100000" in done.stderr, done.stderr
+    assert "at most 100000" not in done.stderr and "Backtrace" not in done.stderr, done.stderr
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
 def test_three_digit_exponents_keep_their_e(tmp_path):
     deck = write_deck(tmp_path / "x.deck", deck_text(**{"  A   0   0 ": "  A   1e-200   0 "}))
     done = fekap("-q", "-o", tmp_path / "o", deck)

@@ -25,6 +25,11 @@ module fekap_deck_geometry
    real(dp), parameter :: min_property = 1.0e-100_dp, max_property = 1.0e100_dp
    !> Most elements per link.
    integer, parameter :: max_elements = 100000
+   !> Most elements in a deck: a run takes about 3.2 KB of memory an element
+   !> (947 MB for three links of 100,000), so this is about 3 GB; more ended
+   !> in the runtime's own allocation error and a backtrace, or in the
+   !> system's out-of-memory killer.
+   integer, parameter :: max_total_elements = 1000000
 
 contains
 
@@ -282,7 +287,7 @@ contains
       integer, intent(in) :: lines(:)
       character(*), parameter :: form = 'name first-node second-node section [elements]'
       type(link_type), allocatable :: list(:)
-      integer :: n, i, iline, j, k
+      integer :: n, i, iline, j, k, total
       logical :: ok, keep, fine
       real(dp) :: length, size_
       allocate (list(size(lines)))
@@ -290,6 +295,7 @@ contains
       call new_name_index(ctx%dropped_links, size(lines))
       size_ = model_size(model)
       n = 0
+      total = 0
       do i = 1, size(lines)
          iline = lines(i)
          if (.not. ctx%name_field(iline, 1, 'link')) cycle
@@ -327,6 +333,13 @@ contains
             else if (fine .and. list(n)%nelem > max_elements) then
                call ctx%error(iline, 5, 'too many elements: a link has at most '//int_text(max_elements), &
                   & label='give a whole number from 1 to '//int_text(max_elements))
+            else if (fine .and. total <= max_total_elements) then
+               total = total + list(n)%nelem
+               if (total > max_total_elements) then
+                  call ctx%error(iline, 5, 'too many elements in all: the links up to this one have '// &
+                     & int_text(total)//', more than a deck''s '//int_text(max_total_elements)// &
+                     & ' (about 3 KB of memory each)', label='mesh the links more coarsely')
+               end if
             end if
          end if
          if (ok .and. list(n)%node(1) == list(n)%node(2)) then
