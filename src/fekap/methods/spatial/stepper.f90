@@ -180,17 +180,25 @@ contains
       type(model_type), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: force_scale, floor
-      integer :: k
+      integer :: k, e, pass
       call build_spatial_mechanism(model, self%m, self%map, error)
       if (allocated(error)) return
       self%s = new_spatial_state(self%m)
       self%t = model%analysis%t_start
       self%tol = model%analysis%length_tol
       self%max_iter = model%analysis%max_iter
-      ! The beams, then the trusses, each in the links' order (build_spatial_mechanism).
-      self%element_link = [(label_type(model%links(k)%name), k=1, size(model%links))]
-      self%element_link = [pack(self%element_link, .not. model%spatial%truss), &
-         & pack(self%element_link, model%spatial%truss)]
+      ! The beams, then the trusses, each in the links' order
+      ! (build_spatial_mechanism). A loop: gfortran 12 built the labels of an
+      ! array constructor over label_type(name) with empty texts.
+      allocate (self%element_link(size(model%links)))
+      e = 0
+      do pass = 1, 2
+         do k = 1, size(model%links)
+            if (model%spatial%truss(k) .neqv. pass == 2) cycle
+            e = e + 1
+            self%element_link(e)%text = model%links(k)%name
+         end do
+      end do
       self%admissible_strain = admissible_strain(model%analysis%tol)
       call check_determined(self, model%file, error)
       if (allocated(error)) return
