@@ -645,11 +645,7 @@ contains
          call restore(self, self%before)
          call step_to(self, t, .false., .true., 0, iterations, cuts, found, error)
          if (allocated(error)) return
-         self%counts%steps = self%counts%steps + 1
-         result%t = t
-         result%iterations = iterations
-         result%cuts = cuts
-         call fill_result(self, result)
+         call take_row(iterations, cuts)
          return
       end if
       self%ahead = snapshot(self)
@@ -674,11 +670,7 @@ contains
                call restore(self, bf)
                call step_to(self, t, .false., .true., 0, iterations, cuts, found, near_error)
                if (.not. allocated(near_error)) then
-                  self%counts%steps = self%counts%steps + 1
-                  result%t = t
-                  result%iterations = iterations
-                  result%cuts = cuts
-                  call fill_result(self, result)
+                  call take_row(iterations, cuts)
                   return
                end if
                call restore(self, bf)
@@ -714,11 +706,17 @@ contains
             self%note = trim(text)//': velocities and accelerations are left out of this step'
          end if
       end associate
-      self%counts%steps = self%counts%steps + 1
-      result%t = t
-      result%iterations = its
-      result%cuts = 0
-      call fill_result(self, result)
+      call take_row(its, 0)
+   contains
+      !> The row at t is the stepper's state: one step more, its result.
+      subroutine take_row(row_iterations, row_cuts)
+         integer, intent(in) :: row_iterations, row_cuts
+         self%counts%steps = self%counts%steps + 1
+         result%t = t
+         result%iterations = row_iterations
+         result%cuts = row_cuts
+         call fill_result(self, result)
+      end subroutine take_row
    end subroutine step_over
 
    !> Whether the configuration Newton converged to is a mechanism
