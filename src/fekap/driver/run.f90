@@ -11,7 +11,8 @@ module fekap_driver_run
    use fekap_kinds, only: dp
    use fekap_error, only: error_type, analysis_error, fatal_error
    use fekap_stepping_interrupt, only: interrupt_signal
-   use fekap_model, only: model_type
+   use fekap_model, only: model_type, loc_file
+   use fekap_model_drive_law, only: law_type
    use fekap_model_results, only: step_result_type, new_step_result, not_finite, result_kinds
    use fekap_stepping_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_writer, only: writer_list_type, run_summary_type
@@ -100,7 +101,9 @@ contains
             call stepper%advance(step_time(model, n, nsteps), result, step_error)
          end if
          if (timed) c1 = clock_seconds()
-         if (.not. allocated(step_error) .and. result%written) call check_finite(result, step_error)
+         if (.not. allocated(step_error) .and. result%written) then
+            call check_finite(model, step_time(model, n, nsteps), result, step_error)
+         end if
          if (allocated(step_error) .and. interrupt_signal() /= 0) then
             ! A signal stopped the step in progress (between Newton iterations).
             write (where_, '(a,i0,a,i0,a,a,a)') 'interrupted by signal ', interrupt_signal(), ' during step ', n, &
@@ -165,16 +168,66 @@ contains
    !> Say after which step an output file failed.
    !> A step whose results hold a value that is not finite fails: its rows
    !> are not written (they would hold NaN), those of the steps before stay.
-   subroutine check_finite(result, error)
+   !> Where a drive's law is beyond the deck's numbers at t (its value, rate
+   !> or second rate above 1e100 or not finite: a polynomial of high degree
+   !> over a long span), the error names that drive: the method was given
+   !> it. Else the method failed without noticing.
+   subroutine check_finite(model, t, result, error)
+      type(model_type), intent(in) :: model
+      real(dp), intent(in) :: t
       type(step_result_type), intent(in) :: result
       type(error_type), allocatable, intent(inout) :: error
+      character(:), allocatable :: drive
       integer :: kind
       kind = not_finite(result)
       if (kind == 0) return
+      drive = overflowing_drive(model, t)
+      if (len(drive) > 0) then
+         call analysis_error(error, 'the '//trim(result_kinds(kind))//' are not finite numbers (NaN or infinity): '// &
+            & drive//' gives a value, rate or second rate beyond 1e100 at t = '//es_text(t, 12, 5)// &
+            & ': change its law, or end the run before this time')
+         return
+      end if
       call analysis_error(error, 'the method returned '//trim(result_kinds(kind))//' that are not finite numbers '// &
          & '(NaN or infinity) without noticing its failure; please report the deck. A smaller time step or '// &
          & 'another method may avoid it')
    end subroutine check_finite
+
+   !> The first drive whose law at t is beyond 1e100 (value, rate or second
+   !> rate) or not finite: its deck line (planar) or its joint (spatial);
+   !> '' if none.
+   function overflowing_drive(model, t) result(text)
+      type(model_type), intent(in) :: model
+      real(dp), intent(in) :: t
+      character(:), allocatable :: text
+      character(len=24) :: where_
+      integer :: i
+      text = ''
+      if (allocated(model%drives)) then
+         do i = 1, size(model%drives)
+            if (.not. beyond(model%drives(i)%law)) cycle
+            associate (loc => model%drives(i)%loc)
+               write (where_, '(i0,a,i0)') loc%line, ':', loc%col
+               text = 'the drive at '//loc_file(model, loc)//':'//trim(where_)
+            end associate
+            return
+         end do
+      end if
+      if (allocated(model%spatial%drives)) then
+         do i = 1, size(model%spatial%drives)
+            if (.not. beyond(model%spatial%drives(i)%law)) cycle
+            text = 'the drive of joint '//model%spatial%joints(model%spatial%drives(i)%joint)%name
+            return
+         end do
+      end if
+   contains
+      logical function beyond(law)
+         type(law_type), intent(in) :: law
+         real(dp) :: f, df, ddf
+         call law%eval(t, f, df, ddf)
+         beyond = .not. (abs(f) <= 1.0e100_dp .and. abs(df) <= 1.0e100_dp .and. abs(ddf) <= 1.0e100_dp)
+      end function beyond
+   end function overflowing_drive
 
    subroutine tell_step(error, n, t)
       type(error_type), intent(inout) :: error
