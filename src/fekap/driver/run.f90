@@ -102,7 +102,7 @@ contains
          end if
          if (timed) c1 = clock_seconds()
          if (.not. allocated(step_error) .and. result%written) then
-            call check_finite(model, step_time(model, n, nsteps), result, step_error)
+            call check_finite(model, result, step_error)
          end if
          if (allocated(step_error) .and. interrupt_signal() /= 0) then
             ! A signal stopped the step in progress (between Newton iterations).
@@ -172,19 +172,18 @@ contains
    !> or second rate above 1e100 or not finite: a polynomial of high degree
    !> over a long span), the error names that drive: the method was given
    !> it. Else the method failed without noticing.
-   subroutine check_finite(model, t, result, error)
+   subroutine check_finite(model, result, error)
       type(model_type), intent(in) :: model
-      real(dp), intent(in) :: t
       type(step_result_type), intent(in) :: result
       type(error_type), allocatable, intent(inout) :: error
       character(:), allocatable :: drive
       integer :: kind
       kind = not_finite(result)
       if (kind == 0) return
-      drive = overflowing_drive(model, t)
+      drive = overflowing_drive(model, result%t)
       if (len(drive) > 0) then
          call analysis_error(error, 'the '//trim(result_kinds(kind))//' are not finite numbers (NaN or infinity): '// &
-            & drive//' gives a value, rate or second rate beyond 1e100 at t = '//es_text(t, 12, 5)// &
+            & drive//' gives a value, rate or second rate beyond 1e100 at t = '//es_text(result%t, 12, 5)// &
             & ': change its law, or end the run before this time')
          return
       end if
