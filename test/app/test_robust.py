@@ -260,8 +260,10 @@ def test_files_of_fekaps_names_without_a_manifest_are_refused_unless_forced(tmp_
     (out / "notes.txt").write_text("mine\n")
     done = fekap("-q", "-o", out, FOURBAR)
     assert done.returncode == 2, done.stderr
-    for name in ("paths.png", "history_P.png", "links.csv"):
+    for name in ("paths.png", "history_P.png", "links.csv", "energy.csv"):
         assert name in done.stderr, done.stderr
+    assert "of the names FEKAP's runs and plots write" in done.stderr, done.stderr
+    assert "give --force to remove them" in done.stderr, done.stderr
     for name in ("old.pvd", "old.lis", "notes.txt", "old_000001.vtu"):
         assert name not in done.stderr, done.stderr
     assert all((out / name).read_text() == "stale\n" for name in stale), "a refused run changed files"

@@ -523,6 +523,25 @@ def test_loose_part_is_input_error(tmp_path, deck, joint, links):
     check(not written, f"files were written: {written}")
 
 
+def test_loop_that_does_not_close_is_refused_unless_the_tolerance_admits_it(tmp_path):
+    """The Bennett loop with J4 at x = -1.7320 (sqrt 3 rounded, 5e-5 off)
+    can move only by straining its links: self-stressed configurations,
+    which the stepper rejects as the planar FEM does (strain 1.1e-8 at step
+    1, above the admissible 1e-8 of the default tolerance), with a message
+    that says what to do; at --tol 1e-6 (admissible 1e-4) it runs."""
+    text = (DECKS / "bennett.deck").read_text()
+    old = "  J4   -sqrt(3) "
+    check(old in text, "the Bennett deck's J4 line changed")
+    deck = tmp_path / "rounded.deck"
+    deck.write_text(text.replace(old, "  J4   -1.7320  "))
+    done = run_fekap("-q", "-o", str(tmp_path / "strict"), str(deck))
+    check(done.returncode == 3, f"exit {done.returncode}, not 3: {done.stderr}")
+    for phrase in ("self-stressed configuration", "give exact coordinates, or a looser --tol"):
+        check(phrase in done.stderr, f"the message does not say {phrase!r}: {done.stderr}")
+    done = run_fekap("-q", "-o", str(tmp_path / "loose"), "--tol", "1e-6", str(deck))
+    check(done.returncode == 0, f"--tol 1e-6: exit {done.returncode}: {done.stderr}")
+
+
 def test_sleeve_on_a_turning_arm_matches_closed_form(tmp_path, spread=None):
     """A cylindrical joint between two moving links (decks/spatial/sleeve.deck):
     the sleeve S slides along and turns about the axis of an arm turning

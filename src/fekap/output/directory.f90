@@ -170,7 +170,7 @@ contains
          end associate
       end do
 
-      ! Files of this run's names that no earlier run recorded.
+      ! Files of FEKAP's output names that no earlier run recorded.
       do i = 1, top%count
          associate (name => top%names(i)%text)
             if (is_run_name(name, plan%stem) .and. .not. listed(old, name)) call append_name(foreign, name)

@@ -54,10 +54,14 @@ contains
          ! larger on a four-bar of 3,500 elements a link, where it became the
          ! run's best and every later estimate looked near singular against
          ! it: the responses untrusted, the rocker's dead point rejected as a
-         ! flip). B_f at the predictor is factored as root_correction would.
+         ! flip). The stress-free B_f at the predictor is factored, as the
+         ! rates' factor is (factor_root; a B_f singular there stays so:
+         ! rcond 0, a change point, as K's estimate of 0 made it).
          call factor_root(self, self%qt, self%seg, root_info, self%system%section)
-         if (root_info == 0) call root_rcond(self, rcond)
-         self%counts%condition_estimates = self%counts%condition_estimates + 1
+         if (root_info == 0) then
+            call root_rcond(self, rcond)
+            self%counts%condition_estimates = self%counts%condition_estimates + 1
+         end if
       else if (info == 0) then
          call system_rcond(self%system, rcond, self%counts)
       end if

@@ -83,13 +83,13 @@ module fekap_spatial_stepper
    !> fourbar-1000-turns' turns.
    real(dp), parameter :: verify_predicted = 1.0e-2_dp
 
-   !> What the stepper keeps of an accepted configuration: to try a step from
-   !> it again, and the two regular states on either side of a change point.
    !> A name for messages.
    type :: label_type
       character(:), allocatable :: text
    end type label_type
 
+   !> What the stepper keeps of an accepted configuration: to try a step from
+   !> it again, and the two regular states on either side of a change point.
    type :: accepted_type
       type(spatial_state_type) :: s
       real(dp) :: t = 0
@@ -633,7 +633,7 @@ contains
       type(spatial_state_type) :: filled
       real(dp) :: t_next, residual, rcond, predictor_rcond
       integer :: iterations, cuts, its, order
-      logical :: found, singular
+      logical :: found, singular, tried_step, held
       character(len=note_length) :: text
       character(:), allocatable :: what
       predictor_rcond = self%predictor_rcond
@@ -659,31 +659,40 @@ contains
          ! --spatial at dt 0.001 ended at t = 0.25), whose rates are
          ! unbounded, and the quintic through them was written as row 0.249
          ! with a residual of 2.5e12. A fill that no order puts on the
-         ! mechanism is no row.
+         ! mechanism (its residual within the Newton contract, its strains
+         ! admissible: check_mechanism's test) is no row.
+         its = 0
+         tried_step = .false.
          do order = fill_order(.true., .true.), 1, -2
             filled = fill_state(self%m, order, bf%t, bf%s, bf%v, bf%a, n%t, n%s, n%v, n%a, t)
-            call correct_state(self%m, self%fdof, t, self%tol, fill_shift, filled, its, residual, rcond)
+            call correct_state(self%m, self%fdof, t, self%tol, fill_shift, filled, iterations, residual, rcond)
+            its = its + iterations
             singular = rcond < rates_drop*bf%reference_rcond
             if (.not. singular) then
-               ! Near, not on, a change point: solve the row itself as without the
-               ! detection, from the state before it; the state ahead stays.
-               call restore(self, bf)
-               call step_to(self, t, .false., .true., 0, iterations, cuts, found, near_error)
-               if (.not. allocated(near_error)) then
-                  call take_row(iterations, cuts)
-                  return
+               if (.not. tried_step) then
+                  ! Near, not on, a change point: solve the row itself as without the
+                  ! detection, from the state before it (once: it does not depend
+                  ! on the fill); the state ahead stays.
+                  tried_step = .true.
+                  call restore(self, bf)
+                  call step_to(self, t, .false., .true., 0, iterations, cuts, found, near_error)
+                  if (.not. allocated(near_error)) then
+                     call take_row(iterations, cuts)
+                     return
+                  end if
+                  call restore(self, bf)
                end if
-               call restore(self, bf)
                call correct_state(self%m, self%fdof, t, self%tol, 0.0_dp, filled, iterations, residual, rcond)
                its = its + iterations
             end if
-            if (fill_holds(self%contract, residual)) exit
+            held = fill_holds(self%contract, residual) .and. admissible(filled)
+            if (held) exit
          end do
-         if (.not. fill_holds(self%contract, residual)) then
+         if (.not. held) then
             write (text, '(a,es12.5,a,es12.5,a,es12.5,a,es9.2,a)') 't = ', t, ': the row of the change point '// &
                & 'stepped over from t = ', bf%t, ' to ', n%t, ' could not be filled (the positions interpolated '// &
-               & 'from both sides and corrected leave a residual of ', residual, '): take another time step, '// &
-               & 'or end the run before it'
+               & 'from both sides and corrected leave a residual of ', residual, ', or strained links): take '// &
+               & 'another time step, or end the run before it'
             call analysis_error(error, trim(text), t=t)
             return
          end if
@@ -708,6 +717,17 @@ contains
       end associate
       call take_row(its, 0)
    contains
+      !> Whether the links' strains at state s are admissible (check_mechanism's bound).
+      logical function admissible(s)
+         type(spatial_state_type), intent(in) :: s
+         type(spatial_configuration_type) :: c
+         real(dp) :: strain
+         integer :: element
+         call configure(self%m, s, c)
+         call largest_strain(self%m, c, strain, element)
+         admissible = strain <= self%admissible_strain
+      end function admissible
+
       !> The row at t is the stepper's state: one step more, its result.
       subroutine take_row(row_iterations, row_cuts)
          integer, intent(in) :: row_iterations, row_cuts
@@ -740,7 +760,9 @@ contains
       if (strain <= self%admissible_strain) return
       converged = .false.
       write (text, '(a,es9.2,a)') 'Newton converged to a self-stressed configuration (strain ', strain, ' in link '
-      why = trim(text)//' '//self%element_link(element)%text//'), not a mechanism configuration'
+      why = trim(text)//' '//self%element_link(element)%text//'), not a mechanism configuration: an '// &
+         & 'over-constrained loop whose geometry does not close exactly strains as it moves; give exact '// &
+         & 'coordinates, or a looser --tol (the admissible strain is 100 times it, at most 1e-3)'
    end subroutine check_mechanism
 
    !> Whether a filled row's residual passes the run's Newton contract (the
