@@ -161,8 +161,9 @@ def test_refined_steps_write_only_mechanism_rows(tmp_path, deck, dt):
     """At a step ten times finer than the deck's, the spatial stepper does not
     pass these change points (the double crank's collinear cranks at t =
     0.25, the A02 chain's flat configuration at t = 0.25), while the planar
-    one does; it stops there (exit 3), and every row it wrote is the planar
-    run's. Before, the double crank went on past t = 0.25 on self-stressed
+    one does; today it stops there (exit 3; a run that passes them one day
+    is held to the planar rows all the same), and every row it wrote is the
+    planar run's. Before, the double crank went on past t = 0.25 on self-stressed
     configurations (links up to 0.42 off their lengths, the residual at
     round-off) and the chain wrote row 0.249 from a quintic fill through the
     unbounded rates of the change point (a residual of 2.5e12, T1 at
