@@ -12,7 +12,7 @@ module fekap_driver_run
    use fekap_error, only: error_type, analysis_error, fatal_error
    use fekap_stepping_interrupt, only: interrupt_signal
    use fekap_model, only: model_type, loc_file
-   use fekap_model_drive_law, only: law_type
+   use fekap_model_drive_law, only: law_beyond
    use fekap_model_results, only: step_result_type, new_step_result, not_finite, result_kinds
    use fekap_stepping_stepper, only: stepper_type, clock_seconds, coarse_clock_seconds, split_seconds, split_timed
    use fekap_output_writer, only: writer_list_type, run_summary_type
@@ -204,7 +204,7 @@ contains
       text = ''
       if (allocated(model%drives)) then
          do i = 1, size(model%drives)
-            if (.not. beyond(model%drives(i)%law)) cycle
+            if (.not. law_beyond(model%drives(i)%law, t)) cycle
             associate (loc => model%drives(i)%loc)
                write (where_, '(i0,a,i0)') loc%line, ':', loc%col
                text = 'the drive at '//loc_file(model, loc)//':'//trim(where_)
@@ -214,18 +214,11 @@ contains
       end if
       if (allocated(model%spatial%drives)) then
          do i = 1, size(model%spatial%drives)
-            if (.not. beyond(model%spatial%drives(i)%law)) cycle
+            if (.not. law_beyond(model%spatial%drives(i)%law, t)) cycle
             text = 'the drive of joint '//model%spatial%joints(model%spatial%drives(i)%joint)%name
             return
          end do
       end if
-   contains
-      logical function beyond(law)
-         type(law_type), intent(in) :: law
-         real(dp) :: f, df, ddf
-         call law%eval(t, f, df, ddf)
-         beyond = .not. (abs(f) <= 1.0e100_dp .and. abs(df) <= 1.0e100_dp .and. abs(ddf) <= 1.0e100_dp)
-      end function beyond
    end function overflowing_drive
 
    subroutine tell_step(error, n, t)

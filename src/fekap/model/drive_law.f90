@@ -4,7 +4,7 @@ module fekap_model_drive_law
    implicit none
    private
 
-   public :: law_type, new_rate_law, new_harmonic_law, new_polynomial_law, new_table_law, new_constant_law, &
+   public :: law_type, law_beyond, new_rate_law, new_harmonic_law, new_polynomial_law, new_table_law, new_constant_law, &
       & new_linear_law
 
    !> Law kinds; constant and linear (a piecewise-linear table) are taken by LOADs only.
@@ -104,6 +104,17 @@ contains
          self%tm(i) = (rhs(i) - (t(i + 1) - t(i))*self%tm(i + 1))/diag(i)
       end do
    end subroutine new_table_law
+
+   !> Whether the law at t is beyond the deck's numbers: its value, rate or
+   !> second rate above 1e100 in magnitude, or not a number (a polynomial of
+   !> high degree over a long span, a table interval of 1e-300).
+   pure logical function law_beyond(self, t) result(beyond)
+      type(law_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      real(dp) :: f, df, ddf
+      call self%eval(t, f, df, ddf)
+      beyond = .not. (abs(f) <= 1.0e100_dp .and. abs(df) <= 1.0e100_dp .and. abs(ddf) <= 1.0e100_dp)
+   end function law_beyond
 
    !> Value, rate and second rate of the law at time t.
    elemental subroutine law_eval(self, t, f, df, ddf)

@@ -32,8 +32,7 @@ module fekap_fem
       & factor_system, residual_norm, newton_correction
    use fekap_stepping_newton, only: newton_contract_type, newton_report_type, always_refactor_type, newton_solve, &
       & stop_spent, stop_diverged, stop_singular, stop_at_floor
-   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, dead_point_advice, limit_load_advice, &
-      & try_accepted, try_replaced, try_failed, &
+   use fekap_stepping_step_control, only: step_cuts_type, advance_by_cuts, try_accepted, try_replaced, try_failed, &
       & try_ended
    use fekap_fem_state, only: fem_state_type, fem_core_type, new_fem_core, accept, fill_result, &
       & prepend_cuts_note, model_distance, no_convergence_error
@@ -85,43 +84,37 @@ contains
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: clock
-      clock = clock_seconds()
-      self%system%timing = .true.
-      call start_step(self, result, error)
-      ! Sampled whatever its outcome: the phases it timed are (see fem_advance).
-      self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
-   end subroutine fem_start
-
-   !> fem_start's work, its phases timed.
-   subroutine start_step(self, result, error)
-      type(fem_stepper_type), intent(inout) :: self
-      type(step_result_type), intent(inout) :: result
-      type(error_type), allocatable, intent(out) :: error
       integer :: verdict
       logical :: ahead
-      call start_configuration(self, self%state%t, self%state%q, self%seg, error)
-      if (allocated(error)) return
-      self%state%seg = self%seg
-      self%state%history%filled = 0
-      call self%factor%invalidate()
-      self%state%has_jump_response = .false.
-      call self%change%take_ahead(ahead)
-      self%advance_floor = 0
-      result%iterations = 0
-      call assemble_system_residual(self%system, self%mesh, self%state%q, self%state%t, self%seg, self%counts)
-      result%residual = residual_norm(self%system, self%mesh)
-      if (self%loaded .and. result%residual > self%conv%residual_floor) then
-         ! Loads at t_start /= 0: find the loaded configuration first.
-         call solve_step(self, self%state%t, 0, result%iterations, result%residual, verdict, error)
-         if (allocated(error)) return
-      else
-         call accept(self, self%state%t, self%state%q)
-      end if
-      if (.not. self%loaded) call start_response(self)
-      call solve_rates(self)
-      result%floor = self%advance_floor
-      call fill_result(self, result)
-   end subroutine start_step
+      clock = clock_seconds()
+      self%system%timing = .true.
+      start: block
+         call start_configuration(self, self%state%t, self%state%q, self%seg, error)
+         if (allocated(error)) exit start
+         self%state%seg = self%seg
+         self%state%history%filled = 0
+         call self%factor%invalidate()
+         self%state%has_jump_response = .false.
+         call self%change%take_ahead(ahead)
+         self%advance_floor = 0
+         result%iterations = 0
+         call assemble_system_residual(self%system, self%mesh, self%state%q, self%state%t, self%seg, self%counts)
+         result%residual = residual_norm(self%system, self%mesh)
+         if (self%loaded .and. result%residual > self%conv%residual_floor) then
+            ! Loads at t_start /= 0: find the loaded configuration first.
+            call solve_step(self, self%state%t, 0, result%iterations, result%residual, verdict, error)
+            if (allocated(error)) exit start
+         else
+            call accept(self, self%state%t, self%state%q)
+         end if
+         if (.not. self%loaded) call start_response(self)
+         call solve_rates(self)
+         result%floor = self%advance_floor
+         call fill_result(self, result)
+      end block start
+      ! Sampled whatever its outcome: the phases it timed are (fem_advance).
+      self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
+   end subroutine fem_start
 
    !> Advance to time t, cutting the step in halves when Newton fails or
    !> converges to an inadmissible configuration, and verifying suspect steps
@@ -131,65 +124,55 @@ contains
       real(dp), intent(in) :: t
       type(step_result_type), intent(inout) :: result
       type(error_type), allocatable, intent(out) :: error
+      type(step_cuts_type) :: cuts
       real(dp) :: clock
+      logical :: filled, ahead
       self%advances = self%advances + 1
       ! The phases are timed on a sample of the steps (and at the start); the
-      ! summary scales them to the run (see phase_seconds), by the sampled
-      ! steps' own time, which a failed step's counts in too: without it a
-      ! statics run that stopped gave its phases 90 times its whole time.
+      ! summary scales them to the run (see phase_seconds) by the sampled
+      ! steps' time, a failed step's included (else a stopped run's phases
+      ! came to 90 times its whole time).
       self%system%timing = phase_timed(self%advances)
       clock = 0
       if (self%system%timing) clock = clock_seconds()
-      call advance_step(self, t, result, error)
+      step: block
+         self%advance_floor = 0
+         call self%change%take_ahead(ahead)
+         if (ahead) then
+            if (t == self%change%ahead%t) then
+               ! The step over a change point solved this time already (with its rates).
+               call restore_state(self, self%change%ahead)
+               result%iterations = self%change%ahead_iterations
+               result%residual = self%change%ahead_residual
+               self%last_cuts = self%change%ahead_cuts
+               result%cuts = self%last_cuts
+               result%floor = self%change%ahead_floor
+               call fill_result(self, result)
+               exit step
+            end if
+            ! Another time: from the regular state before the change point.
+            call restore_state(self, self%change%before)
+         end if
+         ! The paper's `previous` predictor is the last configuration: its tangent
+         ! says nothing about the new time's.
+         call self%change%begin_advance(.not. self%loaded .and. self%model%analysis%predictor /= predictor_previous)
+         call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
+         call self%change%stop_detecting()
+         if (allocated(error)) exit step
+         if (self%change%found) then
+            call step_over(self, t, result, cuts, filled, error)
+            if (allocated(error) .or. filled) exit step
+         end if
+         self%last_cuts = cuts%cuts
+         result%cuts = self%last_cuts
+         result%floor = self%advance_floor
+         call solve_rates(self)
+         ! The listing says why the step was cut (the first and the last rejection).
+         call prepend_cuts_note(self%state%note, cuts)
+         call fill_result(self, result)
+      end block step
       if (self%system%timing) self%counts%seconds_sampled = self%counts%seconds_sampled + (clock_seconds() - clock)
    end subroutine fem_advance
-
-   !> fem_advance's work, its phases timed on the sampled steps.
-   subroutine advance_step(self, t, result, error)
-      type(fem_stepper_type), intent(inout) :: self
-      real(dp), intent(in) :: t
-      type(step_result_type), intent(inout) :: result
-      type(error_type), allocatable, intent(out) :: error
-      type(step_cuts_type) :: cuts
-      logical :: filled, ahead
-      self%advance_floor = 0
-      call self%change%take_ahead(ahead)
-      if (ahead) then
-         if (t == self%change%ahead%t) then
-            ! The step over a change point solved this time already (with its rates).
-            call restore_state(self, self%change%ahead)
-            result%iterations = self%change%ahead_iterations
-            result%residual = self%change%ahead_residual
-            self%last_cuts = self%change%ahead_cuts
-            result%cuts = self%last_cuts
-            result%floor = self%change%ahead_floor
-            call fill_result(self, result)
-            return
-         end if
-         ! Another time: from the regular state before the change point.
-         call restore_state(self, self%change%before)
-      end if
-      ! The paper's `previous` predictor is the last configuration: its tangent
-      ! says nothing about the new time's.
-      call self%change%begin_advance(.not. self%loaded .and. self%model%analysis%predictor /= predictor_previous)
-      call advance_to(self, t, 0, result%iterations, result%residual, cuts, error)
-      call self%change%stop_detecting()
-      if (allocated(error)) return
-      if (self%change%found) then
-         call step_over(self, t, result, cuts, filled, error)
-         if (allocated(error)) return
-         if (filled) then
-            return
-         end if
-      end if
-      self%last_cuts = cuts%cuts
-      result%cuts = self%last_cuts
-      result%floor = self%advance_floor
-      call solve_rates(self)
-      ! The listing says why the step was cut (the first and the last rejection).
-      call prepend_cuts_note(self%state%note, cuts)
-      call fill_result(self, result)
-   end subroutine advance_step
 
    !> The step onto time t found its predictor's tangent near singular (a
    !> change point; detected in solve_step): instead of iterating there, solve
@@ -278,16 +261,8 @@ contains
       type(step_cuts_type), intent(out) :: cuts
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: t_from
-      logical :: driven
       t_from = self%state%t
-      driven = .false.
-      if (allocated(self%model%drives)) driven = size(self%model%drives) > 0
-      ! Loads without drives (statics) fail at a limit load, not a dead point.
-      if (driven) then
-         call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, dead_point_advice, cuts, iterations, error)
-      else
-         call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, limit_load_advice, cuts, iterations, error)
-      end if
+      call advance_by_cuts(self, fem_try, fem_between, t_from, t, depth, self%cut_advice, cuts, iterations, error)
       if (.not. allocated(error) .and. self%state%t > t_from) residual = self%try_residual
       if (depth == 0) call check_free_motion(self, t_from, error)
    end subroutine advance_to

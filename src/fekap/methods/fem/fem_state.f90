@@ -28,7 +28,7 @@ module fekap_fem_state
    use fekap_assembly_strain_rate, only: strain_rate_type, new_strain_rate, strain_rows, solve_material_tangent
    use fekap_assembly_mesh, only: dof_fixed
    use fekap_fem_fields, only: fill_nodes_links, fill_fields
-   use fekap_stepping_step_control, only: step_cuts_type
+   use fekap_stepping_step_control, only: step_cuts_type, dead_point_advice, limit_load_advice
    use fekap_strings, only: es_text
    use fekap_assembly_loads, only: load_set_type
    implicit none
@@ -86,6 +86,9 @@ module fekap_fem_state
       !> Element strain (and gap per model size) above which a converged
       !> configuration is rejected: min(1e-3, max(1e-8, 100 tol)).
       real(dp) :: admissible_strain = 1.0e-8_dp
+      !> What a step given up after its cuts means (advance_by_cuts): a dead
+      !> point of a drive, or without drives (statics) a limit load.
+      character(:), allocatable :: cut_advice
       !> The steps awaiting step-doubling verification, one per halving.
       type(verification_stack_type) :: verification
       !> Steps advanced so far.
@@ -149,6 +152,12 @@ contains
       self%conv%tol = model%analysis%tol
       self%conv%length = model%analysis%length_tol*self%model_length
       self%admissible_strain = admissible_strain(model%analysis%tol)
+      self%cut_advice = dead_point_advice
+      if (.not. allocated(model%drives)) then
+         self%cut_advice = limit_load_advice
+      else if (size(model%drives) == 0) then
+         self%cut_advice = limit_load_advice
+      end if
       call new_branch_check(self%branch, model, self%mesh)
       self%conv%residual_floor = self%residual_floor
    end subroutine new_fem_core
