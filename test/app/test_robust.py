@@ -483,7 +483,7 @@ def test_a_drive_law_that_overflows_is_named(tmp_path):
     done = fekap("-q", "-o", tmp_path / "o", deck)
     assert done.returncode == 2, done.stderr
     line = next(k for k, text in enumerate(deck.read_text().splitlines(), 1) if "polynomial" in text)
-    assert f"{deck}:{line}:" in done.stderr and "beyond 1e100" in done.stderr, done.stderr
+    assert f"{deck}:{line}:" in done.stderr and "end time is beyond 1e100" in done.stderr, done.stderr
     assert "please report" not in done.stderr and "signal" not in done.stderr, done.stderr
 
 
